@@ -1,0 +1,27 @@
+// handemo: the command-line front end. Subcommands are in cmd_*.cpp; errors print one line and exit 1.
+#include "registry.hpp"
+
+#include <handemo/core/error.hpp>
+
+#include <algorithm>
+#include <exception>
+#include <iostream>
+
+int main(int argc, char** argv)
+{
+    CLI::App app{"handemo: change the emotion of captured 3D hand and body motion (StarGAN)", "handemo"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "handemo 0.1.0");
+    auto& reg = handemo::cli::registry();
+    std::stable_sort(reg.begin(), reg.end(), [](auto& a, auto& b) { return a.first < b.first; });
+    for (auto& [order, add] : reg) add(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    } catch (const std::exception& e) {
+        std::cerr << "handemo: error: " << e.what() << "\n";
+        return 1;
+    }
+    return 0;
+}

@@ -1,0 +1,6 @@
+// Motion module: skeletons, clips, forward kinematics, formats (BVH, CSV), keyframes and the
+// image codec of the hand paper (Eq. 3 and Eq. 6), and the synthetic hand dataset.
+#pragma once
+
+#include <handemo/motion/skeleton.hpp>
+#include <handemo/motion/clip.hpp>
