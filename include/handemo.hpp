@@ -5,4 +5,5 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
+#include <handemo/core/progress.hpp>
 #include <handemo/motion.hpp>
