@@ -1,0 +1,96 @@
+// The convolution kernels of handemo's StarGAN (Chan et al. 2020, Sec. 3.3 and Fig. 3: the generator's
+// 7x7 / 4x4-stride-2 / 3x3 residual / transposed 4x4 layers and the PatchGAN discriminator): forward,
+// backward-data, backward-weight and bias gradient of PyTorch's Conv2d (cross-correlation, NCHW, zero
+// padding), and ConvTranspose2d as the adjoint of Conv2d. The kernels are noexcept, single-threaded,
+// allocate nothing (the caller provides `scratch` of conv2d_scratch_size<T>(g) elements) and exist for
+// T = float and double. Semantics: forward functions overwrite their output (y =), backward functions
+// accumulate into theirs (g +=). The plain-loop versions in kernels::reference define the results.
+#pragma once
+
+#include <cstddef>
+
+#include <handemo/kernels/reference.hpp>
+
+namespace handemo::kernels {
+
+/// @brief Elements of T the kernels of this file need as `scratch` for geometry g (the maximum over all
+/// of conv2d_forward / backward_data / backward_weight and the conv_transpose2d functions).
+template <class T>
+std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
+{
+    return reference::conv2d_scratch_size<T>(g);
+}
+
+/// @brief y = conv(x, w) + bias (PyTorch Conv2d).
+/// y[n,o,i,j] = b[o] + sum_{c,u,v} x[n,c,i*s-p+u, j*s-p+v] w[o,c,u,v]
+/// @param g geometry (must satisfy g.valid())
+/// @param x [batch, in_channels, in_h, in_w]
+/// @param w [out_channels, in_channels, kernel_h, kernel_w]
+/// @param bias_or_null [out_channels] or nullptr for no bias
+/// @param y [batch, out_channels, out_h, out_w], overwritten
+/// @param scratch conv2d_scratch_size<T>(g) elements
+template <class T>
+void conv2d_forward(const conv_geometry& g, const T* x, const T* w, const T* bias_or_null, T* y, T* scratch) noexcept
+{
+    reference::conv2d_forward(g, x, w, bias_or_null, y, scratch);
+}
+
+/// @brief gx += dL/dx.  dL/dx[n,c,h,w] = sum_{o,u,v: h = i*s-p+u, w = j*s-p+v} gy[n,o,i,j] w[o,c,u,v]
+/// @param gy [batch, out_channels, out_h, out_w]  @param w [out_channels, in_channels, kh, kw]
+/// @param gx [batch, in_channels, in_h, in_w], accumulated into  @param scratch conv2d_scratch_size<T>(g)
+template <class T>
+void conv2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
+{
+    reference::conv2d_backward_data(g, gy, w, gx, scratch);
+}
+
+/// @brief gw += dL/dw.  dL/dw[o,c,u,v] = sum_{n,i,j} gy[n,o,i,j] x[n,c,i*s-p+u, j*s-p+v]
+/// @param x [batch, in_channels, in_h, in_w]  @param gy [batch, out_channels, out_h, out_w]
+/// @param gw [out_channels, in_channels, kh, kw], accumulated into  @param scratch conv2d_scratch_size<T>(g)
+template <class T>
+void conv2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
+{
+    reference::conv2d_backward_weight(g, x, gy, gw, scratch);
+}
+
+/// @brief gb += dL/db.  dL/db[o] = sum_{n,i,j} gy[n,o,i,j]
+/// @param gy [batch, out_channels, out_h, out_w]  @param gb [out_channels], accumulated into
+template <class T>
+void conv2d_backward_bias(const conv_geometry& g, const T* gy, T* gb) noexcept
+{
+    reference::conv2d_backward_bias(g, gy, gb);
+}
+
+/// @brief y = ConvTranspose2d(x, w), no bias. PyTorch ConvTranspose2d(in=Ci, out=Co, k, s, p) on an
+/// H x W input is the backward-data of the convolution with geometry
+/// g = {batch, in_channels = Co, in_h = (H-1)s - 2p + k, in_w = (W-1)s - 2p + k, out_channels = Ci, k, k, s, p}.
+/// y[n,c,h,w] = sum_{o,u,v: h = i*s-p+u, w = j*s-p+v} x[n,o,i,j] w[o,c,u,v]
+/// @param x [batch, g.out_channels, g.out_h(), g.out_w()] (= [batch, Ci, H, W])
+/// @param w [g.out_channels, g.in_channels, k, k] (= PyTorch's [Ci, Co, k, k])
+/// @param y [batch, g.in_channels, g.in_h, g.in_w], overwritten  @param scratch conv2d_scratch_size<T>(g)
+template <class T>
+void conv_transpose2d_forward(const conv_geometry& g, const T* x, const T* w, T* y, T* scratch) noexcept
+{
+    reference::conv_transpose2d_forward(g, x, w, y, scratch);
+}
+
+/// @brief gx += dL/dx of conv_transpose2d_forward = conv2d_forward(g, gy, w) without bias.
+/// dL/dx[n,o,i,j] = sum_{c,u,v} gy[n,c,i*s-p+u, j*s-p+v] w[o,c,u,v]
+/// @param gy [batch, g.in_channels, g.in_h, g.in_w]  @param gx [batch, g.out_channels, g.out_h(), g.out_w()]
+template <class T>
+void conv_transpose2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
+{
+    reference::conv_transpose2d_backward_data(g, gy, w, gx, scratch);
+}
+
+/// @brief gw += dL/dw of conv_transpose2d_forward = conv2d_backward_weight(g, x := gy, gy := x).
+/// dL/dw[o,c,u,v] = sum_{n,i,j} x[n,o,i,j] gy[n,c,i*s-p+u, j*s-p+v]
+/// @param x [batch, g.out_channels, g.out_h(), g.out_w()]  @param gy [batch, g.in_channels, g.in_h, g.in_w]
+/// @param gw [g.out_channels, g.in_channels, k, k], accumulated into
+template <class T>
+void conv_transpose2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
+{
+    reference::conv_transpose2d_backward_weight(g, x, gy, gw, scratch);
+}
+
+}  // namespace handemo::kernels
