@@ -4,3 +4,5 @@
 
 #include <handemo/motion/skeleton.hpp>
 #include <handemo/motion/clip.hpp>
+#include <handemo/motion/bvh.hpp>
+#include <handemo/motion/csv.hpp>

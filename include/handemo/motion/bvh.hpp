@@ -1,0 +1,568 @@
+// BVH (Biovision Hierarchy) motion files: reads any hierarchy (ROOT/JOINT/End Site, 3 or 6 channels per
+// joint in any order) into a `clip`, whose per-joint angle sequences are the P_j of Eq. 1 in Chan, Irimia,
+// Ho 2020, and writes a clip back in the conventional layout Blender and three.js import. The reader
+// checks everything at the boundary (sizes before allocating, numbers, finiteness, row counts) and names
+// the file and 1-based line in every `format_error`; nesting is parsed with an explicit stack, so a
+// deeply nested or hostile file cannot overflow the call stack.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/core/io.hpp>
+#include <handemo/motion/clip.hpp>
+
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+namespace handemo {
+
+/// Largest joint count a BVH file may declare; larger hierarchies are refused as corrupt.
+inline constexpr std::size_t bvh_max_joints = 10000;
+
+namespace detail {
+
+constexpr bool is_blank(char c) noexcept { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+enum class number_status { ok, not_a_number, not_finite };
+
+/// Parses a whole token as a decimal floating-point number (a leading '+' is accepted).
+inline number_status parse_number(std::string_view tok, double& out) noexcept
+{
+    if (tok.size() > 1 && tok.front() == '+' && tok[1] != '-' && tok[1] != '+') tok.remove_prefix(1);
+    if (tok.empty()) return number_status::not_a_number;
+    const char* end = tok.data() + tok.size();
+    const auto [p, ec] = std::from_chars(tok.data(), end, out);
+    if (p != end) return number_status::not_a_number;
+    if (ec == std::errc::result_out_of_range) return number_status::not_finite;
+    if (ec != std::errc()) return number_status::not_a_number;
+    return std::isfinite(out) ? number_status::ok : number_status::not_finite;
+}
+
+/// Appends `v` in fixed notation with `decimals` digits after the point, trailing zeros trimmed,
+/// "-0" written as "0".
+inline void append_fixed(std::string& out, double v, int decimals)
+{
+    char buf[400];
+    const auto [p, ec] = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+    if (ec != std::errc()) throw value_error("bvh: cannot format value " + std::to_string(v));
+    std::string_view s(buf, static_cast<std::size_t>(p - buf));
+    if (s.find('.') != std::string_view::npos) {
+        while (s.back() == '0') s.remove_suffix(1);
+        if (s.back() == '.') s.remove_suffix(1);
+    }
+    if (s == "-0") s = "0";
+    out += s;
+}
+
+/// Appends the shortest decimal text that reads back to exactly `v`.
+inline void append_shortest(std::string& out, double v)
+{
+    char buf[64];
+    const auto [p, ec] = std::to_chars(buf, buf + sizeof buf, v);
+    if (ec != std::errc()) throw value_error("format: cannot format value " + std::to_string(v));
+    out.append(buf, p);
+}
+
+/// Parses one BVH channel name (case-insensitive), e.g. "Zrotation".
+inline bool parse_channel(std::string_view tok, channel& out) noexcept
+{
+    if (tok.size() != 9) return false;
+    auto lower = [](char c) { return (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c; };
+    std::string s;
+    for (char c : tok) s += lower(c);
+    const int a = s[0] == 'x' ? 0 : s[0] == 'y' ? 1 : s[0] == 'z' ? 2 : -1;
+    if (a < 0) return false;
+    const std::string_view rest = std::string_view(s).substr(1);
+    if (rest == "position") out = static_cast<channel>(a);
+    else if (rest == "rotation") out = static_cast<channel>(3 + a);
+    else return false;
+    return true;
+}
+
+/// Checks a joint's channel list: 3 rotations (one per axis), optionally 3 positions (one per axis).
+/// Returns an empty string when valid, else what is wrong.
+inline std::string check_channels(const std::vector<channel>& chans)
+{
+    if (chans.size() != 3 && chans.size() != 6)
+        return "CHANNELS " + std::to_string(chans.size()) + " is not 3 or 6";
+    int rot[3] = {0, 0, 0}, pos[3] = {0, 0, 0};
+    for (channel c : chans) (is_rotation(c) ? rot : pos)[static_cast<int>(channel_axis(c))]++;
+    for (int a = 0; a < 3; ++a) {
+        if (rot[a] != 1)
+            return std::string("CHANNELS must name ") + "XYZ"[a] + "rotation exactly once, found " +
+                   std::to_string(rot[a]);
+        if (chans.size() == 6 && pos[a] != 1)
+            return std::string("CHANNELS 6 must name ") + "XYZ"[a] + "position exactly once, found " +
+                   std::to_string(pos[a]);
+    }
+    return {};
+}
+
+/// Token cursor over BVH text that tracks 1-based line numbers.
+class bvh_cursor {
+public:
+    bvh_cursor(std::string_view text, std::string_view source) : text_(text), src_(source)
+    {
+        if (text_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;  // UTF-8 byte-order mark
+    }
+
+    struct token {
+        std::string_view text;
+        long line;
+    };
+
+    [[noreturn]] void fail(long line, const std::string& msg) const
+    {
+        throw format_error("bvh: " + where(src_, line) + ": " + msg);
+    }
+
+    long line() const noexcept { return line_; }
+    bool at_end() const noexcept { return pos_ >= text_.size(); }
+
+    /// Next whitespace-separated token, crossing lines; empty text at end of file.
+    token next() noexcept
+    {
+        while (pos_ < text_.size() && (is_blank(text_[pos_]) || text_[pos_] == '\n')) {
+            if (text_[pos_] == '\n') ++line_;
+            ++pos_;
+        }
+        const std::size_t b = pos_;
+        while (pos_ < text_.size() && !is_blank(text_[pos_]) && text_[pos_] != '\n') ++pos_;
+        return {text_.substr(b, pos_ - b), line_};
+    }
+
+    /// Next token, failing with "unexpected end of file <context>" at the end.
+    token require(const std::string& context)
+    {
+        token t = next();
+        if (t.text.empty()) fail(line_, "unexpected end of file " + context);
+        return t;
+    }
+
+    /// The rest of the current line, trimmed (the cursor moves to the line break).
+    std::string_view rest_of_line() noexcept
+    {
+        const std::size_t b = pos_;
+        while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+        std::string_view s = text_.substr(b, pos_ - b);
+        while (!s.empty() && is_blank(s.front())) s.remove_prefix(1);
+        while (!s.empty() && is_blank(s.back())) s.remove_suffix(1);
+        return s;
+    }
+
+    /// Consumes the line break ending the current line (if any) and returns the next line, without
+    /// its line break; `line()` is its 1-based number.
+    std::string_view next_line() noexcept
+    {
+        if (pos_ < text_.size() && text_[pos_] == '\n') {
+            ++pos_;
+            ++line_;
+        }
+        const std::size_t b = pos_;
+        while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+        return text_.substr(b, pos_ - b);
+    }
+
+    /// Counts the non-blank lines after the current one, without moving.
+    std::size_t count_rows_after() const noexcept
+    {
+        std::size_t n = 0;
+        bool blank = true;
+        std::size_t p = pos_;
+        while (p < text_.size() && text_[p] != '\n') ++p;  // skip the current line
+        for (; p < text_.size(); ++p) {
+            const char c = text_[p];
+            if (c == '\n') {
+                if (!blank) ++n;
+                blank = true;
+            } else if (!is_blank(c)) {
+                blank = false;
+            }
+        }
+        if (!blank) ++n;
+        return n;
+    }
+
+    double number(const token& t, const std::string& field) const
+    {
+        double v = 0;
+        switch (parse_number(t.text, v)) {
+        case number_status::ok: return v;
+        case number_status::not_finite:
+            fail(t.line, field + ": value '" + std::string(t.text) + "' is not finite");
+        default: fail(t.line, field + ": '" + std::string(t.text) + "' is not a number");
+        }
+    }
+
+private:
+    std::string_view text_;
+    std::string_view src_;
+    std::size_t pos_ = 0;
+    long line_ = 1;
+};
+
+inline bool is_blank_line(std::string_view s) noexcept
+{
+    for (char c : s)
+        if (!is_blank(c)) return false;
+    return true;
+}
+
+}  // namespace detail
+
+/// @brief Parses BVH text into a clip.
+/// @param text the whole file (LF or CRLF line ends, spaces or tabs).
+/// @param source_name the file name used in error messages.
+/// @return a clip with angles [frames, J, 3] (x, y, z degrees), positions [frames, J, 3] (position
+/// channel values, or the joint's OFFSET where it has none) and fps = 1 / Frame Time (snapped to the
+/// nearest integer when within 1e-4 relative of it, so `Frame Time: 0.0333333` gives 30 fps).
+/// @throws format_error naming the file, 1-based line and field for any malformed, truncated,
+/// non-finite, inconsistent (Frames vs rows, values per row) or absurdly large input. Never returns a
+/// partial clip.
+inline clip parse_bvh(std::string_view text, std::string_view source_name)
+{
+    using detail::bvh_cursor;
+    bvh_cursor cur(text, source_name);
+
+    auto t = cur.next();
+    if (t.text != "HIERARCHY")
+        cur.fail(t.line, t.text.empty() ? std::string("empty file, expected HIERARCHY")
+                                        : "found '" + std::string(t.text) + "', expected HIERARCHY");
+
+    skeleton sk;
+    sk.name = std::string(source_name);
+    // Explicit stack of open blocks: a joint index, or -1 - joint for that joint's End Site block.
+    struct open_block {
+        int joint;
+        bool end_site;
+        bool has_offset;
+        bool has_channels;
+        long line;
+    };
+    std::vector<open_block> stack;
+    std::size_t total_channels = 0;
+
+    auto joint_name = [&](int j) { return "'" + sk.joints[static_cast<std::size_t>(j)].name + "'"; };
+    auto context = [&]() -> std::string {
+        if (stack.empty()) return "in HIERARCHY";
+        const auto& b = stack.back();
+        return std::string("in HIERARCHY (") + (b.end_site ? "End Site of joint " : "joint ") + joint_name(b.joint) +
+               " opened on line " + std::to_string(b.line) + " is not closed)";
+    };
+    auto read_offset = [&](const std::string& what) {
+        vec3 v{};
+        for (std::size_t k = 0; k < 3; ++k) v[k] = cur.number(cur.require(context()), "OFFSET of " + what);
+        return v;
+    };
+    auto open_joint = [&](long line, bool root) {
+        if (sk.joints.size() >= bvh_max_joints)
+            cur.fail(line, "more than " + std::to_string(bvh_max_joints) + " joints (corrupt file?)");
+        std::string_view name = cur.rest_of_line();
+        bool brace = false;
+        if (!name.empty() && name.back() == '{') {
+            brace = true;
+            name.remove_suffix(1);
+            while (!name.empty() && detail::is_blank(name.back())) name.remove_suffix(1);
+        }
+        if (name.empty()) cur.fail(line, std::string(root ? "ROOT" : "JOINT") + " has no name");
+        if (name.find_first_of("{}") != std::string_view::npos)
+            cur.fail(line, "joint name '" + std::string(name) + "' contains a brace");
+        joint j;
+        j.name = std::string(name);
+        j.parent = root ? -1 : stack.back().joint;
+        j.channels.clear();
+        sk.joints.push_back(std::move(j));
+        const int idx = static_cast<int>(sk.joints.size() - 1);
+        if (!brace) {
+            auto b = cur.require(context());
+            if (b.text != "{")
+                cur.fail(b.line, "found '" + std::string(b.text) + "' after joint '" + std::string(name) + "', expected {");
+        }
+        stack.push_back({idx, false, false, false, line});
+    };
+
+    t = cur.next();
+    for (;;) {
+        if (t.text.empty()) cur.fail(cur.line(), "unexpected end of file " + context());
+        if (stack.empty()) {
+            if (t.text == "ROOT") {
+                open_joint(t.line, true);
+            } else if (t.text == "MOTION") {
+                if (sk.joints.empty()) cur.fail(t.line, "MOTION before any ROOT joint");
+                break;
+            } else {
+                cur.fail(t.line, "found '" + std::string(t.text) + "', expected ROOT or MOTION");
+            }
+        } else if (stack.back().end_site) {
+            auto& b = stack.back();
+            if (t.text == "OFFSET") {
+                if (b.has_offset) cur.fail(t.line, "second OFFSET in End Site of joint " + joint_name(b.joint));
+                sk.joints[static_cast<std::size_t>(b.joint)].end_site =
+                    read_offset("End Site of joint " + joint_name(b.joint));
+                b.has_offset = true;
+            } else if (t.text == "}") {
+                if (!b.has_offset) cur.fail(t.line, "End Site of joint " + joint_name(b.joint) + " has no OFFSET");
+                stack.pop_back();
+            } else {
+                cur.fail(t.line, "found '" + std::string(t.text) + "' in End Site of joint " + joint_name(b.joint) +
+                                     ", expected OFFSET or }");
+            }
+        } else {
+            auto& b = stack.back();
+            joint& jt = sk.joints[static_cast<std::size_t>(b.joint)];
+            if (t.text == "OFFSET") {
+                if (b.has_offset) cur.fail(t.line, "second OFFSET in joint " + joint_name(b.joint));
+                jt.offset = read_offset("joint " + joint_name(b.joint));
+                b.has_offset = true;
+            } else if (t.text == "CHANNELS") {
+                if (b.has_channels) cur.fail(t.line, "second CHANNELS in joint " + joint_name(b.joint));
+                const auto n = cur.require(context());
+                unsigned count = 0;
+                const auto [p, ec] = std::from_chars(n.text.data(), n.text.data() + n.text.size(), count);
+                if (ec != std::errc() || p != n.text.data() + n.text.size())
+                    cur.fail(n.line, "CHANNELS count '" + std::string(n.text) + "' of joint " + joint_name(b.joint) +
+                                         " is not a number");
+                if (count != 3 && count != 6)
+                    cur.fail(n.line, "CHANNELS " + std::string(n.text) + " is not 3 or 6 (joint " +
+                                         joint_name(b.joint) + ")");
+                for (unsigned k = 0; k < count; ++k) {
+                    const auto c = cur.require(context());
+                    channel ch{};
+                    if (!detail::parse_channel(c.text, ch))
+                        cur.fail(c.line, "unknown channel '" + std::string(c.text) + "' in joint " + joint_name(b.joint) +
+                                             ", expected Xposition, Yposition, Zposition, Xrotation, Yrotation or "
+                                             "Zrotation");
+                    jt.channels.push_back(ch);
+                }
+                if (auto msg = detail::check_channels(jt.channels); !msg.empty())
+                    cur.fail(n.line, msg + " (joint " + joint_name(b.joint) + ")");
+                total_channels += count;
+                b.has_channels = true;
+            } else if (t.text == "JOINT") {
+                if (!b.has_channels) cur.fail(t.line, "joint " + joint_name(b.joint) + " has no CHANNELS before JOINT");
+                open_joint(t.line, false);
+            } else if (t.text == "End") {
+                const auto s = cur.require(context());
+                if (s.text != "Site")
+                    cur.fail(s.line, "found 'End " + std::string(s.text) + "', expected End Site");
+                if (jt.end_site) cur.fail(t.line, "second End Site in joint " + joint_name(b.joint));
+                const auto br = cur.require(context());
+                if (br.text != "{") cur.fail(br.line, "found '" + std::string(br.text) + "' after End Site, expected {");
+                stack.push_back({b.joint, true, false, false, t.line});
+            } else if (t.text == "}") {
+                if (!b.has_offset) cur.fail(t.line, "joint " + joint_name(b.joint) + " has no OFFSET");
+                if (!b.has_channels) cur.fail(t.line, "joint " + joint_name(b.joint) + " has no CHANNELS");
+                stack.pop_back();
+            } else {
+                cur.fail(t.line, "found '" + std::string(t.text) + "' in joint " + joint_name(b.joint) +
+                                     ", expected OFFSET, CHANNELS, JOINT, End Site or }");
+            }
+        }
+        t = cur.next();
+    }
+
+    // MOTION header: "Frames: N" and "Frame Time: T" (the number may be glued to the colon).
+    auto f = cur.require("after MOTION, expected Frames:");
+    const long frames_line = f.line;
+    std::string_view frames_text;
+    if (f.text.substr(0, 7) == "Frames:") {
+        frames_text = f.text.substr(7);
+        if (frames_text.empty()) frames_text = cur.require("after Frames:").text;
+    } else {
+        cur.fail(f.line, "found '" + std::string(f.text) + "', expected Frames:");
+    }
+    std::uint64_t frames = 0;
+    {
+        const auto [p, ec] = std::from_chars(frames_text.data(), frames_text.data() + frames_text.size(), frames);
+        if (ec != std::errc() || p != frames_text.data() + frames_text.size())
+            cur.fail(frames_line, "Frames: '" + std::string(frames_text) + "' is not a non-negative integer");
+    }
+    if (frames == 0) cur.fail(frames_line, "Frames: 0, a clip needs at least one frame");
+
+    auto ft = cur.require("after Frames, expected Frame Time:");
+    if (ft.text != "Frame") cur.fail(ft.line, "found '" + std::string(ft.text) + "', expected Frame Time:");
+    auto tm = cur.require("after Frame, expected Time:");
+    std::string_view time_text;
+    if (tm.text.substr(0, 5) == "Time:") {
+        time_text = tm.text.substr(5);
+        if (time_text.empty()) {
+            tm = cur.require("after Frame Time:");
+            time_text = tm.text;
+        }
+    } else {
+        cur.fail(tm.line, "found 'Frame " + std::string(tm.text) + "', expected Frame Time:");
+    }
+    const double frame_time = cur.number({time_text, tm.line}, "Frame Time");
+    if (!(frame_time > 0)) cur.fail(tm.line, "Frame Time " + std::string(time_text) + " is not positive");
+    if (auto rest = cur.rest_of_line(); !rest.empty())
+        cur.fail(cur.line(), "unexpected '" + std::string(rest) + "' after Frame Time");
+
+    // Count the data rows before allocating anything sized by Frames.
+    const std::size_t rows = cur.count_rows_after();
+    if (rows != frames)
+        cur.fail(frames_line, "Frames: " + std::to_string(frames) + " but the file has " + std::to_string(rows) +
+                                  " data row" + (rows == 1 ? "" : "s") +
+                                  (rows < frames ? " (truncated motion?)" : " (extra rows?)"));
+
+    // Column k of a row -> (joint, channel).
+    std::vector<std::pair<std::size_t, channel>> columns;
+    columns.reserve(total_channels);
+    for (std::size_t j = 0; j < sk.joints.size(); ++j)
+        for (channel c : sk.joints[j].channels) columns.emplace_back(j, c);
+
+    const std::size_t J = sk.joints.size();
+    clip out = clip::make(std::move(sk), static_cast<std::size_t>(frames), 1.0 / frame_time);
+    if (const double r = std::round(out.fps); r >= 1 && std::abs(out.fps - r) <= 1e-4 * r) out.fps = r;
+
+    std::size_t frame = 0;
+    while (frame < frames) {
+        const std::string_view row = cur.next_line();
+        if (detail::is_blank_line(row)) continue;
+        const long line = cur.line();
+        std::size_t k = 0, p = 0;
+        for (;;) {
+            while (p < row.size() && detail::is_blank(row[p])) ++p;
+            if (p >= row.size()) break;
+            const std::size_t b = p;
+            while (p < row.size() && !detail::is_blank(row[p])) ++p;
+            if (k >= columns.size()) {
+                std::size_t n = k + 1;  // count all values for the message
+                for (;;) {
+                    while (p < row.size() && detail::is_blank(row[p])) ++p;
+                    if (p >= row.size()) break;
+                    while (p < row.size() && !detail::is_blank(row[p])) ++p;
+                    ++n;
+                }
+                cur.fail(line, "row has " + std::to_string(n) + " values, expected " + std::to_string(columns.size()));
+            }
+            const auto [j, ch] = columns[k];
+            const std::string field = "frame " + std::to_string(frame) + " joint '" + out.skel.joints[j].name + "' " +
+                                      std::string(channel_name(ch));
+            const double v = cur.number({row.substr(b, p - b), line}, field);
+            const auto a = static_cast<std::size_t>(channel_axis(ch));
+            (is_rotation(ch) ? out.angles : out.positions)[(frame * J + j) * 3 + a] = v;
+            ++k;
+        }
+        if (k != columns.size())
+            cur.fail(line, "row has " + std::to_string(k) + " values, expected " + std::to_string(columns.size()));
+        ++frame;
+    }
+    return out;
+}
+
+/// @brief Reads a BVH file.
+/// @throws io_error when the file cannot be read; format_error (file, line, field) when it is malformed.
+inline clip read_bvh(const std::filesystem::path& path) { return parse_bvh(read_file(path), path.string()); }
+
+/// @brief Formats a clip as BVH text: HIERARCHY with ROOT/JOINT/End Site blocks indented by tabs,
+/// channels in each joint's stored order, then MOTION, Frames:, Frame Time: and one row per frame.
+/// Joints are written depth-first from the parent indices (the clip's order when it came from a file).
+/// @param precision digits after the decimal point for OFFSET and motion values (0..17).
+/// @throws value_error / shape_error when the clip is inconsistent (see clip::validate), a joint's
+/// channels are not 3 rotations (+ 3 positions) or a name cannot be written.
+inline std::string to_bvh_string(const clip& c, int precision = 6)
+{
+    c.validate("to_bvh_string");
+    if (precision < 0 || precision > 17)
+        throw value_error("to_bvh_string: precision " + std::to_string(precision) + " is not in 0..17");
+    const skeleton& sk = c.skel;
+    const std::size_t J = sk.size();
+    std::vector<std::vector<std::size_t>> children(J);
+    std::vector<std::size_t> roots;
+    for (std::size_t j = 0; j < J; ++j) {
+        const joint& jt = sk.joints[j];
+        if (auto msg = detail::check_channels(jt.channels); !msg.empty())
+            throw value_error("to_bvh_string: joint '" + jt.name + "': " + msg);
+        if (jt.name.empty() || jt.name.find_first_of("{}\r\n") != std::string::npos ||
+            detail::is_blank(jt.name.front()) || detail::is_blank(jt.name.back()))
+            throw value_error("to_bvh_string: joint " + std::to_string(j) + " name '" + jt.name +
+                              "' is empty or has braces, line breaks or surrounding blanks");
+        if (jt.parent < 0) roots.push_back(j);
+        else children[static_cast<std::size_t>(jt.parent)].push_back(j);
+    }
+
+    // Depth-first pre-order with an explicit stack.
+    std::vector<std::pair<std::size_t, std::size_t>> order;  // (joint, depth)
+    order.reserve(J);
+    {
+        std::vector<std::pair<std::size_t, std::size_t>> st;
+        for (auto r = roots.rbegin(); r != roots.rend(); ++r) st.emplace_back(*r, 0);
+        while (!st.empty()) {
+            const auto [j, d] = st.back();
+            st.pop_back();
+            order.emplace_back(j, d);
+            for (auto ch = children[j].rbegin(); ch != children[j].rend(); ++ch) st.emplace_back(*ch, d + 1);
+        }
+    }
+
+    std::string s;
+    s.reserve(64 * J + c.frames * J * 6 * 10);
+    auto indent = [&](std::size_t d) { s.append(d, '\t'); };
+    auto vec = [&](const vec3& v) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            s += ' ';
+            detail::append_fixed(s, v[k], precision);
+        }
+    };
+    std::vector<std::size_t> open;  // joints whose block is open
+    auto close = [&]() {
+        const std::size_t j = open.back();
+        const std::size_t d = open.size() - 1;
+        if (sk.joints[j].end_site) {
+            indent(d + 1), s += "End Site\n";
+            indent(d + 1), s += "{\n";
+            indent(d + 2), s += "OFFSET", vec(*sk.joints[j].end_site), s += '\n';
+            indent(d + 1), s += "}\n";
+        }
+        indent(d), s += "}\n";
+        open.pop_back();
+    };
+    s += "HIERARCHY\n";
+    for (const auto& [j, d] : order) {
+        while (open.size() > d) close();
+        const joint& jt = sk.joints[j];
+        indent(d), s += (d == 0 ? "ROOT " : "JOINT "), s += jt.name, s += '\n';
+        indent(d), s += "{\n";
+        indent(d + 1), s += "OFFSET", vec(jt.offset), s += '\n';
+        indent(d + 1), s += "CHANNELS ", s += std::to_string(jt.channels.size());
+        for (channel ch : jt.channels) s += ' ', s += channel_name(ch);
+        s += '\n';
+        open.push_back(j);
+    }
+    while (!open.empty()) close();
+
+    s += "MOTION\nFrames:\t" + std::to_string(c.frames) + "\nFrame Time:\t";
+    {
+        char buf[64];
+        const auto [p, ec] = std::to_chars(buf, buf + sizeof buf, 1.0 / c.fps, std::chars_format::general, 10);
+        (void)ec;
+        s.append(buf, p);
+    }
+    s += '\n';
+    for (std::size_t f = 0; f < c.frames; ++f) {
+        bool first = true;
+        for (const auto& [j, d] : order) {
+            for (channel ch : sk.joints[j].channels) {
+                if (!first) s += ' ';
+                first = false;
+                const auto a = static_cast<std::size_t>(channel_axis(ch));
+                detail::append_fixed(s, is_rotation(ch) ? c.angle(f, j, a) : c.position(f, j, a), precision);
+            }
+        }
+        s += '\n';
+    }
+    return s;
+}
+
+/// @brief Writes a clip as a BVH file atomically (temporary file + rename).
+/// @throws value_error / shape_error for an inconsistent clip, io_error when the file cannot be written.
+inline void write_bvh(const std::filesystem::path& path, const clip& c) { write_file_atomic(path, to_bvh_string(c)); }
+
+}  // namespace handemo
