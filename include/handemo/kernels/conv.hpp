@@ -8,17 +8,26 @@
 #pragma once
 
 #include <cstddef>
+#include <type_traits>
 
+#include <handemo/kernels/detail/conv_simd.hpp>
 #include <handemo/kernels/reference.hpp>
 
 namespace handemo::kernels {
+
+namespace detail {
+/// float and double take the xsimd path; any other T the reference loops.
+template <class T>
+inline constexpr bool fast_type = std::is_same_v<T, float> || std::is_same_v<T, double>;
+}  // namespace detail
 
 /// @brief Elements of T the kernels of this file need as `scratch` for geometry g (the maximum over all
 /// of conv2d_forward / backward_data / backward_weight and the conv_transpose2d functions).
 template <class T>
 std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
 {
-    return reference::conv2d_scratch_size<T>(g);
+    if constexpr (detail::fast_type<T>) return detail::scratch_elements<T>(g);
+    else return reference::conv2d_scratch_size<T>(g);
 }
 
 /// @brief y = conv(x, w) + bias (PyTorch Conv2d).
@@ -32,7 +41,8 @@ std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
 template <class T>
 void conv2d_forward(const conv_geometry& g, const T* x, const T* w, const T* bias_or_null, T* y, T* scratch) noexcept
 {
-    reference::conv2d_forward(g, x, w, bias_or_null, y, scratch);
+    if constexpr (detail::fast_type<T>) detail::forward(g, x, w, bias_or_null, y, scratch, false);
+    else reference::conv2d_forward(g, x, w, bias_or_null, y, scratch);
 }
 
 /// @brief gx += dL/dx.  dL/dx[n,c,h,w] = sum_{o,u,v: h = i*s-p+u, w = j*s-p+v} gy[n,o,i,j] w[o,c,u,v]
@@ -41,7 +51,8 @@ void conv2d_forward(const conv_geometry& g, const T* x, const T* w, const T* bia
 template <class T>
 void conv2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
 {
-    reference::conv2d_backward_data(g, gy, w, gx, scratch);
+    if constexpr (detail::fast_type<T>) detail::backward_data(g, gy, w, gx, scratch);
+    else reference::conv2d_backward_data(g, gy, w, gx, scratch);
 }
 
 /// @brief gw += dL/dw.  dL/dw[o,c,u,v] = sum_{n,i,j} gy[n,o,i,j] x[n,c,i*s-p+u, j*s-p+v]
@@ -50,7 +61,8 @@ void conv2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
 template <class T>
 void conv2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
 {
-    reference::conv2d_backward_weight(g, x, gy, gw, scratch);
+    if constexpr (detail::fast_type<T>) detail::backward_weight(g, x, gy, gw, scratch);
+    else reference::conv2d_backward_weight(g, x, gy, gw, scratch);
 }
 
 /// @brief gb += dL/db.  dL/db[o] = sum_{n,i,j} gy[n,o,i,j]
@@ -71,7 +83,13 @@ void conv2d_backward_bias(const conv_geometry& g, const T* gy, T* gb) noexcept
 template <class T>
 void conv_transpose2d_forward(const conv_geometry& g, const T* x, const T* w, T* y, T* scratch) noexcept
 {
-    reference::conv_transpose2d_forward(g, x, w, y, scratch);
+    if constexpr (detail::fast_type<T>) {
+        const std::size_t ny = g.x_size();
+        for (std::size_t k = 0; k < ny; ++k) y[k] = T(0);
+        detail::backward_data(g, x, w, y, scratch);
+    } else {
+        reference::conv_transpose2d_forward(g, x, w, y, scratch);
+    }
 }
 
 /// @brief gx += dL/dx of conv_transpose2d_forward = conv2d_forward(g, gy, w) without bias.
@@ -80,7 +98,8 @@ void conv_transpose2d_forward(const conv_geometry& g, const T* x, const T* w, T*
 template <class T>
 void conv_transpose2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
 {
-    reference::conv_transpose2d_backward_data(g, gy, w, gx, scratch);
+    if constexpr (detail::fast_type<T>) detail::forward(g, gy, w, static_cast<const T*>(nullptr), gx, scratch, true);
+    else reference::conv_transpose2d_backward_data(g, gy, w, gx, scratch);
 }
 
 /// @brief gw += dL/dw of conv_transpose2d_forward = conv2d_backward_weight(g, x := gy, gy := x).
@@ -90,7 +109,8 @@ void conv_transpose2d_backward_data(const conv_geometry& g, const T* gy, const T
 template <class T>
 void conv_transpose2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
 {
-    reference::conv_transpose2d_backward_weight(g, x, gy, gw, scratch);
+    if constexpr (detail::fast_type<T>) detail::backward_weight(g, gy, x, gw, scratch);
+    else reference::conv_transpose2d_backward_weight(g, x, gy, gw, scratch);
 }
 
 }  // namespace handemo::kernels

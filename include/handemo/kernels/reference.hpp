@@ -152,7 +152,7 @@ void conv_transpose2d_forward(const conv_geometry& g, const T* x, const T* w, T*
 {
     const std::size_t ny = g.x_size();
     for (std::size_t k = 0; k < ny; ++k) y[k] = T(0);
-    conv2d_backward_data(g, x, w, y, scratch);
+    reference::conv2d_backward_data(g, x, w, y, scratch);
 }
 
 /// @brief gx += dL/dx of conv_transpose2d_forward: the forward convolution of gy (no bias).
@@ -186,7 +186,7 @@ void conv_transpose2d_backward_data(const conv_geometry& g, const T* gy, const T
 template <class T>
 void conv_transpose2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
 {
-    conv2d_backward_weight(g, gy, x, gw, scratch);
+    reference::conv2d_backward_weight(g, gy, x, gw, scratch);
 }
 
 }  // namespace reference

@@ -1,0 +1,281 @@
+// The fast convolution path behind kernels/conv.hpp: every convolution pass of the StarGAN (Chan et al.
+// 2020, Sec. 3.3) is written as a small GEMM C[j][i] (+)= sum_k V[k][i] S[j][k] computed by one
+// register-blocked xsimd micro-kernel: NV SIMD vectors along i (MR = NV * lanes, the vectorised dimension)
+// times NR broadcast rows along j, 12 FMA accumulators. V is either packed (implicit im2col, zero-padded)
+// or read in place; S is always read in place with arbitrary strides, so the weights are never repacked.
+//   forward          i = output pixel (batch folded in), j = out channel, k = (c,u,v)
+//   backward-data    i = (c,u,v),  j = output pixel, k = out channel, then a col2im scatter-add
+//   backward-weight  i = (c,u,v),  j = out channel, k = output pixel (summed over the batch)
+// The architecture is whatever xsimd's default_arch is for the target's -march (AVX2 + FMA on x86-64-v3).
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include <xsimd/xsimd.hpp>
+
+#include <handemo/kernels/reference.hpp>
+
+namespace handemo::kernels::detail {
+
+template <class T>
+using simd_t = xsimd::batch<T>;
+
+template <class T>
+inline constexpr int simd_lanes = int(simd_t<T>::size);
+
+/// Vectors per micro-tile along i, broadcast rows along j (NV * NR = 12 accumulators + NV + 1 <= 16 regs).
+inline constexpr int micro_nv = 3;
+inline constexpr int micro_nr = 4;
+template <class T>
+inline constexpr int micro_mr = micro_nv * simd_lanes<T>;
+/// Reduction block of the forward pass: the packed V block (kc x MR) stays in L1.
+inline constexpr int forward_kc = 256;
+
+/// tile[j][0..MR) (+)= sum_{k<kc} v[k*vk + 0..MR) * s[j*sj + k*sk], j < NR.
+/// accumulate = false starts from zero, true from the current tile.
+template <class T, int NR>
+inline void micro_kernel(int kc, const T* __restrict v, std::ptrdiff_t vk, const T* __restrict s,
+                         std::ptrdiff_t sj, std::ptrdiff_t sk, T* __restrict tile, bool accumulate) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>, NV = micro_nv, MR = micro_mr<T>;
+    B acc[NR][NV];
+    if (accumulate) {
+        for (int j = 0; j < NR; ++j)
+            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_unaligned(tile + j * MR + q * L);
+    } else {
+        for (int j = 0; j < NR; ++j)
+            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
+    }
+    const T* sp[NR];
+    for (int j = 0; j < NR; ++j) sp[j] = s + j * sj;
+    if (sk == 1) {
+        for (int k = 0; k < kc; ++k) {
+            B a[NV];
+            for (int q = 0; q < NV; ++q) a[q] = B::load_unaligned(v + q * L);
+            for (int j = 0; j < NR; ++j) {
+                const B b(sp[j][k]);
+                for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
+            }
+            v += vk;
+        }
+    } else {
+        std::ptrdiff_t off = 0;
+        for (int k = 0; k < kc; ++k) {
+            B a[NV];
+            for (int q = 0; q < NV; ++q) a[q] = B::load_unaligned(v + q * L);
+            for (int j = 0; j < NR; ++j) {
+                const B b(sp[j][off]);
+                for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
+            }
+            v += vk;
+            off += sk;
+        }
+    }
+    for (int j = 0; j < NR; ++j)
+        for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
+}
+
+template <class T>
+inline void micro_dispatch(int nr, int kc, const T* v, std::ptrdiff_t vk, const T* s, std::ptrdiff_t sj,
+                           std::ptrdiff_t sk, T* tile, bool accumulate) noexcept
+{
+    static_assert(micro_nr == 4, "micro_dispatch handles nr = 1..4 (micro_nr changed)");
+    switch (nr) {
+    case 4: micro_kernel<T, 4>(kc, v, vk, s, sj, sk, tile, accumulate); break;
+    case 3: micro_kernel<T, 3>(kc, v, vk, s, sj, sk, tile, accumulate); break;
+    case 2: micro_kernel<T, 2>(kc, v, vk, s, sj, sk, tile, accumulate); break;
+    default: micro_kernel<T, 1>(kc, v, vk, s, sj, sk, tile, accumulate); break;
+    }
+}
+
+/// Scratch elements of the fast path for geometry g (max over all passes), see each pass for its parts.
+template <class T>
+inline std::size_t scratch_elements(const conv_geometry& g) noexcept
+{
+    constexpr std::size_t MR = micro_mr<T>, NR = micro_nr;
+    const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
+    const std::size_t P = std::size_t(g.out_h()) * g.out_w();
+    const std::size_t co_r = (std::size_t(g.out_channels) + NR - 1) / NR * NR;
+    const std::size_t tile = NR * MR;
+    const std::size_t fwd = std::min<std::size_t>(K, forward_kc) * MR + tile;
+    const std::size_t bwd_data = std::size_t(g.out_channels) * MR + tile;
+    const std::size_t bwd_weight = P * MR + co_r * MR;
+    return std::max({fwd, bwd_data, bwd_weight}) + 64 / sizeof(T);
+}
+
+/// Forward pass (also the backward-data of the transposed convolution).
+/// mode 0: y = conv + bias (bias may be null); mode 1: y += conv.
+template <class T>
+inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                    bool accumulate_out) noexcept
+{
+    constexpr int MR = micro_mr<T>, NR = micro_nr, L = simd_lanes<T>;
+    using B = simd_t<T>;
+    const int oh = g.out_h(), ow = g.out_w(), P = oh * ow, Ptot = P * g.batch;
+    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
+    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w;
+    T* vp = scratch;
+    T* tile = scratch + std::size_t(std::min(K, forward_kc)) * MR;
+    // per-lane geometry of the current panel
+    std::ptrdiff_t xbase[MR], ybase[MR];
+    int ih0[MR], iw0[MR];
+    for (int p0 = 0; p0 < Ptot; p0 += MR) {
+        const int np = std::min(MR, Ptot - p0);
+        for (int i = 0; i < MR; ++i) {
+            const int p = p0 + std::min(i, np - 1), n = p / P, r = p % P, oy = r / ow, ox = r % ow;
+            ih0[i] = i < np ? oy * g.stride - g.pad : -1000000;  // dead lanes always read as padding
+            iw0[i] = ox * g.stride - g.pad;
+            xbase[i] = std::ptrdiff_t(n) * g.in_channels * HW + std::ptrdiff_t(ih0[i]) * g.in_w + iw0[i];
+            ybase[i] = std::ptrdiff_t(n) * Co * P + r;
+        }
+        const bool contiguous = np == MR && ybase[MR - 1] - ybase[0] == MR - 1;
+        for (int k0 = 0; k0 < K; k0 += forward_kc) {
+            const int kc = std::min(forward_kc, K - k0);
+            // pack V[k][i] = x[n_i, c, ih0_i + u, iw0_i + v] (0 outside), k = (c, u, v)
+            {
+                int c = k0 / (kh * kw), u = (k0 / kw) % kh, v = k0 % kw;
+                T* dst = vp;
+                for (int k = 0; k < kc; ++k) {
+                    const std::ptrdiff_t off = c * HW + std::ptrdiff_t(u) * g.in_w + v;
+                    for (int i = 0; i < MR; ++i) {
+                        const bool in = unsigned(ih0[i] + u) < unsigned(g.in_h) && unsigned(iw0[i] + v) < unsigned(g.in_w);
+                        dst[i] = in ? x[xbase[i] + off] : T(0);
+                    }
+                    dst += MR;
+                    if (++v == kw) {
+                        v = 0;
+                        if (++u == kh) u = 0, ++c;
+                    }
+                }
+            }
+            const bool first = k0 == 0, add = !first || accumulate_out;
+            for (int o0 = 0; o0 < Co; o0 += NR) {
+                const int nr = std::min(NR, Co - o0);
+                micro_dispatch<T>(nr, kc, vp, MR, w + std::ptrdiff_t(o0) * K + k0, K, 1, tile, false);
+                for (int j = 0; j < nr; ++j) {
+                    const T b = (first && bias) ? bias[o0 + j] : T(0);
+                    const T* t = tile + j * MR;
+                    const std::ptrdiff_t yo = std::ptrdiff_t(o0 + j) * P;
+                    if (contiguous) {
+                        T* yp = y + ybase[0] + yo;
+                        for (int q = 0; q < MR; q += L) {
+                            B r = B::load_unaligned(t + q) + B(b);
+                            if (add) r += B::load_unaligned(yp + q);
+                            r.store_unaligned(yp + q);
+                        }
+                    } else {
+                        for (int i = 0; i < np; ++i) {
+                            T& dst = y[ybase[i] + yo];
+                            dst = (add ? dst : T(0)) + t[i] + b;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Backward-data pass: gx += col2im(W^T gy), the GEMM done per image with V = W read in place
+/// (k-rows of W are contiguous along (c,u,v)) and S = gy read in place, then scattered into gx.
+template <class T>
+inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
+{
+    constexpr int MR = micro_mr<T>, NR = micro_nr;
+    const int oh = g.out_h(), ow = g.out_w(), P = oh * ow;
+    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
+    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w;
+    T* vpack = scratch;
+    T* tile = scratch + std::size_t(Co) * MR;
+    std::ptrdiff_t koff[MR];
+    int ku[MR], kv[MR];
+    for (int k0 = 0; k0 < K; k0 += MR) {
+        const int nk = std::min(MR, K - k0);
+        for (int i = 0; i < MR; ++i) {
+            const int k = k0 + std::min(i, nk - 1), c = k / (kh * kw), u = (k / kw) % kh, v = k % kw;
+            ku[i] = u;
+            kv[i] = v;
+            koff[i] = c * HW + std::ptrdiff_t(u) * g.in_w + v;
+        }
+        const T* vsrc = w + k0;
+        std::ptrdiff_t vk = K;
+        if (nk < MR) {  // partial panel: copy with zero lanes so no load runs past w
+            for (int o = 0; o < Co; ++o)
+                for (int i = 0; i < MR; ++i) vpack[std::ptrdiff_t(o) * MR + i] = i < nk ? w[std::ptrdiff_t(o) * K + k0 + i] : T(0);
+            vsrc = vpack;
+            vk = MR;
+        }
+        for (int n = 0; n < g.batch; ++n) {
+            const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
+            T* gxn = gx + std::ptrdiff_t(n) * g.in_channels * HW;
+            for (int p0 = 0; p0 < P; p0 += NR) {
+                const int nr = std::min(NR, P - p0);
+                micro_dispatch<T>(nr, Co, vsrc, vk, gyn + p0, 1, P, tile, false);
+                for (int j = 0; j < nr; ++j) {
+                    const int p = p0 + j, ih0 = (p / ow) * g.stride - g.pad, iw0 = (p % ow) * g.stride - g.pad;
+                    T* base = gxn + std::ptrdiff_t(ih0) * g.in_w + iw0;
+                    const T* t = tile + j * MR;
+                    for (int i = 0; i < nk; ++i)
+                        if (unsigned(ih0 + ku[i]) < unsigned(g.in_h) && unsigned(iw0 + kv[i]) < unsigned(g.in_w))
+                            base[koff[i]] += t[i];
+                }
+            }
+        }
+    }
+}
+
+/// Backward-weight pass: gw[o, k] += sum_{n,p} gy[n,o,p] col_n[k,p]; V = col_n^T packed per image
+/// (P x MR), S = gy rows in place, partial sums for all out channels kept in scratch across the batch.
+/// `x` plays the role of the input, `gy` of the output gradient (swapped for the transposed conv).
+template <class T>
+inline void backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
+{
+    constexpr int MR = micro_mr<T>, NR = micro_nr, L = simd_lanes<T>;
+    using B = simd_t<T>;
+    const int oh = g.out_h(), ow = g.out_w(), P = oh * ow;
+    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
+    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w;
+    T* vp = scratch;
+    T* acc = scratch + std::size_t(P) * MR;
+    std::ptrdiff_t koff[MR];
+    int ku[MR], kv[MR];
+    for (int k0 = 0; k0 < K; k0 += MR) {
+        const int nk = std::min(MR, K - k0);
+        for (int i = 0; i < MR; ++i) {
+            const int k = k0 + std::min(i, nk - 1), c = k / (kh * kw), u = (k / kw) % kh, v = k % kw;
+            ku[i] = i < nk ? u : -1000000;  // dead lanes always read as padding
+            kv[i] = v;
+            koff[i] = c * HW + std::ptrdiff_t(u) * g.in_w + v;
+        }
+        for (int n = 0; n < g.batch; ++n) {
+            const T* xn = x + std::ptrdiff_t(n) * g.in_channels * HW;
+            T* dst = vp;
+            for (int p = 0; p < P; ++p) {
+                const int ih0 = (p / ow) * g.stride - g.pad, iw0 = (p % ow) * g.stride - g.pad;
+                const T* base = xn + std::ptrdiff_t(ih0) * g.in_w + iw0;
+                for (int i = 0; i < MR; ++i) {
+                    const bool in = unsigned(ih0 + ku[i]) < unsigned(g.in_h) && unsigned(iw0 + kv[i]) < unsigned(g.in_w);
+                    dst[i] = in ? base[koff[i]] : T(0);
+                }
+                dst += MR;
+            }
+            const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
+            for (int o0 = 0; o0 < Co; o0 += NR)
+                micro_dispatch<T>(std::min(NR, Co - o0), P, vp, MR, gyn + std::ptrdiff_t(o0) * P, P, 1,
+                                  acc + std::ptrdiff_t(o0) * MR, n > 0);
+        }
+        for (int o = 0; o < Co; ++o) {
+            T* dst = gw + std::ptrdiff_t(o) * K + k0;
+            const T* src = acc + std::ptrdiff_t(o) * MR;
+            if (nk == MR) {
+                for (int q = 0; q < MR; q += L) (B::load_unaligned(dst + q) + B::load_unaligned(src + q)).store_unaligned(dst + q);
+            } else {
+                for (int i = 0; i < nk; ++i) dst[i] += src[i];
+            }
+        }
+    }
+}
+
+}  // namespace handemo::kernels::detail

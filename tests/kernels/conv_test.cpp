@@ -1,0 +1,179 @@
+// Fast (xsimd) convolution kernels against the plain-loop reference: every StarGAN conv shape of the
+// generator and discriminator and random odd geometries, all passes, float and double.
+#include <doctest/doctest.h>
+
+#include <handemo/kernels/conv.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace hk = handemo::kernels;
+
+namespace {
+
+std::string describe(const hk::conv_geometry& g)
+{
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "b%d %dx%dx%d -> %d k%dx%d s%d p%d", g.batch, g.in_channels, g.in_h, g.in_w,
+                  g.out_channels, g.kernel_h, g.kernel_w, g.stride, g.pad);
+    return buf;
+}
+
+std::vector<double> random_vector(std::size_t n, std::mt19937& rng)
+{
+    std::uniform_real_distribution<double> d(-1.0, 1.0);
+    std::vector<double> v(n);
+    for (auto& e : v) e = d(rng);
+    return v;
+}
+
+template <class T>
+std::vector<T> cast(const std::vector<double>& v)
+{
+    return std::vector<T>(v.begin(), v.end());
+}
+
+constexpr int guard = 17;  // trailing elements that must stay untouched
+
+/// max |got - want| / max(max |want|, 1e-30) over the first want.size() elements; guard checked.
+template <class T>
+double rel_error(const std::vector<T>& got, const std::vector<double>& want)
+{
+    double num = 0, den = 1e-30;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+        num = std::max(num, std::abs(double(got[i]) - want[i]));
+        den = std::max(den, std::abs(want[i]));
+    }
+    for (std::size_t i = want.size(); i < got.size(); ++i)
+        if (got[i] != T(7)) return 1e9;  // write past the end
+    return num / den;
+}
+
+template <class T>
+std::vector<T> with_guard(const std::vector<double>& v)
+{
+    std::vector<T> r(v.begin(), v.end());
+    r.resize(v.size() + guard, T(7));
+    return r;
+}
+
+template <class T>
+void check_geometry(const hk::conv_geometry& g, double tol, unsigned seed)
+{
+    INFO(describe(g), " T=", sizeof(T) == 4 ? "float" : "double");
+    std::mt19937 rng(seed);
+    const auto x = random_vector(g.x_size(), rng), w = random_vector(g.w_size(), rng),
+               b = random_vector(std::size_t(g.out_channels), rng), gy = random_vector(g.y_size(), rng),
+               gx0 = random_vector(g.x_size(), rng), gw0 = random_vector(g.w_size(), rng),
+               gb0 = random_vector(std::size_t(g.out_channels), rng);
+    const auto xt = cast<T>(x), wt = cast<T>(w), bt = cast<T>(b), gyt = cast<T>(gy);
+    std::vector<T> scratch(hk::conv2d_scratch_size<T>(g) + guard, std::numeric_limits<T>::quiet_NaN());
+
+    // forward with and without bias (y is pre-filled with garbage: forward must overwrite)
+    for (int with_bias = 0; with_bias < 2; ++with_bias) {
+        std::vector<double> want(g.y_size());
+        hk::reference::conv2d_forward<double>(g, x.data(), w.data(), with_bias ? b.data() : nullptr, want.data(), nullptr);
+        auto got = with_guard<T>(std::vector<double>(g.y_size(), 3.0));
+        hk::conv2d_forward<T>(g, xt.data(), wt.data(), with_bias ? bt.data() : nullptr, got.data(), scratch.data());
+        CHECK_MESSAGE(rel_error(got, want) <= tol, "forward bias=", with_bias);
+    }
+    {  // backward data accumulates
+        auto want = gx0;
+        hk::reference::conv2d_backward_data<double>(g, gy.data(), w.data(), want.data(), nullptr);
+        auto got = with_guard<T>(gx0);
+        hk::conv2d_backward_data<T>(g, gyt.data(), wt.data(), got.data(), scratch.data());
+        CHECK_MESSAGE(rel_error(got, want) <= tol, "backward_data");
+    }
+    {  // backward weight accumulates
+        auto want = gw0;
+        hk::reference::conv2d_backward_weight<double>(g, x.data(), gy.data(), want.data(), nullptr);
+        auto got = with_guard<T>(gw0);
+        hk::conv2d_backward_weight<T>(g, xt.data(), gyt.data(), got.data(), scratch.data());
+        CHECK_MESSAGE(rel_error(got, want) <= tol, "backward_weight");
+    }
+    {  // bias gradient accumulates
+        auto want = gb0;
+        hk::reference::conv2d_backward_bias<double>(g, gy.data(), want.data());
+        auto got = with_guard<T>(gb0);
+        hk::conv2d_backward_bias<T>(g, gyt.data(), got.data());
+        CHECK_MESSAGE(rel_error(got, want) <= tol, "backward_bias");
+    }
+    // transposed convolution: x_t has the conv's output shape, y_t the conv's input shape
+    {
+        std::vector<double> want(g.x_size());
+        hk::reference::conv_transpose2d_forward<double>(g, gy.data(), w.data(), want.data(), nullptr);
+        auto got = with_guard<T>(std::vector<double>(g.x_size(), -5.0));
+        hk::conv_transpose2d_forward<T>(g, gyt.data(), wt.data(), got.data(), scratch.data());
+        CHECK_MESSAGE(rel_error(got, want) <= tol, "conv_transpose2d_forward");
+    }
+    {
+        const auto gyT = random_vector(g.x_size(), rng);
+        auto want = gy;  // gx of the transposed conv has its input's shape = conv output shape; accumulate
+        hk::reference::conv_transpose2d_backward_data<double>(g, gyT.data(), w.data(), want.data(), nullptr);
+        auto got = with_guard<T>(gy);
+        const auto gyTt = cast<T>(gyT);
+        hk::conv_transpose2d_backward_data<T>(g, gyTt.data(), wt.data(), got.data(), scratch.data());
+        CHECK_MESSAGE(rel_error(got, want) <= tol, "conv_transpose2d_backward_data");
+
+        auto wantw = gw0;
+        hk::reference::conv_transpose2d_backward_weight<double>(g, gy.data(), gyT.data(), wantw.data(), nullptr);
+        auto gotw = with_guard<T>(gw0);
+        hk::conv_transpose2d_backward_weight<T>(g, gyt.data(), gyTt.data(), gotw.data(), scratch.data());
+        CHECK_MESSAGE(rel_error(gotw, wantw) <= tol, "conv_transpose2d_backward_weight");
+    }
+    for (int i = 0; i < guard; ++i) {  // scratch past its declared size is never touched
+        CHECK(std::isnan(double(scratch[scratch.size() - 1 - i])));
+    }
+}
+
+/// The conv layers of reference_stargan.py at channel base cd (12x24 image, 5 domains).
+std::vector<hk::conv_geometry> stargan_shapes(int cd, int b)
+{
+    return {
+        {b, 8, 12, 24, cd, 7, 7, 1, 3},               // G conv7x7 3+5 -> cd
+        {b, cd, 12, 24, 2 * cd, 4, 4, 2, 1},          // G down 1 (and convT up 2 = its transpose)
+        {b, 2 * cd, 6, 12, 4 * cd, 4, 4, 2, 1},       // G down 2 (and convT up 1)
+        {b, 4 * cd, 3, 6, 4 * cd, 3, 3, 1, 1},        // G residual conv
+        {b, cd, 12, 24, 3, 7, 7, 1, 3},               // G last conv7x7 -> 3
+        {b, 3, 12, 24, cd, 4, 4, 2, 1},               // D conv 1 (bias)
+        {b, 4 * cd, 1, 3, 1, 3, 3, 1, 1},             // D src head
+        {b, 4 * cd, 1, 3, 5, 1, 3, 1, 0},             // D cls head (full-map kernel)
+    };
+}
+
+}  // namespace
+
+TEST_CASE("conv kernels match the reference on the StarGAN shapes (embedded cd=32, batch 1 and 3)")
+{
+    for (int b : {1, 3})
+        for (const auto& g : stargan_shapes(32, b)) {
+            check_geometry<float>(g, 1e-5, 1u + unsigned(g.in_channels * 7 + g.out_channels));
+            check_geometry<double>(g, 1e-12, 2u + unsigned(g.kernel_h));
+        }
+}
+
+TEST_CASE("conv kernels match the reference on the paper's largest shapes (cd=64, batch 1)")
+{
+    for (const auto& g : stargan_shapes(64, 1)) check_geometry<float>(g, 1e-5, 11u);
+}
+
+TEST_CASE("conv kernels match the reference on random odd geometries")
+{
+    std::mt19937 rng(20200427u);
+    auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    int tested = 0;
+    while (tested < 60) {
+        hk::conv_geometry g{pick(0, 1) ? 1 : 3, pick(1, 13), pick(1, 11), pick(1, 11), pick(1, 13),
+                            pick(1, 7), pick(1, 7), pick(1, 2), pick(0, 3)};
+        if (!g.valid()) continue;
+        check_geometry<float>(g, 1e-5, unsigned(tested));
+        check_geometry<double>(g, 1e-12, unsigned(tested) + 1000u);
+        ++tested;
+    }
+    CHECK(tested == 60);
+}

@@ -1,0 +1,66 @@
+// thread_pool: every index runs exactly once, chunking is static (same index -> same thread every
+// run), per-chunk floating-point reductions are bit-identical across runs, exceptions propagate.
+#include <doctest/doctest.h>
+
+#include <handemo/kernels/thread_pool.hpp>
+
+#include <atomic>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+namespace hk = handemo::kernels;
+
+TEST_CASE("thread_pool runs each index once, on a fixed thread")
+{
+    for (unsigned n : {0u, 1u, 2u, 3u, 5u}) {
+        hk::thread_pool pool(n);
+        CHECK(pool.size() == (n == 0 ? 1u : n));
+        for (int rep = 0; rep < 3; ++rep) {
+            std::vector<std::atomic<int>> hits(1000);
+            std::vector<std::thread::id> who1(1000), who2(1000);
+            pool.parallel_for(0, 1000, [&](int i) { hits[std::size_t(i)]++; who1[std::size_t(i)] = std::this_thread::get_id(); });
+            pool.parallel_for(0, 1000, [&](int i) { who2[std::size_t(i)] = std::this_thread::get_id(); });
+            for (int i = 0; i < 1000; ++i) REQUIRE(hits[std::size_t(i)] == 1);
+            CHECK(who1 == who2);
+            // chunks are contiguous: the thread changes at most size()-1 times
+            int changes = 0;
+            for (int i = 1; i < 1000; ++i) changes += who1[std::size_t(i)] != who1[std::size_t(i - 1)];
+            CHECK(changes <= int(pool.size()) - 1);
+        }
+        pool.parallel_for(5, 5, [&](int) { FAIL("empty range ran"); });
+        std::atomic<int> sum{0};
+        pool.parallel_for(-3, 4, [&](int i) { sum += i; });
+        CHECK(sum == 0);
+    }
+}
+
+TEST_CASE("thread_pool per-chunk reductions are deterministic")
+{
+    hk::thread_pool pool(3);
+    std::vector<float> data(100003);
+    for (std::size_t i = 0; i < data.size(); ++i) data[i] = float(std::sin(double(i)) * 1e3);
+    auto reduce = [&] {
+        const int chunks = 7;
+        std::vector<float> part(chunks, 0.0f);
+        pool.parallel_for(0, chunks, [&](int c) {
+            for (std::size_t i = std::size_t(c); i < data.size(); i += chunks) part[std::size_t(c)] += data[i];
+        });
+        float s = 0;
+        for (float p : part) s += p;
+        return s;
+    };
+    const float first = reduce();
+    for (int rep = 0; rep < 20; ++rep) CHECK(reduce() == first);
+}
+
+TEST_CASE("thread_pool rethrows the exception of an iteration and stays usable")
+{
+    hk::thread_pool pool(2);
+    CHECK_THROWS_AS(pool.parallel_for(0, 100, [](int i) { if (i == 77) throw std::runtime_error("boom"); }),
+                    std::runtime_error);
+    std::atomic<int> n{0};
+    pool.parallel_for(0, 100, [&](int) { ++n; });
+    CHECK(n == 100);
+}
