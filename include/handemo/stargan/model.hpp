@@ -1,0 +1,423 @@
+// The StarGAN generator and discriminator of the hand paper (Chan, Irimia, Ho 2020, Sec. 3.3, Fig. 3),
+// laid out exactly as the official StarGAN (Choi et al. 2018, yunjey/stargan model.py) and handemo's
+// reference_stargan.py, with the same PyTorch parameter names and layouts, for motion images: the
+// K x J x 3 image of Eq. 3 (K keyframes, J joints, RGB = the three Euler angles) zero-padded at the
+// bottom/right to H x W. G: conv7 -> IN -> ReLU -> 2 x [conv4 s2 -> IN -> ReLU] -> residual blocks ->
+// 2 x [convT4 s2 -> IN -> ReLU] -> conv7 -> tanh, target label tiled as C extra input channels, no
+// biases. D: d_repeat x [conv4 s2 (bias) -> LeakyReLU(0.01)], src head conv3 -> [N, 1, h, w], cls head
+// conv with kernel (h, w) -> [N, C]. Training goes through the autodiff tape (forward); generator::infer
+// runs the kernels directly with a preallocated workspace (no tape, no allocation).
+#pragma once
+
+#include <handemo/autodiff.hpp>
+#include <handemo/core/error.hpp>
+#include <handemo/tensor/aligned.hpp>
+#include <handemo/tensor/shape.hpp>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace handemo::stargan {
+
+using autodiff::tape;
+using autodiff::var;
+
+// ------------------------------------------------------------------------------------------ configs
+/// @brief Configuration concept: joints J, keyframes K, domains C, conv_dim, res_blocks, d_repeat, batch.
+template <class C>
+concept stargan_config = requires {
+    { C::joints } -> std::convertible_to<std::size_t>;
+    { C::keyframes } -> std::convertible_to<std::size_t>;
+    { C::domains } -> std::convertible_to<std::size_t>;
+    { C::conv_dim } -> std::convertible_to<std::size_t>;
+    { C::res_blocks } -> std::convertible_to<std::size_t>;
+    { C::d_repeat } -> std::convertible_to<std::size_t>;
+    { C::batch } -> std::convertible_to<std::size_t>;
+};
+
+/// @brief Hand, embedded size (the default of handemo's tools): 23 joints, 9 keyframes, 5 emotions.
+struct hand_embedded {
+    static constexpr std::size_t joints = 23, keyframes = 9, domains = 5, conv_dim = 32, res_blocks = 3,
+                                 d_repeat = 3, batch = 1;
+};
+/// @brief Hand, the paper's StarGAN size (conv_dim 64, 6 residual blocks).
+struct hand_paper {
+    static constexpr std::size_t joints = 23, keyframes = 9, domains = 5, conv_dim = 64, res_blocks = 6,
+                                 d_repeat = 3, batch = 1;
+};
+/// @brief Body (22 joints, 8 emotion classes), embedded size.
+struct body_embedded {
+    static constexpr std::size_t joints = 22, keyframes = 9, domains = 8, conv_dim = 32, res_blocks = 3,
+                                 d_repeat = 3, batch = 1;
+};
+/// @brief Any config with another batch size: `with_batch<hand_embedded, 16>`.
+template <stargan_config Config, std::size_t N>
+struct with_batch : Config {
+    static constexpr std::size_t batch = N;
+};
+
+/// @brief Sizes derived from a config.
+/// The image is padded to multiples of 4 = 2^2: the generator's two stride-2 4x4 convolutions and two
+/// stride-2 transposed convolutions return exactly the input size only when H and W are divisible by 4
+/// (9 x 23 -> 12 x 24, reference_stargan.py's H = 12, W = 24). D's d_repeat stride-2 4x4 pad-1 convs
+/// floor odd sizes (12 -> 6 -> 3 -> 1, 24 -> 12 -> 6 -> 3) and its cls head takes whatever map remains
+/// as its kernel, so D needs no further divisibility.
+template <stargan_config Config>
+struct dims {
+    static constexpr std::size_t N = Config::batch, C = Config::domains, K = Config::keyframes,
+                                 J = Config::joints, cd = Config::conv_dim, R = Config::res_blocks,
+                                 rep = Config::d_repeat;
+    static constexpr std::size_t H = round_up(K, 4), W = round_up(J, 4);
+    /// D's feature map after layer i (0 = the input)
+    static constexpr std::size_t d_h(std::size_t i) { return i == 0 ? H : conv_out(d_h(i - 1), 4, 2, 1); }
+    static constexpr std::size_t d_w(std::size_t i) { return i == 0 ? W : conv_out(d_w(i - 1), 4, 2, 1); }
+    static constexpr std::size_t d_ch(std::size_t i) { return i == 0 ? 3 : cd << (i - 1); }
+    static constexpr std::size_t Hd = d_h(rep), Wd = d_w(rep), Cd = d_ch(rep);
+    static_assert(H % 4 == 0 && W % 4 == 0, "stargan: padded image must be divisible by 4");
+    static_assert(Hd >= 1 && Wd >= 1, "stargan: image too small for d_repeat stride-2 convolutions");
+};
+
+namespace detail {
+
+/// One named parameter inside a model's flat value/grad buffers.
+struct param_entry {
+    std::string name;
+    std::size_t offset = 0, size = 0;
+    std::vector<std::size_t> shape;
+};
+
+/// Flat parameter storage (values and grads, 64-byte aligned entries) with PyTorch names.
+template <class T>
+class param_store {
+public:
+    void add(std::string name, std::vector<std::size_t> shape)
+    {
+        std::size_t n = 1;
+        for (std::size_t d : shape) n *= d;
+        entries_.push_back({std::move(name), total_, n, std::move(shape)});
+        total_ += (n + 15) / 16 * 16;
+    }
+    void finish()
+    {
+        values_ = aligned_buffer<T>(total_);
+        grads_ = aligned_buffer<T>(total_);
+    }
+    T* value(std::size_t i) noexcept { return values_.data() + entries_[i].offset; }
+    const T* value(std::size_t i) const noexcept { return values_.data() + entries_[i].offset; }
+    T* grad(std::size_t i) noexcept { return grads_.data() + entries_[i].offset; }
+    std::size_t count() const noexcept { return entries_.size(); }
+    const param_entry& entry(std::size_t i) const noexcept { return entries_[i]; }
+    template <class F>
+    void for_each(F&& f)
+    {
+        for (std::size_t i = 0; i < entries_.size(); ++i)
+            f(std::string_view(entries_[i].name), std::span<T>(value(i), entries_[i].size),
+              std::span<T>(grad(i), entries_[i].size), std::span<const std::size_t>(entries_[i].shape));
+    }
+    void zero_grad() noexcept
+    {
+        if (total_) std::memset(grads_.data(), 0, total_ * sizeof(T));
+    }
+    std::size_t numel() const noexcept
+    {
+        std::size_t n = 0;
+        for (const auto& e : entries_) n += e.size;
+        return n;
+    }
+
+private:
+    std::vector<param_entry> entries_;
+    std::size_t total_ = 0;
+    aligned_buffer<T> values_, grads_;
+};
+
+/// In-place InstanceNorm (affine, biased variance) and optional ReLU over [N, C, M]. Used by infer().
+template <class T>
+void instance_norm_relu_inplace(T* x, const T* gamma, const T* beta, int N, int C, int M, bool relu,
+                                T eps = T(1e-5)) noexcept
+{
+    for (int b = 0; b < N; ++b)
+        for (int c = 0; c < C; ++c) {
+            T* v = x + (std::size_t(b) * C + c) * M;
+            T s = 0;
+            for (int m = 0; m < M; ++m) s += v[m];
+            const T mu = s / T(M);
+            T q = 0;
+            for (int m = 0; m < M; ++m) q += (v[m] - mu) * (v[m] - mu);
+            const T k = gamma[c] / std::sqrt(q / T(M) + eps), d = beta[c] - k * mu;
+            if (relu)
+                for (int m = 0; m < M; ++m) v[m] = std::max(k * v[m] + d, T(0));
+            else
+                for (int m = 0; m < M; ++m) v[m] = k * v[m] + d;
+        }
+}
+
+}  // namespace detail
+
+// ------------------------------------------------------------------------------------------ generator
+/// @brief StarGAN generator G(x, c): [N, 3, H, W] image and one-hot target [N, C] -> [N, 3, H, W] in (-1, 1).
+/// @tparam T float or double
+/// @tparam Config a stargan_config (hand_embedded, hand_paper, body_embedded, with_batch<...>)
+template <class T, stargan_config Config>
+class generator {
+public:
+    using dims_type = dims<Config>;
+    static constexpr std::size_t N = dims_type::N, C = dims_type::C, H = dims_type::H, W = dims_type::W,
+                                 cd = dims_type::cd, R = dims_type::R;
+    using image_shape = shape<N, 3, H, W>;
+    using label_shape = shape<N, C>;
+
+    /// @brief Allocates the parameters (all zero; initialise them through for_each_parameter).
+    generator()
+    {
+        auto conv = [&](std::string name, std::size_t o, std::size_t i, std::size_t k) {
+            p_.add(std::move(name) + ".weight", {o, i, k, k});
+        };
+        auto norm = [&](const std::string& name, std::size_t c) {
+            p_.add(name + ".weight", {c});
+            p_.add(name + ".bias", {c});
+        };
+        conv("main.0", cd, 3 + C, 7);
+        norm("main.1", cd);
+        conv("main.3", 2 * cd, cd, 4);
+        norm("main.4", 2 * cd);
+        conv("main.6", 4 * cd, 2 * cd, 4);
+        norm("main.7", 4 * cd);
+        for (std::size_t r = 0; r < R; ++r) {
+            const std::string b = "main." + std::to_string(9 + r) + ".main.";
+            conv(b + "0", 4 * cd, 4 * cd, 3);
+            norm(b + "1", 4 * cd);
+            conv(b + "3", 4 * cd, 4 * cd, 3);
+            norm(b + "4", 4 * cd);
+        }
+        p_.add("main." + std::to_string(9 + R) + ".weight", {4 * cd, 2 * cd, 4, 4});  // ConvTranspose [in, out, k, k]
+        norm("main." + std::to_string(10 + R), 2 * cd);
+        p_.add("main." + std::to_string(12 + R) + ".weight", {2 * cd, cd, 4, 4});
+        norm("main." + std::to_string(13 + R), cd);
+        conv("main." + std::to_string(15 + R), 3, cd, 7);
+        p_.finish();
+    }
+
+    /// @brief Calls f(name, value, grad, shape) for every parameter, in PyTorch state_dict order.
+    template <class F>
+    void for_each_parameter(F&& f)
+    {
+        p_.for_each(f);
+    }
+    /// @brief Sets every parameter gradient to zero.
+    void zero_grad() noexcept { p_.zero_grad(); }
+    /// @brief Whether forward() makes parameters trainable leaves (false: constants, no weight grads).
+    void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
+    /// @brief Number of scalar parameters.
+    std::size_t parameter_count() const noexcept { return p_.numel(); }
+
+    /// @brief Records G(x, label) on the tape.
+    /// @param x [N, 3, H, W] padded motion images  @param label [N, C] one-hot target domains
+    var<T, image_shape> forward(tape<T>& t, const var<T, image_shape>& x, const var<T, label_shape>& label)
+    {
+        using namespace handemo::autodiff;
+        using autodiff::tanh;
+        std::size_t k = 0;
+        auto w = [&]<class S>() { ++k; return t.template parameter<S>(p_.value(k - 1), grad_or_null(k - 1)); };
+        auto in_relu = [&]<std::size_t Ch, class V>(const V& v, bool with_relu) {
+            auto g = w.template operator()<shape<Ch>>();
+            auto b = w.template operator()<shape<Ch>>();
+            auto y = instance_norm(v, g, b);
+            return with_relu ? relu(y) : y;
+        };
+        auto h0 = concat_channels(x, tile<H, W>(label));
+        auto h1 = in_relu.template operator()<cd>(conv2d<1, 3>(h0, w.template operator()<shape<cd, 3 + C, 7, 7>>()), true);
+        auto h2 = in_relu.template operator()<2 * cd>(conv2d<2, 1>(h1, w.template operator()<shape<2 * cd, cd, 4, 4>>()), true);
+        auto h = in_relu.template operator()<4 * cd>(conv2d<2, 1>(h2, w.template operator()<shape<4 * cd, 2 * cd, 4, 4>>()), true);
+        for (std::size_t r = 0; r < R; ++r) {
+            auto a = in_relu.template operator()<4 * cd>(conv2d<1, 1>(h, w.template operator()<shape<4 * cd, 4 * cd, 3, 3>>()), true);
+            auto b = in_relu.template operator()<4 * cd>(conv2d<1, 1>(a, w.template operator()<shape<4 * cd, 4 * cd, 3, 3>>()), false);
+            h = h + b;
+        }
+        auto u1 = in_relu.template operator()<2 * cd>(conv_transpose2d<2, 1>(h, w.template operator()<shape<4 * cd, 2 * cd, 4, 4>>()), true);
+        auto u2 = in_relu.template operator()<cd>(conv_transpose2d<2, 1>(u1, w.template operator()<shape<2 * cd, cd, 4, 4>>()), true);
+        return tanh(conv2d<1, 3>(u2, w.template operator()<shape<3, cd, 7, 7>>()));
+    }
+
+    /// @brief Buffers for infer(): sized at construction, reused by every call.
+    class workspace {
+    public:
+        workspace()
+        {
+            const std::size_t act = N * std::max<std::size_t>(cd, 3 + C) * H * W;
+            for (auto& b : buf_) b = aligned_buffer<T>(act);
+            std::size_t s = 0;
+            for (const auto& g : geometries()) s = std::max(s, kernels::conv2d_scratch_size<T>(g));
+            scratch_ = aligned_buffer<T>(std::max<std::size_t>(s, 1));
+        }
+
+    private:
+        friend class generator;
+        std::array<aligned_buffer<T>, 4> buf_;
+        aligned_buffer<T> scratch_;
+    };
+
+    /// @brief G(x, label) without a tape, single-threaded, no allocation.
+    /// @param x [N, 3, H, W]  @param label [N, C]  @param out [N, 3, H, W] (written)
+    void infer(const T* x, const T* label, T* out, workspace& ws) const
+    {
+        const auto g = geometries();
+        T* a = ws.buf_[0].data();
+        T* b = ws.buf_[1].data();
+        T* c = ws.buf_[2].data();
+        T* d = ws.buf_[3].data();
+        T* s = ws.scratch_.data();
+        const std::size_t HW = H * W;
+        for (std::size_t n = 0; n < N; ++n) {
+            std::memcpy(a + n * (3 + C) * HW, x + n * 3 * HW, 3 * HW * sizeof(T));
+            for (std::size_t k = 0; k < C; ++k)
+                std::fill_n(a + (n * (3 + C) + 3 + k) * HW, HW, label[n * C + k]);
+        }
+        std::size_t k = 0;
+        auto conv = [&](const kernels::conv_geometry& geo, const T* in, T* o) {
+            kernels::conv2d_forward<T>(geo, in, p_.value(k++), static_cast<const T*>(nullptr), o, s);
+        };
+        auto convt = [&](const kernels::conv_geometry& geo, const T* in, T* o) {
+            std::memset(o, 0, geo.x_size() * sizeof(T));
+            kernels::conv2d_backward_data<T>(geo, in, p_.value(k++), o, s);
+        };
+        auto norm = [&](T* v, int ch, int m, bool with_relu) {
+            detail::instance_norm_relu_inplace(v, p_.value(k), p_.value(k + 1), int(N), ch, m, with_relu);
+            k += 2;
+        };
+        conv(g[0], a, b);
+        norm(b, int(cd), int(HW), true);
+        conv(g[1], b, a);
+        norm(a, int(2 * cd), int(HW / 4), true);
+        conv(g[2], a, b);
+        norm(b, int(4 * cd), int(HW / 16), true);
+        const std::size_t m16 = N * 4 * cd * HW / 16;
+        for (std::size_t r = 0; r < R; ++r) {
+            conv(g[3], b, c);
+            norm(c, int(4 * cd), int(HW / 16), true);
+            conv(g[3], c, d);
+            norm(d, int(4 * cd), int(HW / 16), false);
+            for (std::size_t i = 0; i < m16; ++i) b[i] += d[i];
+        }
+        convt(g[4], b, a);
+        norm(a, int(2 * cd), int(HW / 4), true);
+        convt(g[5], a, c);
+        norm(c, int(cd), int(HW), true);
+        conv(g[6], c, out);
+        for (std::size_t i = 0; i < N * 3 * HW; ++i) out[i] = std::tanh(out[i]);
+    }
+
+    /// @brief Multiply-adds of one forward pass (for GFLOP/s counters).
+    static double forward_macs() noexcept
+    {
+        const auto g = geometries();
+        return g[0].macs() + g[1].macs() + g[2].macs() + 2.0 * R * g[3].macs() + g[4].macs() + g[5].macs() +
+               g[6].macs();
+    }
+
+    /// @brief Convolution geometries: conv7, down1, down2, residual conv3, up1 and up2 (as the adjoint
+    /// conv), final conv7.
+    static std::array<kernels::conv_geometry, 7> geometries() noexcept
+    {
+        const int n = int(N), h = int(H), w = int(W), c = int(cd);
+        return {{{n, int(3 + C), h, w, c, 7, 7, 1, 3},
+                 {n, c, h, w, 2 * c, 4, 4, 2, 1},
+                 {n, 2 * c, h / 2, w / 2, 4 * c, 4, 4, 2, 1},
+                 {n, 4 * c, h / 4, w / 4, 4 * c, 3, 3, 1, 1},
+                 {n, 2 * c, h / 2, w / 2, 4 * c, 4, 4, 2, 1},
+                 {n, c, h, w, 2 * c, 4, 4, 2, 1},
+                 {n, c, h, w, 3, 7, 7, 1, 3}}};
+    }
+
+private:
+    T* grad_or_null(std::size_t i) noexcept { return requires_grad_ ? p_.grad(i) : nullptr; }
+    detail::param_store<T> p_;
+    bool requires_grad_ = true;
+};
+
+// ------------------------------------------------------------------------------------------ discriminator
+/// @brief StarGAN discriminator D(x) = (src [N, 1, Hd, Wd] real/fake scores, cls [N, C] domain logits).
+template <class T, stargan_config Config>
+class discriminator {
+public:
+    using dims_type = dims<Config>;
+    static constexpr std::size_t N = dims_type::N, C = dims_type::C, H = dims_type::H, W = dims_type::W,
+                                 rep = dims_type::rep, Hd = dims_type::Hd, Wd = dims_type::Wd,
+                                 Cd = dims_type::Cd;
+    using image_shape = shape<N, 3, H, W>;
+    using src_shape = shape<N, 1, Hd, Wd>;
+    using cls_shape = shape<N, C>;
+
+    /// @brief Output of forward(): the two heads.
+    struct outputs {
+        var<T, src_shape> src;
+        var<T, cls_shape> cls;
+    };
+
+    /// @brief Allocates the parameters (all zero; initialise them through for_each_parameter).
+    discriminator()
+    {
+        for (std::size_t i = 0; i < rep; ++i) {
+            const std::string b = "main." + std::to_string(2 * i);
+            p_.add(b + ".weight", {dims_type::d_ch(i + 1), dims_type::d_ch(i), 4, 4});
+            p_.add(b + ".bias", {dims_type::d_ch(i + 1)});
+        }
+        p_.add("conv1.weight", {1, Cd, 3, 3});
+        p_.add("conv2.weight", {C, Cd, Hd, Wd});
+        p_.finish();
+    }
+
+    template <class F>
+    void for_each_parameter(F&& f)
+    {
+        p_.for_each(f);
+    }
+    void zero_grad() noexcept { p_.zero_grad(); }
+    void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
+    std::size_t parameter_count() const noexcept { return p_.numel(); }
+
+    /// @brief Records D(x) on the tape.
+    outputs forward(tape<T>& t, const var<T, image_shape>& x)
+    {
+        auto h = layers<0>(t, x);
+        auto src = conv2d<1, 1>(h, t.template parameter<shape<1, Cd, 3, 3>>(p_.value(2 * rep), grad_or_null(2 * rep)));
+        auto cls = conv2d<1, 0>(h, t.template parameter<shape<C, Cd, Hd, Wd>>(p_.value(2 * rep + 1),
+                                                                              grad_or_null(2 * rep + 1)));
+        return {src, var<T, cls_shape>{cls.t, cls.id}};
+    }
+
+    /// @brief Multiply-adds of one forward pass.
+    static double forward_macs() noexcept
+    {
+        double m = 0;
+        for (std::size_t i = 0; i < rep; ++i)
+            m += double(N) * dims_type::d_ch(i + 1) * dims_type::d_h(i + 1) * dims_type::d_w(i + 1) *
+                 dims_type::d_ch(i) * 16;
+        return m + double(N) * Hd * Wd * Cd * 9 + double(N) * C * Cd * Hd * Wd;
+    }
+
+private:
+    template <std::size_t I, class S>
+    auto layers(tape<T>& t, const var<T, S>& x)
+    {
+        if constexpr (I == rep) {
+            return x;
+        } else {
+            constexpr std::size_t co = dims_type::d_ch(I + 1), ci = dims_type::d_ch(I);
+            auto w = t.template parameter<shape<co, ci, 4, 4>>(p_.value(2 * I), grad_or_null(2 * I));
+            auto b = t.template parameter<shape<co>>(p_.value(2 * I + 1), grad_or_null(2 * I + 1));
+            return layers<I + 1>(t, autodiff::leaky_relu(autodiff::conv2d<2, 1>(x, w, b), T(0.01)));
+        }
+    }
+    T* grad_or_null(std::size_t i) noexcept { return requires_grad_ ? p_.grad(i) : nullptr; }
+    detail::param_store<T> p_;
+    bool requires_grad_ = true;
+};
+
+}  // namespace handemo::stargan
