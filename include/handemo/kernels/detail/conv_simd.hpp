@@ -91,6 +91,65 @@ inline void micro_dispatch(int nr, int kc, const T* v, std::ptrdiff_t vk, const 
     }
 }
 
+/// tile[j][0..MR) = sum_{k<kc} v[koff[k] + 0..MR) * s[j*sj + k], j < NR: the V rows of the stride-1
+/// path are shifted windows of one zero-padded image (implicit im2col, nothing packed).
+template <class T, int NR>
+inline void micro_kernel_idx(int kc, const T* __restrict v, const int* __restrict koff, const T* __restrict s,
+                             std::ptrdiff_t sj, T* __restrict tile) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>, NV = micro_nv, MR = micro_mr<T>;
+    B acc[NR][NV];
+    for (int j = 0; j < NR; ++j)
+        for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
+    const T* sp[NR];
+    for (int j = 0; j < NR; ++j) sp[j] = s + j * sj;
+    for (int k = 0; k < kc; ++k) {
+        const T* vk = v + koff[k];
+        B a[NV];
+        for (int q = 0; q < NV; ++q) a[q] = B::load_unaligned(vk + q * L);
+        for (int j = 0; j < NR; ++j) {
+            const B b(sp[j][k]);
+            for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
+        }
+    }
+    for (int j = 0; j < NR; ++j)
+        for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
+}
+
+template <class T>
+inline void micro_idx_dispatch(int nr, int kc, const T* v, const int* koff, const T* s, std::ptrdiff_t sj,
+                               T* tile) noexcept
+{
+    switch (nr) {
+    case 4: micro_kernel_idx<T, 4>(kc, v, koff, s, sj, tile); break;
+    case 3: micro_kernel_idx<T, 3>(kc, v, koff, s, sj, tile); break;
+    case 2: micro_kernel_idx<T, 2>(kc, v, koff, s, sj, tile); break;
+    default: micro_kernel_idx<T, 1>(kc, v, koff, s, sj, tile); break;
+    }
+}
+
+/// Elements of the zero-padded image (plus read-past slack) of the stride-1 path.
+inline std::size_t padded_image_elements(const conv_geometry& g, int mr) noexcept
+{
+    const std::size_t Hp = std::size_t(g.in_h) + 2 * g.pad, Wp = std::size_t(g.in_w) + 2 * g.pad;
+    return std::size_t(g.in_channels) * Hp * Wp + std::size_t(mr) + Wp;
+}
+
+/// The geometry whose stride-1 forward pass is g's backward-data (gy padded by k-1-p, flipped weights).
+inline conv_geometry flipped_geometry(const conv_geometry& g) noexcept
+{
+    return {g.batch, g.out_channels, g.out_h(), g.out_w(), g.in_channels, g.kernel_h, g.kernel_w, 1,
+            g.kernel_h - 1 - g.pad};
+}
+
+/// Stride 1, square-free kernels: the flipped-forward route of backward-data applies (pad <= k-1, kh == kw
+/// so one pad fits both axes).
+inline bool backward_data_by_forward(const conv_geometry& g) noexcept
+{
+    return g.stride == 1 && g.kernel_h == g.kernel_w && g.pad <= g.kernel_h - 1;
+}
+
 /// Scratch elements of the fast path for geometry g (max over all passes), see each pass for its parts.
 template <class T>
 inline std::size_t scratch_elements(const conv_geometry& g) noexcept
@@ -103,7 +162,71 @@ inline std::size_t scratch_elements(const conv_geometry& g) noexcept
     const std::size_t fwd = std::min<std::size_t>(K, forward_kc) * MR + tile;
     const std::size_t bwd_data = std::size_t(g.out_channels) * MR + tile;
     const std::size_t bwd_weight = P * MR + co_r * MR;
-    return std::max({fwd, bwd_data, bwd_weight}) + 64 / sizeof(T);
+    std::size_t s1 = 0;
+    if (g.stride == 1) s1 = padded_image_elements(g, int(MR)) + tile;
+    if (backward_data_by_forward(g)) s1 = std::max(s1, padded_image_elements(flipped_geometry(g), int(MR)) + tile + g.w_size());
+    return std::max({fwd, bwd_data, bwd_weight, s1}) + 64 / sizeof(T);
+}
+
+/// Forward pass for stride 1: per image, x is copied once into a zero-padded [C, H+2p, W+2p] buffer and
+/// the output is computed on the "wide" grid p' = i*(W+2p) + j, where im2col row (c,u,v) is the window
+/// starting at c*(H+2p)*(W+2p) + u*(W+2p) + v; columns j >= out_w are computed and dropped.
+template <class T>
+inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                            bool accumulate_out) noexcept
+{
+    constexpr int MR = micro_mr<T>, NR = micro_nr;
+    const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
+    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
+    const int Pw = (oh - 1) * Wp + ow;  // last wide index that is a real output, + 1
+    const std::size_t npad = padded_image_elements(g, MR);
+    T* xp = scratch;
+    T* tile = scratch + npad;
+    int koff[forward_kc];
+    for (std::size_t i = 0; i < npad; ++i) xp[i] = T(0);
+    for (int n = 0; n < g.batch; ++n) {
+        const T* xn = x + std::ptrdiff_t(n) * g.in_channels * g.in_h * g.in_w;
+        for (int c = 0; c < g.in_channels; ++c)
+            for (int r = 0; r < g.in_h; ++r) {
+                const T* src = xn + (std::ptrdiff_t(c) * g.in_h + r) * g.in_w;
+                T* dst = xp + (std::ptrdiff_t(c) * Hp + r + g.pad) * Wp + g.pad;
+                for (int q = 0; q < g.in_w; ++q) dst[q] = src[q];
+            }
+        T* yn = y + std::ptrdiff_t(n) * Co * P;
+        for (int k0 = 0; k0 < K; k0 += forward_kc) {
+            const int kc = std::min(forward_kc, K - k0);
+            {
+                int c = k0 / (kh * kw), u = (k0 / kw) % kh, v = k0 % kw;
+                for (int k = 0; k < kc; ++k) {
+                    koff[k] = (c * Hp + u) * Wp + v;
+                    if (++v == kw) {
+                        v = 0;
+                        if (++u == kh) u = 0, ++c;
+                    }
+                }
+            }
+            const bool first = k0 == 0, add = !first || accumulate_out;
+            for (int p0 = 0; p0 < Pw; p0 += MR) {
+                for (int o0 = 0; o0 < Co; o0 += NR) {
+                    const int nr = std::min(NR, Co - o0);
+                    micro_idx_dispatch<T>(nr, kc, xp + p0, koff, w + std::ptrdiff_t(o0) * K + k0, K, tile);
+                    for (int j = 0; j < nr; ++j) {
+                        const T b = (first && bias) ? bias[o0 + j] : T(0);
+                        const T* t = tile + j * MR;
+                        T* yo = yn + std::ptrdiff_t(o0 + j) * P;
+                        int r = p0 / Wp, q = p0 % Wp;
+                        for (int i = 0; i < MR && r < oh; ++i) {
+                            if (q < ow) {
+                                T& dst = yo[r * ow + q];
+                                dst = (add ? dst : T(0)) + t[i] + b;
+                            }
+                            if (++q == Wp) q = 0, ++r;
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Forward pass (also the backward-data of the transposed convolution).
@@ -112,6 +235,7 @@ template <class T>
 inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
                     bool accumulate_out) noexcept
 {
+    if (g.stride == 1) return forward_stride1(g, x, w, bias, y, scratch, accumulate_out);
     constexpr int MR = micro_mr<T>, NR = micro_nr, L = simd_lanes<T>;
     using B = simd_t<T>;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow, Ptot = P * g.batch;
@@ -178,11 +302,29 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
     }
 }
 
+/// Backward-data of a stride-1 convolution as the stride-1 forward pass of gy (padded by k-1-p) with the
+/// flipped, channel-swapped kernel w'[c,o,u,v] = w[o,c,k-1-u,k-1-v]:
+/// gx[c,h,w] = sum_{o,u,v} gy[o, h+p-u, w+p-v] w[o,c,u,v] = sum_{o,u',v'} gy_pad'[o, h+u', w+v'] w'[c,o,u',v'].
+template <class T>
+inline void backward_data_stride1(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
+{
+    const int kh = g.kernel_h, kw = g.kernel_w, Ci = g.in_channels, Co = g.out_channels;
+    T* wf = scratch;
+    for (int o = 0; o < Co; ++o)
+        for (int c = 0; c < Ci; ++c)
+            for (int u = 0; u < kh; ++u)
+                for (int v = 0; v < kw; ++v)
+                    wf[((std::ptrdiff_t(c) * Co + o) * kh + (kh - 1 - u)) * kw + (kw - 1 - v)] =
+                        w[((std::ptrdiff_t(o) * Ci + c) * kh + u) * kw + v];
+    forward_stride1(flipped_geometry(g), gy, wf, static_cast<const T*>(nullptr), gx, scratch + g.w_size(), true);
+}
+
 /// Backward-data pass: gx += col2im(W^T gy), the GEMM done per image with V = W read in place
 /// (k-rows of W are contiguous along (c,u,v)) and S = gy read in place, then scattered into gx.
 template <class T>
 inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
 {
+    if (backward_data_by_forward(g)) return backward_data_stride1(g, gy, w, gx, scratch);
     constexpr int MR = micro_mr<T>, NR = micro_nr;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow;
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;

@@ -1,0 +1,135 @@
+// Google Benchmark of handemo's convolution kernels on every conv shape of the StarGAN of Chan et al.
+// 2020 (reference_stargan.py: 12x24 image, 5 domains, cd = 64 "paper" and cd = 32 "embedded"), forward at
+// batch 1 (inference) and forward / backward-data / backward-weight at batch 16 (training), each with a
+// GFLOP/s counter (2 x multiply-adds / s), plus the generator's whole conv stack at batch 1.
+#include <benchmark/benchmark.h>
+
+#include <handemo/kernels/conv.hpp>
+
+#include <random>
+#include <string>
+#include <vector>
+
+namespace hk = handemo::kernels;
+
+namespace {
+
+struct layer {
+    std::string name;
+    hk::conv_geometry g;  // batch filled in per benchmark
+    bool transposed;      // ConvTranspose2d whose forward is g's backward-data
+};
+
+std::vector<layer> stargan_layers(int cd)
+{
+    return {
+        {"G.conv7_in", {1, 8, 12, 24, cd, 7, 7, 1, 3}, false},
+        {"G.down1", {1, cd, 12, 24, 2 * cd, 4, 4, 2, 1}, false},
+        {"G.down2", {1, 2 * cd, 6, 12, 4 * cd, 4, 4, 2, 1}, false},
+        {"G.res3x3", {1, 4 * cd, 3, 6, 4 * cd, 3, 3, 1, 1}, false},
+        {"G.up1(convT)", {1, 2 * cd, 6, 12, 4 * cd, 4, 4, 2, 1}, true},
+        {"G.up2(convT)", {1, cd, 12, 24, 2 * cd, 4, 4, 2, 1}, true},
+        {"G.conv7_out", {1, cd, 12, 24, 3, 7, 7, 1, 3}, false},
+        {"D.conv1", {1, 3, 12, 24, cd, 4, 4, 2, 1}, false},
+        {"D.conv2", {1, cd, 6, 12, 2 * cd, 4, 4, 2, 1}, false},
+        {"D.conv3", {1, 2 * cd, 3, 6, 4 * cd, 4, 4, 2, 1}, false},
+        {"D.src3x3", {1, 4 * cd, 1, 3, 1, 3, 3, 1, 1}, false},
+        {"D.cls", {1, 4 * cd, 1, 3, 5, 1, 3, 1, 0}, false},
+    };
+}
+
+struct buffers {
+    std::vector<float> x, w, b, y, scratch;
+    explicit buffers(const hk::conv_geometry& g)
+        : x(g.x_size()), w(g.w_size()), b(std::size_t(g.out_channels)), y(g.y_size()),
+          scratch(hk::conv2d_scratch_size<float>(g))
+    {
+        std::mt19937 rng(1);
+        std::uniform_real_distribution<float> d(-1.f, 1.f);
+        for (auto* v : {&x, &w, &b, &y}) for (auto& e : *v) e = d(rng);
+    }
+};
+
+enum class pass { forward, backward_data, backward_weight };
+
+void run_layer(benchmark::State& state, hk::conv_geometry g, bool transposed, pass ps)
+{
+    buffers buf(g);
+    std::vector<float> gw(g.w_size(), 0.f);
+    for (auto _ : state) {
+        // for a transposed layer, "forward" is g's backward-data (into x), "backward_data" is g's forward
+        if (!transposed) {
+            switch (ps) {
+            case pass::forward: hk::conv2d_forward(g, buf.x.data(), buf.w.data(), buf.b.data(), buf.y.data(), buf.scratch.data()); break;
+            case pass::backward_data: hk::conv2d_backward_data(g, buf.y.data(), buf.w.data(), buf.x.data(), buf.scratch.data()); break;
+            case pass::backward_weight: hk::conv2d_backward_weight(g, buf.x.data(), buf.y.data(), gw.data(), buf.scratch.data()); break;
+            }
+        } else {
+            switch (ps) {
+            case pass::forward: hk::conv_transpose2d_forward(g, buf.y.data(), buf.w.data(), buf.x.data(), buf.scratch.data()); break;
+            case pass::backward_data: hk::conv_transpose2d_backward_data(g, buf.x.data(), buf.w.data(), buf.y.data(), buf.scratch.data()); break;
+            case pass::backward_weight: hk::conv_transpose2d_backward_weight(g, buf.y.data(), buf.x.data(), gw.data(), buf.scratch.data()); break;
+            }
+        }
+        benchmark::ClobberMemory();
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(2 * g.macs() * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+/// The generator's conv stack at batch 1 (rep residual blocks of two 3x3 convs), in network order.
+void run_generator(benchmark::State& state, int cd, int rep)
+{
+    std::vector<layer> seq;
+    const auto all = stargan_layers(cd);
+    seq.push_back(all[0]);
+    seq.push_back(all[1]);
+    seq.push_back(all[2]);
+    for (int r = 0; r < 2 * rep; ++r) seq.push_back(all[3]);
+    seq.push_back(all[4]);
+    seq.push_back(all[5]);
+    seq.push_back(all[6]);
+    std::vector<buffers> bufs;
+    double macs = 0;
+    for (const auto& l : seq) {
+        bufs.emplace_back(l.g);
+        macs += l.g.macs();
+    }
+    for (auto _ : state) {
+        for (std::size_t i = 0; i < seq.size(); ++i) {
+            auto& b = bufs[i];
+            if (seq[i].transposed)
+                hk::conv_transpose2d_forward(seq[i].g, b.y.data(), b.w.data(), b.x.data(), b.scratch.data());
+            else
+                hk::conv2d_forward<float>(seq[i].g, b.x.data(), b.w.data(), nullptr, b.y.data(), b.scratch.data());
+        }
+        benchmark::ClobberMemory();
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(2 * macs * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["MMAC"] = macs * 1e-6;
+}
+
+}  // namespace
+
+int main(int argc, char** argv)
+{
+    benchmark::RegisterBenchmark("generator_convs/paper(64,6)/b1", run_generator, 64, 6)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("generator_convs/embedded(32,3)/b1", run_generator, 32, 3)->Unit(benchmark::kMicrosecond);
+    for (int cd : {64, 32})
+        for (const auto& l : stargan_layers(cd)) {
+            const std::string base = "cd" + std::to_string(cd) + "/" + l.name;
+            hk::conv_geometry g = l.g;
+            benchmark::RegisterBenchmark((base + "/fwd/b1").c_str(), run_layer, g, l.transposed, pass::forward)
+                ->Unit(benchmark::kMicrosecond);
+            g.batch = 16;
+            benchmark::RegisterBenchmark((base + "/fwd/b16").c_str(), run_layer, g, l.transposed, pass::forward)
+                ->Unit(benchmark::kMicrosecond);
+            benchmark::RegisterBenchmark((base + "/bwd_data/b16").c_str(), run_layer, g, l.transposed, pass::backward_data)
+                ->Unit(benchmark::kMicrosecond);
+            benchmark::RegisterBenchmark((base + "/bwd_weight/b16").c_str(), run_layer, g, l.transposed, pass::backward_weight)
+                ->Unit(benchmark::kMicrosecond);
+        }
+    benchmark::Initialize(&argc, argv);
+    if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+}
