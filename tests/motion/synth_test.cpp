@@ -1,0 +1,236 @@
+#include <handemo/motion/codec.hpp>
+#include <handemo/motion/keyframes.hpp>
+#include <handemo/motion/synth.hpp>
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <map>
+
+using namespace handemo;
+
+namespace {
+const std::vector<synth_item>& dataset()
+{
+    static const std::vector<synth_item> d = synthesize_dataset(3, 2024);
+    return d;
+}
+
+// Sum over rotation channels of the range of motion, after a 7-frame moving average (removes tremor).
+double range_of_motion(const clip& c)
+{
+    const std::size_t J3 = c.skel.size() * 3;
+    double total = 0;
+    for (std::size_t i = 0; i < J3; ++i) {
+        double lo = 1e9, hi = -1e9;
+        for (std::size_t f = 0; f < c.frames; ++f) {
+            double s = 0;
+            int n = 0;
+            for (int d = -3; d <= 3; ++d) {
+                const long g = static_cast<long>(f) + d;
+                if (g < 0 || g >= static_cast<long>(c.frames)) continue;
+                s += c.angles[static_cast<std::size_t>(g) * J3 + i];
+                ++n;
+            }
+            lo = std::min(lo, s / n);
+            hi = std::max(hi, s / n);
+        }
+        total += hi - lo;
+    }
+    return total;
+}
+
+// Spread (cycles) of the phase lags of index..pinky MCP flexion, by circular cross-correlation over the
+// two periodic cycles (the clip's frames 0..n-2 cover exactly 2 cycles).
+double finger_phase_spread(const clip& c)
+{
+    const std::size_t n = c.frames - 1;
+    auto sig = [&](std::size_t f) {
+        std::vector<double> s(n);
+        double m = 0;
+        for (std::size_t i = 0; i < n; ++i) m += s[i] = c.angle(i, hand_index::finger_joint(f, 1), 0);
+        for (auto& v : s) v -= m / static_cast<double>(n);
+        return s;
+    };
+    const auto ref = sig(1);
+    double lo = 0, hi = 0;
+    for (std::size_t f = 2; f < 5; ++f) {
+        const auto s = sig(f);
+        long best = 0;
+        double best_v = -1e300;
+        const long half = static_cast<long>(n / 4);
+        for (long lag = -half; lag <= half; ++lag) {
+            double v = 0;
+            for (std::size_t i = 0; i < n; ++i) v += s[(i + n + static_cast<std::size_t>(lag + static_cast<long>(n))) % n] * ref[i];
+            if (v > best_v) best_v = v, best = lag;
+        }
+        const double cyc = static_cast<double>(best) * synth_cycles / static_cast<double>(n);
+        lo = std::min(lo, cyc);
+        hi = std::max(hi, cyc);
+    }
+    return hi - lo;
+}
+}  // namespace
+
+TEST_CASE("synth: names, file stems and their errors")
+{
+    for (emotion e : all_emotions) CHECK(emotion_from_string(to_string(e)) == e);
+    for (hand_motion m : all_hand_motions) CHECK(hand_motion_from_string(to_string(m)) == m);
+    CHECK(to_string(hand_motion::hand_on_mouse) == "hand-on-mouse");
+    CHECK_THROWS_AS(emotion_from_string("bored"), value_error);
+    CHECK_THROWS_AS(hand_motion_from_string("waving"), value_error);
+    CHECK(file_stem(hand_motion::hand_on_mouse, emotion::sad, 3) == "hand_hand-on-mouse_sad_3");
+    const auto l = parse_file_stem("hand_hand-on-mouse_sad_3");
+    CHECK(l.motion == hand_motion::hand_on_mouse);
+    CHECK(l.emo == emotion::sad);
+    CHECK(l.take == 3);
+    try {
+        (void)parse_file_stem("hand_crawling_bored_0");
+        FAIL("no error");
+    } catch (const value_error& e) {
+        CHECK(std::string(e.what()).find("bored") != std::string::npos);
+    }
+    CHECK_THROWS_AS(parse_file_stem("hand_crawling_sad"), value_error);
+    CHECK_THROWS_AS(parse_file_stem("hand_crawling_sad_x"), value_error);
+    CHECK_THROWS_AS(synthesize(hand_motion::crawling, emotion::sad, 0, 1, 0.0), value_error);
+    CHECK_THROWS_AS(synthesize_dataset(0, 1), value_error);
+}
+
+TEST_CASE("synth: deterministic per seed, different per take and seed, within limits, 2 cycles")
+{
+    const clip a = synthesize(hand_motion::gripping, emotion::happy, 1, 7);
+    const clip b = synthesize(hand_motion::gripping, emotion::happy, 1, 7);
+    CHECK(a.angles == b.angles);
+    CHECK(a.positions == b.positions);
+    CHECK(synthesize(hand_motion::gripping, emotion::happy, 2, 7).angles != a.angles);
+    CHECK(synthesize(hand_motion::gripping, emotion::happy, 1, 8).angles != a.angles);
+    const auto& d = dataset();
+    REQUIRE(d.size() == 7 * 5 * 3);
+    for (const auto& it : d) {
+        CHECK_NOTHROW(it.c.validate(it.file_stem));
+        CHECK(it.c.joint_count() == hand_joint_count);
+        CHECK(it.c.fps == 60.0);
+        CHECK(it.file_stem == file_stem(it.motion, it.emo, it.take));
+        for (std::size_t f = 0; f < it.c.frames; ++f)
+            for (std::size_t j = 0; j < 23; ++j)
+                for (std::size_t k = 0; k < 3; ++k) {
+                    const double v = it.c.angle(f, j, k);
+                    if (v < it.c.skel.joints[j].lower_limit[k] || v > it.c.skel.joints[j].upper_limit[k])
+                        FAIL(it.file_stem << " frame " << f << " joint " << j << " axis " << k << " = " << v);
+                }
+        if (it.emo == emotion::neutral) {
+            CHECK(it.c.duration() >= 1.9);
+            CHECK(it.c.duration() <= 4.0);
+        }
+        // Exactly 2 cycles: after a 7-frame moving average (removes tremor), the clip shifted by one cycle
+        // matches itself better than shifted by any fraction of a cycle.
+        const std::size_t cyc = (it.c.frames - 1) / 2, J3 = 69;
+        std::vector<double> sm(it.c.angles.size());
+        for (std::size_t f = 0; f < it.c.frames; ++f)
+            for (std::size_t i = 0; i < J3; ++i) {
+                double s = 0;
+                int cnt = 0;
+                for (long g = static_cast<long>(f) - 3; g <= static_cast<long>(f) + 3; ++g)
+                    if (g >= 0 && g < static_cast<long>(it.c.frames)) s += it.c.angles[static_cast<std::size_t>(g) * J3 + i], ++cnt;
+                sm[f * J3 + i] = s / cnt;
+            }
+        std::vector<std::size_t> active;  // channels that really move (> 3 deg after smoothing)
+        for (std::size_t i = 0; i < J3; ++i) {
+            double lo = 1e9, hi = -1e9;
+            for (std::size_t f = 0; f < it.c.frames; ++f) lo = std::min(lo, sm[f * J3 + i]), hi = std::max(hi, sm[f * J3 + i]);
+            if (hi - lo > 3.0) active.push_back(i);
+        }
+        REQUIRE_MESSAGE(!active.empty(), it.file_stem);
+        auto shifted = [&](double s) {
+            const auto sh = static_cast<std::size_t>(std::lround(s * static_cast<double>(cyc)));
+            double d = 0;
+            for (std::size_t f = 0; f < cyc; ++f)
+                for (std::size_t i : active) d += std::abs(sm[f * J3 + i] - sm[(f + sh) * J3 + i]);
+            return d;
+        };
+        const double one = shifted(1.0);
+        for (double s : {0.2, 0.35, 0.5, 0.65, 0.8}) CHECK_MESSAGE(one < shifted(s), it.file_stem << " shift " << s);
+    }
+}
+
+TEST_CASE("synth: per-emotion statistics follow Table 1")
+{
+    std::map<emotion, double> rom, dur, spread;
+    std::map<hand_motion, std::map<emotion, double>> rom_m;
+    for (const auto& it : dataset()) {
+        const double r = range_of_motion(it.c);
+        rom[it.emo] += r;
+        rom_m[it.motion][it.emo] += r;
+        dur[it.emo] += it.c.duration();
+        if (it.motion == hand_motion::gripping) spread[it.emo] += finger_phase_spread(it.c) / 3.0;
+    }
+    for (emotion e : all_emotions)
+        MESSAGE(to_string(e) << ": range of motion " << rom[e] / 21 << " deg (sum over channels), duration " << dur[e] / 21
+                             << " s, finger phase spread (gripping) " << spread[e] << " cycles");
+    // angry: exaggerated, fast, large range; happy: energetic, large; sad: tired, slow, small; fearful: small.
+    CHECK(rom[emotion::angry] > rom[emotion::happy]);
+    CHECK(rom[emotion::happy] > 1.15 * rom[emotion::neutral]);
+    CHECK(rom[emotion::sad] < 0.75 * rom[emotion::neutral]);
+    CHECK(rom[emotion::fearful] < 0.85 * rom[emotion::neutral]);
+    for (auto& [m, r] : rom_m) {
+        CHECK_MESSAGE(r[emotion::angry] > r[emotion::neutral], to_string(m));
+        CHECK_MESSAGE(r[emotion::neutral] > r[emotion::sad], to_string(m));
+    }
+    CHECK(dur[emotion::angry] < dur[emotion::happy]);
+    CHECK(dur[emotion::happy] < dur[emotion::neutral]);
+    CHECK(dur[emotion::neutral] < dur[emotion::sad]);
+    // Asynchronous fingers only when fearful.
+    CHECK(spread[emotion::fearful] > 0.15);
+    for (emotion e : {emotion::angry, emotion::happy, emotion::neutral, emotion::sad}) CHECK_MESSAGE(spread[e] < 0.06, to_string(e));
+    // The API returns the same ground truth.
+    CHECK(style_of(emotion::sad).tempo < style_of(emotion::neutral).tempo);
+    CHECK(style_of(emotion::fearful).phase_lag > 0);
+}
+
+TEST_CASE("synth: motion types are distinct movements (nearest-centroid on keyframe images)")
+{
+    const auto& d = dataset();
+    std::vector<keyframes<9>> kf;
+    for (const auto& it : d) kf.push_back(extract_keyframes<9>(it.c));
+    const angle_range r = compute_range(kf);
+    std::vector<std::vector<double>> x;
+    for (const auto& k : kf) {
+        const auto px = encode(k, r);
+        x.emplace_back(px.values.begin(), px.values.end());
+    }
+    // Leave-one-out nearest centroid over the 7 motion types.
+    int correct = 0;
+    for (std::size_t q = 0; q < d.size(); ++q) {
+        std::vector<std::vector<double>> cen(7, std::vector<double>(x[0].size(), 0.0));
+        std::vector<int> cnt(7, 0);
+        for (std::size_t i = 0; i < d.size(); ++i) {
+            if (i == q) continue;
+            const auto m = static_cast<std::size_t>(d[i].motion);
+            for (std::size_t e = 0; e < x[i].size(); ++e) cen[m][e] += x[i][e];
+            ++cnt[m];
+        }
+        std::size_t best = 0;
+        double best_d = 1e300;
+        for (std::size_t m = 0; m < 7; ++m) {
+            double dist = 0;
+            for (std::size_t e = 0; e < x[q].size(); ++e) {
+                const double v = x[q][e] - cen[m][e] / cnt[m];
+                dist += v * v;
+            }
+            if (dist < best_d) best_d = dist, best = m;
+        }
+        correct += best == static_cast<std::size_t>(d[q].motion);
+        if (best != static_cast<std::size_t>(d[q].motion)) MESSAGE(d[q].file_stem << " classified as " << to_string(static_cast<hand_motion>(best)));
+    }
+    const double acc = static_cast<double>(correct) / static_cast<double>(d.size());
+    MESSAGE("leave-one-out nearest-centroid motion-type accuracy: " << acc << " (" << correct << "/" << d.size() << ")");
+    CHECK(acc >= 0.95);
+    // The neutral keyframe images of different motion types are far apart (mean pixel distance).
+    for (std::size_t a = 0; a < 7; ++a)
+        for (std::size_t b = a + 1; b < 7; ++b) {
+            const std::size_t ia = a * 15 + 2 * 3, ib = b * 15 + 2 * 3;  // neutral take 0
+            double dist = 0;
+            for (std::size_t e = 0; e < x[ia].size(); ++e) dist += std::abs(x[ia][e] - x[ib][e]);
+            CHECK_MESSAGE(dist / static_cast<double>(x[ia].size()) > 2.0, a << " vs " << b);
+        }
+}
