@@ -9,3 +9,5 @@
 #include <handemo/render/figure.hpp>
 #include <handemo/render/filmstrip.hpp>
 #include <handemo/render/font.hpp>
+#include <handemo/render/motion_image.hpp>
+#include <handemo/render/svg.hpp>

@@ -139,7 +139,9 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
 
     // Pass 2: layout and drawing.
     const long gap = 3;
-    int ts = std::max(1, opt.title_scale);
+    int ts = std::max(1, opt.title_scale);  // one scale for every title: the largest at which all fit
+    for (const auto& t : opt.titles)
+        while (ts > 1 && text_width(t, ts) > static_cast<long>(opt.cell_width) - 4) --ts;
     const long title_h = opt.titles.empty() ? 0 : text_height(ts) + 12;
     const auto cols = static_cast<long>(clips.size()), rows = static_cast<long>(opt.rows);
     const long W = cols * static_cast<long>(opt.cell_width) + (cols + 1) * gap;
@@ -149,8 +151,7 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
     for (long c = 0; c < cols; ++c) {
         const long cx0 = gap + c * (static_cast<long>(opt.cell_width) + gap);
         if (title_h > 0) {
-            int s = ts;
-            while (s > 1 && text_width(opt.titles[static_cast<std::size_t>(c)], s) > static_cast<long>(opt.cell_width) - 4) --s;
+            const int s = ts;
             const std::string t = detail::fit_text(opt.titles[static_cast<std::size_t>(c)], static_cast<long>(opt.cell_width) - 4, s);
             draw_text(out, cx0 + (static_cast<long>(opt.cell_width) - text_width(t, s)) / 2, (title_h - text_height(s)) / 2, t,
                       color::rgb8(30, 30, 30), s);

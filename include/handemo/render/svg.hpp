@@ -1,0 +1,490 @@
+// SVG plots written as plain text (no library): the StarGAN training losses of the hand paper (Eq. 4 and
+// Eq. 5: L_D = -L_adv + lambda_cls L_cls^r, L_G = L_adv + lambda_cls L_cls^f + lambda_rec L_rec, one curve
+// per logged term) from a CSV log, and grouped bar charts with error bars (mean +- std per metric and
+// method) for evaluation summaries. The y axis is logarithmic when every value is positive and they span
+// more than one decade; symmetric-logarithmic (sign(v) log10(1 + |v| / c)) when values of both signs span
+// more than three decades; linear otherwise. All text is XML-escaped.
+#pragma once
+
+#include <handemo/core/error.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace handemo {
+
+/// How values map to the vertical axis.
+enum class axis_scale { linear, log, symlog };
+
+/// @brief Options of plot_losses_svg.
+struct loss_plot_options {
+    std::size_t width = 860, height = 480;
+    std::string title = "training losses";
+    std::size_t max_points = 2000;  ///< longer series are averaged in equal buckets of steps
+};
+
+/// @brief One bar of an evaluation summary: `mean` +- `std` of `metric` for `method`.
+struct bar_entry {
+    std::string metric, method;
+    double mean = 0, std = 0;
+};
+
+/// @brief Options of plot_bars_svg.
+struct bar_plot_options {
+    std::size_t panel_width = 260, panel_height = 260;
+    std::size_t panels_per_row = 4;
+    std::string title = "evaluation";
+};
+
+namespace detail {
+
+/// Escapes the five XML special characters; drops other control characters, which XML 1.0 forbids.
+inline std::string xml_escape(std::string_view s)
+{
+    std::string r;
+    r.reserve(s.size());
+    for (char ch : s) {
+        switch (ch) {
+        case '&': r += "&amp;"; break;
+        case '<': r += "&lt;"; break;
+        case '>': r += "&gt;"; break;
+        case '"': r += "&quot;"; break;
+        case '\'': r += "&apos;"; break;
+        default:
+            if (static_cast<unsigned char>(ch) >= 0x20 || ch == '\t' || ch == '\n') r += ch;
+        }
+    }
+    return r;
+}
+
+/// A number with up to `digits` significant digits, no trailing zeros ("0.001", "2.5e+06").
+inline std::string fmt_num(double v, int digits = 4)
+{
+    if (v == 0) return "0";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    return buf;
+}
+
+/// Coordinates with two decimals (plenty for an SVG user unit).
+inline std::string fmt_px(double v)
+{
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.2f", v);
+    std::string s = buf;
+    while (s.size() > 1 && s.back() == '0') s.pop_back();
+    if (!s.empty() && s.back() == '.') s.pop_back();
+    return s == "-0" ? "0" : s;
+}
+
+inline std::string_view trim(std::string_view s) noexcept
+{
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
+    while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
+    return s;
+}
+
+inline std::vector<std::string_view> split_csv_line(std::string_view line)
+{
+    std::vector<std::string_view> f;
+    std::size_t start = 0;
+    for (std::size_t i = 0; i <= line.size(); ++i)
+        if (i == line.size() || line[i] == ',') {
+            f.push_back(trim(line.substr(start, i - start)));
+            start = i + 1;
+        }
+    return f;
+}
+
+/// Lines of `text` with their 1-based numbers, without '\r', skipping blank lines and '#' comments.
+inline std::vector<std::pair<long, std::string_view>> csv_lines(std::string_view text)
+{
+    std::vector<std::pair<long, std::string_view>> out;
+    long no = 0;
+    while (!text.empty() || no == 0) {
+        ++no;
+        const std::size_t nl = text.find('\n');
+        std::string_view line = text.substr(0, nl);
+        text = nl == std::string_view::npos ? std::string_view{} : text.substr(nl + 1);
+        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+        if (!trim(line).empty() && trim(line).front() != '#') out.emplace_back(no, line);
+        if (text.empty()) break;
+    }
+    return out;
+}
+
+/// Parses a number; empty, "nan" or "-" mean missing (returns NaN).
+inline double parse_cell(std::string_view cell, const std::string& what, long line, std::string_view column)
+{
+    if (cell.empty() || cell == "-" || cell == "nan" || cell == "NaN") return std::nan("");
+    double v = 0;
+    const char* b = cell.data();
+    if (*b == '+') ++b;
+    const auto [ptr, ec] = std::from_chars(b, cell.data() + cell.size(), v);
+    if (ec != std::errc{} || ptr != cell.data() + cell.size())
+        throw format_error(what + ": line " + std::to_string(line) + ": column '" + std::string(column) + "' value '" +
+                           std::string(cell) + "' is not a number");
+    return v;
+}
+
+/// Tick positions 1, 2 or 5 x 10^k apart covering [lo, hi] with about `n` ticks.
+inline std::vector<double> nice_ticks(double lo, double hi, int n = 6)
+{
+    if (!(hi > lo)) return {lo};
+    const double raw = (hi - lo) / std::max(n, 1), mag = std::pow(10.0, std::floor(std::log10(raw)));
+    double step = mag;
+    for (double m : {1.0, 2.0, 5.0, 10.0})
+        if (m * mag >= raw) {
+            step = m * mag;
+            break;
+        }
+    std::vector<double> t;
+    for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step) t.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
+    return t;
+}
+
+/// A vertical axis: value -> pixel for one of the three scales.
+struct y_axis {
+    axis_scale kind = axis_scale::linear;
+    double lo = 0, hi = 1;  ///< in transformed units
+    double c = 1;           ///< symlog linear threshold
+    double top = 0, bottom = 1;
+
+    double transform(double v) const noexcept
+    {
+        switch (kind) {
+        case axis_scale::log: return std::log10(v);
+        case axis_scale::symlog: return (v < 0 ? -1.0 : 1.0) * std::log10(1.0 + std::abs(v) / c);
+        default: return v;
+        }
+    }
+    double pixel(double v) const noexcept { return bottom - (transform(v) - lo) / (hi - lo) * (bottom - top); }
+};
+
+inline constexpr std::array<std::string_view, 10> plot_palette{"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
+                                                                "#17becf", "#e377c2", "#8c564b", "#7f7f7f", "#bcbd22"};
+
+/// Builds the y axis over `values` (finite entries only) for the chosen scale, with tick values.
+inline y_axis make_y_axis(axis_scale kind, std::span<const double> values, double top, double bottom, std::vector<double>& ticks)
+{
+    y_axis ax;
+    ax.kind = kind;
+    ax.top = top;
+    ax.bottom = bottom;
+    double lo = 1e300, hi = -1e300, amin = 1e300;
+    for (double v : values) {
+        if (!std::isfinite(v)) continue;
+        lo = std::min(lo, v), hi = std::max(hi, v);
+        if (v != 0) amin = std::min(amin, std::abs(v));
+    }
+    if (!(hi >= lo)) lo = 0, hi = 1;
+    ticks.clear();
+    if (kind == axis_scale::log) {
+        const double a = std::floor(std::log10(lo)), b = std::ceil(std::log10(hi));
+        ax.lo = a, ax.hi = std::max(b, a + 1);
+        for (double e = ax.lo; e <= ax.hi + 1e-9; e += 1) ticks.push_back(std::pow(10.0, e));
+    } else if (kind == axis_scale::symlog) {
+        ax.c = std::pow(10.0, std::floor(std::log10(amin < 1e300 ? amin : 1.0)));
+        ax.lo = ax.transform(lo), ax.hi = ax.transform(hi);
+        if (ax.lo > 0) ax.lo = 0;
+        if (ax.hi < 0) ax.hi = 0;
+        ticks.push_back(0);
+        const double amax = std::max(std::abs(lo), std::abs(hi));
+        for (double m = ax.c; m <= amax * 1.0001; m *= 10) {
+            if (m <= hi) ticks.push_back(m);
+            if (-m >= lo) ticks.push_back(-m);
+        }
+        std::sort(ticks.begin(), ticks.end());
+    } else {
+        if (hi - lo < 1e-12 * std::max(1.0, std::abs(hi))) lo -= 0.5, hi += 0.5;
+        ticks = nice_ticks(lo, hi);
+        const double step = ticks.size() > 1 ? ticks[1] - ticks[0] : 1.0;
+        ax.lo = std::min(lo, ticks.front());
+        ax.hi = std::max(hi, ticks.back());
+        if (ticks.front() > lo) ax.lo = ticks.front() - step;
+        if (ticks.back() < hi) ax.hi = ticks.back() + step;
+    }
+    if (!(ax.hi > ax.lo)) ax.hi = ax.lo + 1;
+    return ax;
+}
+
+inline void svg_text(std::string& out, double x, double y, std::string_view text, std::string_view anchor = "start",
+                     int size = 12, std::string_view extra = {})
+{
+    out += "<text x=\"" + fmt_px(x) + "\" y=\"" + fmt_px(y) + "\" font-size=\"" + std::to_string(size) + "\" text-anchor=\"" +
+           std::string(anchor) + "\"" + (extra.empty() ? "" : " " + std::string(extra)) + ">" + xml_escape(text) + "</text>\n";
+}
+
+inline void svg_line(std::string& out, double x0, double y0, double x1, double y1, std::string_view stroke, double w = 1)
+{
+    out += "<line x1=\"" + fmt_px(x0) + "\" y1=\"" + fmt_px(y0) + "\" x2=\"" + fmt_px(x1) + "\" y2=\"" + fmt_px(y1) +
+           "\" stroke=\"" + std::string(stroke) + "\" stroke-width=\"" + fmt_px(w) + "\"/>\n";
+}
+
+inline std::string svg_open(std::size_t w, std::size_t h)
+{
+    return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(w) +
+           "\" height=\"" + std::to_string(h) + "\" viewBox=\"0 0 " + std::to_string(w) + " " + std::to_string(h) +
+           "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n<rect x=\"0\" y=\"0\" width=\"" + std::to_string(w) +
+           "\" height=\"" + std::to_string(h) + "\" fill=\"white\"/>\n";
+}
+
+}  // namespace detail
+
+/// @brief The y-axis scale for a set of values (non-finite values are ignored).
+/// @return log when all values are positive and max / min > 10 (more than one decade); symlog when
+///         values of both signs occur and max|v| / min nonzero |v| > 1000; linear otherwise.
+inline axis_scale choose_y_scale(std::span<const double> values) noexcept
+{
+    double lo = 1e300, hi = -1e300, amin = 1e300, amax = 0;
+    for (double v : values) {
+        if (!std::isfinite(v)) continue;
+        lo = std::min(lo, v), hi = std::max(hi, v);
+        if (v != 0) amin = std::min(amin, std::abs(v)), amax = std::max(amax, std::abs(v));
+    }
+    if (!(hi >= lo)) return axis_scale::linear;
+    if (lo > 0 && hi / lo > 10.0) return axis_scale::log;
+    if (lo < 0 && hi > 0 && amax / amin > 1000.0) return axis_scale::symlog;
+    return axis_scale::linear;
+}
+
+/// @brief A training-loss log: `step` and one named series per loss term (NaN where a cell is empty).
+struct loss_log {
+    std::vector<std::string> terms;           ///< [T] column names after `step`
+    std::vector<double> steps;                ///< [N]
+    std::vector<std::vector<double>> values;  ///< [T][N]
+};
+
+/// @brief Parses a CSV loss log: header `step,<term>,...`, then numeric rows ('#' lines and blank lines
+/// are skipped; an empty cell, `nan` or `-` is a missing value).
+/// @throws format_error naming `what`, the line and the column for a missing header, a first column
+///         other than `step`, a row with the wrong number of fields, or a cell that is not a number.
+inline loss_log parse_loss_csv(std::string_view text, const std::string& what = "loss log")
+{
+    const auto lines = detail::csv_lines(text);
+    if (lines.empty()) throw format_error(what + ": empty file, expected a header 'step,<loss>,...'");
+    const auto header = detail::split_csv_line(lines[0].second);
+    std::string first(header[0]);
+    for (auto& ch : first) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (first != "step")
+        throw format_error(what + ": line " + std::to_string(lines[0].first) + ": first column '" + std::string(header[0]) +
+                           "' is not 'step'");
+    if (header.size() < 2)
+        throw format_error(what + ": line " + std::to_string(lines[0].first) + ": header has no loss column after 'step'");
+    loss_log log;
+    for (std::size_t i = 1; i < header.size(); ++i) {
+        if (header[i].empty())
+            throw format_error(what + ": line " + std::to_string(lines[0].first) + ": column " + std::to_string(i + 1) + " has no name");
+        log.terms.emplace_back(header[i]);
+    }
+    log.values.resize(log.terms.size());
+    for (std::size_t r = 1; r < lines.size(); ++r) {
+        const auto [no, line] = lines[r];
+        const auto f = detail::split_csv_line(line);
+        if (f.size() != header.size())
+            throw format_error(what + ": line " + std::to_string(no) + ": " + std::to_string(f.size()) + " fields, expected " +
+                               std::to_string(header.size()) + " (as in the header)");
+        const double step = detail::parse_cell(f[0], what, no, header[0]);
+        if (!std::isfinite(step)) throw format_error(what + ": line " + std::to_string(no) + ": column 'step' is empty or not finite");
+        log.steps.push_back(step);
+        for (std::size_t t = 0; t < log.terms.size(); ++t) log.values[t].push_back(detail::parse_cell(f[t + 1], what, no, header[t + 1]));
+    }
+    if (log.steps.empty()) throw format_error(what + ": no data rows after the header");
+    return log;
+}
+
+/// @brief Plots a CSV training log as an SVG: one polyline per loss term, legend, ticked axes, and a
+/// log / symlog / linear y axis chosen by choose_y_scale over all values.
+/// @param csv_text header `step,<term>,...` then numeric rows (see parse_loss_csv).
+/// @return the SVG document.
+/// @throws format_error from parse_loss_csv.
+inline std::string plot_losses_svg(std::string_view csv_text, const loss_plot_options& opt = {})
+{
+    const loss_log log = parse_loss_csv(csv_text, "plot_losses_svg");
+    std::vector<double> all;
+    for (auto& v : log.values) all.insert(all.end(), v.begin(), v.end());
+    const axis_scale kind = choose_y_scale(all);
+    const double W = static_cast<double>(std::max<std::size_t>(opt.width, 320)), H = static_cast<double>(std::max<std::size_t>(opt.height, 200));
+    const double L = 72, R = W - 180, T = 44, B = H - 52;
+    std::vector<double> yt;
+    const detail::y_axis ay = detail::make_y_axis(kind, all, T, B, yt);
+    double s0 = *std::min_element(log.steps.begin(), log.steps.end()), s1 = *std::max_element(log.steps.begin(), log.steps.end());
+    if (!(s1 > s0)) s0 -= 0.5, s1 += 0.5;
+    auto px = [&](double s) { return L + (s - s0) / (s1 - s0) * (R - L); };
+
+    std::string out = detail::svg_open(static_cast<std::size_t>(W), static_cast<std::size_t>(H));
+    detail::svg_text(out, (L + R) / 2, 26, opt.title, "middle", 16, "font-weight=\"bold\"");
+    out += "<rect x=\"" + detail::fmt_px(L) + "\" y=\"" + detail::fmt_px(T) + "\" width=\"" + detail::fmt_px(R - L) + "\" height=\"" +
+           detail::fmt_px(B - T) + "\" fill=\"none\" stroke=\"#444\"/>\n";
+    for (double t : yt) {
+        const double y = ay.pixel(t);
+        if (y < T - 0.5 || y > B + 0.5) continue;
+        detail::svg_line(out, L, y, R, y, "#e4e4e4");
+        detail::svg_line(out, L - 5, y, L, y, "#444");
+        detail::svg_text(out, L - 8, y + 4, detail::fmt_num(t), "end", 11);
+    }
+    for (double t : detail::nice_ticks(s0, s1, 8)) {
+        const double x = px(t);
+        detail::svg_line(out, x, B, x, B + 5, "#444");
+        detail::svg_text(out, x, B + 18, detail::fmt_num(t, 6), "middle", 11);
+    }
+    detail::svg_text(out, (L + R) / 2, H - 12, "step", "middle", 12);
+    const std::string ylabel = kind == axis_scale::log ? "loss (log scale)" : kind == axis_scale::symlog ? "loss (symmetric log scale)" : "loss";
+    detail::svg_text(out, 18, (T + B) / 2, ylabel, "middle", 12,
+                     "transform=\"rotate(-90 18 " + detail::fmt_px((T + B) / 2) + ")\"");
+
+    for (std::size_t t = 0; t < log.terms.size(); ++t) {
+        const std::string_view colour = detail::plot_palette[t % detail::plot_palette.size()];
+        // points, averaged in buckets of consecutive rows when there are more than max_points
+        std::vector<std::pair<double, double>> pts;
+        for (std::size_t i = 0; i < log.steps.size(); ++i) {
+            const double v = log.values[t][i];
+            if (std::isfinite(v) && (kind != axis_scale::log || v > 0)) pts.emplace_back(log.steps[i], v);
+        }
+        const std::size_t maxp = std::max<std::size_t>(opt.max_points, 2);
+        if (pts.size() > maxp) {
+            std::vector<std::pair<double, double>> avg;
+            const std::size_t per = (pts.size() + maxp - 1) / maxp;
+            for (std::size_t i = 0; i < pts.size(); i += per) {
+                double sx = 0, sy = 0;
+                const std::size_t e = std::min(pts.size(), i + per);
+                for (std::size_t k = i; k < e; ++k) sx += pts[k].first, sy += pts[k].second;
+                avg.emplace_back(sx / static_cast<double>(e - i), sy / static_cast<double>(e - i));
+            }
+            pts = std::move(avg);
+        }
+        out += "<polyline fill=\"none\" stroke=\"" + std::string(colour) + "\" stroke-width=\"1.6\" stroke-linejoin=\"round\" points=\"";
+        for (std::size_t i = 0; i < pts.size(); ++i)
+            out += (i ? " " : "") + detail::fmt_px(px(pts[i].first)) + "," + detail::fmt_px(ay.pixel(pts[i].second));
+        out += "\"><title>" + detail::xml_escape(log.terms[t]) + "</title></polyline>\n";
+        const double ly = T + 8 + 20.0 * static_cast<double>(t);
+        detail::svg_line(out, R + 14, ly, R + 38, ly, colour, 2.5);
+        detail::svg_text(out, R + 44, ly + 4, log.terms[t], "start", 12);
+    }
+    out += "</svg>\n";
+    return out;
+}
+
+/// @brief Parses an evaluation summary CSV with the header `metric,method,mean,std` (std may be empty: 0).
+/// @throws format_error naming `what`, the line and the field for a wrong header, field count, a mean
+///         that is not a finite number, or a std that is negative or not a number.
+inline std::vector<bar_entry> parse_bar_csv(std::string_view text, const std::string& what = "summary")
+{
+    const auto lines = detail::csv_lines(text);
+    if (lines.empty()) throw format_error(what + ": empty file, expected a header 'metric,method,mean,std'");
+    const auto h = detail::split_csv_line(lines[0].second);
+    std::string hs;
+    for (std::size_t i = 0; i < h.size(); ++i) hs += (i ? "," : "") + std::string(h[i]);
+    for (auto& ch : hs) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (hs != "metric,method,mean,std")
+        throw format_error(what + ": line " + std::to_string(lines[0].first) + ": header '" + std::string(lines[0].second) +
+                           "' is not 'metric,method,mean,std'");
+    std::vector<bar_entry> out;
+    for (std::size_t r = 1; r < lines.size(); ++r) {
+        const auto [no, line] = lines[r];
+        const auto f = detail::split_csv_line(line);
+        if (f.size() != 4)
+            throw format_error(what + ": line " + std::to_string(no) + ": " + std::to_string(f.size()) + " fields, expected 4");
+        bar_entry e{std::string(f[0]), std::string(f[1]), detail::parse_cell(f[2], what, no, "mean"),
+                    detail::parse_cell(f[3], what, no, "std")};
+        if (!std::isfinite(e.mean)) throw format_error(what + ": line " + std::to_string(no) + ": mean is empty or not finite");
+        if (std::isnan(e.std)) e.std = 0;
+        if (!(e.std >= 0) || !std::isfinite(e.std))
+            throw format_error(what + ": line " + std::to_string(no) + ": std " + std::string(f[3]) + " is not a finite value >= 0");
+        out.push_back(std::move(e));
+    }
+    if (out.empty()) throw format_error(what + ": no data rows after the header");
+    return out;
+}
+
+/// @brief True when the first non-blank line of `text` is the header `metric,method,mean,std`.
+inline bool is_bar_csv(std::string_view text)
+{
+    const auto lines = detail::csv_lines(text);
+    if (lines.empty()) return false;
+    std::string hs;
+    const auto h = detail::split_csv_line(lines[0].second);
+    for (std::size_t i = 0; i < h.size(); ++i) hs += (i ? "," : "") + std::string(h[i]);
+    for (auto& ch : hs) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return hs == "metric,method,mean,std";
+}
+
+/// @brief Grouped bar chart: one panel per metric (own linear y axis including 0), one bar per method
+/// (same colour in every panel, legend on top), error bars from mean - std to mean + std.
+/// @throws value_error when `bars` is empty or a mean/std is not finite (std < 0).
+inline std::string plot_bars_svg(std::span<const bar_entry> bars, const bar_plot_options& opt = {})
+{
+    if (bars.empty()) throw value_error("plot_bars_svg: no bars to draw (expected at least one metric,method,mean,std row)");
+    std::vector<std::string> metrics, methods;
+    for (const auto& b : bars) {
+        if (!std::isfinite(b.mean) || !std::isfinite(b.std) || b.std < 0)
+            throw value_error("plot_bars_svg: metric '" + b.metric + "' method '" + b.method + "': mean " + detail::fmt_num(b.mean) +
+                              " / std " + detail::fmt_num(b.std) + " must be finite with std >= 0");
+        if (std::find(metrics.begin(), metrics.end(), b.metric) == metrics.end()) metrics.push_back(b.metric);
+        if (std::find(methods.begin(), methods.end(), b.method) == methods.end()) methods.push_back(b.method);
+    }
+    const std::size_t per_row = std::max<std::size_t>(1, std::min(opt.panels_per_row, metrics.size()));
+    const std::size_t prow = (metrics.size() + per_row - 1) / per_row;
+    const double pw = static_cast<double>(std::max<std::size_t>(opt.panel_width, 120)),
+                 ph = static_cast<double>(std::max<std::size_t>(opt.panel_height, 120));
+    const double legend_h = 22.0 * static_cast<double>((methods.size() + 3) / 4) + 8;
+    const double top = 40 + legend_h;
+    const double W = pw * static_cast<double>(per_row) + 20, H = top + ph * static_cast<double>(prow) + 10;
+    std::string out = detail::svg_open(static_cast<std::size_t>(W), static_cast<std::size_t>(H));
+    detail::svg_text(out, W / 2, 24, opt.title, "middle", 16, "font-weight=\"bold\"");
+    for (std::size_t m = 0; m < methods.size(); ++m) {
+        const double lx = 20 + static_cast<double>(m % 4) * (W - 40) / 4, ly = 44 + 22.0 * static_cast<double>(m / 4);
+        out += "<rect x=\"" + detail::fmt_px(lx) + "\" y=\"" + detail::fmt_px(ly - 10) + "\" width=\"14\" height=\"14\" fill=\"" +
+               std::string(detail::plot_palette[m % detail::plot_palette.size()]) + "\"/>\n";
+        detail::svg_text(out, lx + 20, ly + 2, methods[m], "start", 12);
+    }
+    for (std::size_t k = 0; k < metrics.size(); ++k) {
+        const double ox = 10 + pw * static_cast<double>(k % per_row), oy = top + ph * static_cast<double>(k / per_row);
+        const double L = ox + 56, R = ox + pw - 12, T = oy + 26, B = oy + ph - 40;
+        std::vector<double> vals{0.0};
+        for (const auto& b : bars)
+            if (b.metric == metrics[k]) vals.push_back(b.mean - b.std), vals.push_back(b.mean + b.std), vals.push_back(b.mean);
+        std::vector<double> ticks;
+        const detail::y_axis ay = detail::make_y_axis(axis_scale::linear, vals, T, B, ticks);
+        detail::svg_text(out, (L + R) / 2, oy + 16, metrics[k], "middle", 13, "font-weight=\"bold\"");
+        for (double t : ticks) {
+            const double y = ay.pixel(t);
+            detail::svg_line(out, L, y, R, y, t == 0 ? "#888" : "#e4e4e4");
+            detail::svg_text(out, L - 6, y + 4, detail::fmt_num(t), "end", 11);
+        }
+        detail::svg_line(out, L, T, L, B, "#444");
+        const double slot = (R - L) / static_cast<double>(methods.size()), bw = slot * 0.7;
+        for (std::size_t m = 0; m < methods.size(); ++m) {
+            const bar_entry* e = nullptr;
+            for (const auto& b : bars)
+                if (b.metric == metrics[k] && b.method == methods[m]) e = &b;
+            if (!e) continue;
+            const double cx = L + slot * (static_cast<double>(m) + 0.5);
+            const double y0 = ay.pixel(0), y1 = ay.pixel(e->mean);
+            out += "<rect x=\"" + detail::fmt_px(cx - bw / 2) + "\" y=\"" + detail::fmt_px(std::min(y0, y1)) + "\" width=\"" +
+                   detail::fmt_px(bw) + "\" height=\"" + detail::fmt_px(std::abs(y1 - y0)) + "\" fill=\"" +
+                   std::string(detail::plot_palette[m % detail::plot_palette.size()]) + "\"><title>" +
+                   detail::xml_escape(e->method + ": " + detail::fmt_num(e->mean) + " +- " + detail::fmt_num(e->std)) + "</title></rect>\n";
+            if (e->std > 0) {
+                const double ya = ay.pixel(e->mean - e->std), yb = ay.pixel(e->mean + e->std);
+                detail::svg_line(out, cx, ya, cx, yb, "#222", 1.2);
+                detail::svg_line(out, cx - bw / 5, ya, cx + bw / 5, ya, "#222", 1.2);
+                detail::svg_line(out, cx - bw / 5, yb, cx + bw / 5, yb, "#222", 1.2);
+            }
+            detail::svg_text(out, cx, B + 14, detail::fmt_num(e->mean, 3), "middle", 10);
+        }
+    }
+    out += "</svg>\n";
+    return out;
+}
+
+}  // namespace handemo
