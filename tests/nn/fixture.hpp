@@ -29,4 +29,29 @@ double max_rel_error(const A& a, const B& b, double floor)
     return e;
 }
 
+/// CHECKs |got - want| <= rtol * max(|want|, 0.01 max|want|) element-wise (relative error, with a floor
+/// of 1 % of the tensor's scale so that values that cancel to ~0 are compared at the tensor's precision).
+template <class A, class B>
+void check_close(const std::string& what, const A& got, const B& want, double rtol)
+{
+    INFO(what);
+    REQUIRE(got.size() == want.size());
+    double scale = 0;
+    for (std::size_t i = 0; i < want.size(); ++i) scale = std::max(scale, std::abs(static_cast<double>(want[i])));
+    const double floor = std::max(scale * 1e-2, 1e-30);
+    double worst = 0;
+    std::size_t at = 0;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+        const double e = std::abs(static_cast<double>(got[i]) - static_cast<double>(want[i])) /
+                         std::max(std::abs(static_cast<double>(want[i])), floor);
+        if (!(e <= worst)) {
+            worst = e;
+            at = i;
+        }
+    }
+    INFO("worst element " << at << ": got " << static_cast<double>(got[at]) << ", want "
+                          << static_cast<double>(want[at]) << ", relative error " << worst);
+    CHECK(worst <= rtol);
+}
+
 }  // namespace handemo::test
