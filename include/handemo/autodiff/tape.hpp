@@ -242,9 +242,9 @@ public:
             for (int j : n.in)
                 if (j >= 0 && at(j).requires_grad) at(j).mark = true;
         }
-        for (int i = 0; i <= loss; ++i) {
+        for (int i = 0; i <= loss; ++i) {  // every adjoint reads as 0 unless loss depends on the node
             node<T>& n = at(i);
-            if (n.mark && n.requires_grad && !n.external_adjoint) std::memset(n.adjoint, 0, n.size * sizeof(T));
+            if (n.requires_grad && !n.external_adjoint) std::memset(n.adjoint, 0, n.size * sizeof(T));
         }
         at(loss).adjoint[0] += T(1);
         for (int i = loss; i >= 0; --i) {

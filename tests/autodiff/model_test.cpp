@@ -1,0 +1,215 @@
+// StarGAN generator/discriminator on the autodiff tape: parameter names and layouts (official StarGAN),
+// output shapes, tape-free inference equal to the tape forward, batch split over a thread pool equal to
+// single-threaded, and finite-difference gradient checks (double) of a residual block, a small G, a
+// small D and the WGAN-GP penalty through a small D.
+#include "gradcheck.hpp"
+
+#include <handemo/stargan/model.hpp>
+
+#include <map>
+
+using namespace handemo;
+using namespace handemo::autodiff;
+using namespace handemo::stargan;
+using handemo::test::gc_param;
+using handemo::test::gradcheck;
+using handemo::test::leaf;
+using handemo::test::random_param;
+
+namespace {
+// Tiny config: 3 keyframes x 5 joints -> 4 x 8 image, 3 domains, conv_dim 2, 1 block, D depth 2.
+struct tiny {
+    static constexpr std::size_t joints = 5, keyframes = 3, domains = 3, conv_dim = 2, res_blocks = 1,
+                                 d_repeat = 2, batch = 2;
+};
+template <class M>
+void randomise(M& m, unsigned seed, double scale = 0.3)
+{
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-scale, scale);
+    m.for_each_parameter([&](std::string_view name, auto value, auto, std::span<const std::size_t> shape) {
+        // InstanceNorm gammas (1-D ".weight") around 1, everything else around 0
+        const bool gamma = shape.size() == 1 && name.ends_with(".weight");
+        for (auto& v : value) v = gamma ? 1 + u(rng) : u(rng);
+    });
+}
+// Wraps every model parameter as a gc_param that aliases the model's own buffers through copies.
+template <class M>
+std::vector<gc_param> model_params(M& m)
+{
+    std::vector<gc_param> ps;
+    m.for_each_parameter([&](std::string_view, std::span<double> v, std::span<double>, std::span<const std::size_t>) {
+        gc_param p;
+        p.value.assign(v.begin(), v.end());
+        p.grad.assign(v.size(), 0.0);
+        ps.push_back(std::move(p));
+    });
+    return ps;
+}
+template <class M>
+void load_params(M& m, std::vector<gc_param>& ps)
+{
+    std::size_t k = 0;
+    m.for_each_parameter([&](std::string_view, std::span<double> v, std::span<double> g, std::span<const std::size_t>) {
+        std::copy(ps[k].value.begin(), ps[k].value.end(), v.begin());
+        std::fill(g.begin(), g.end(), 0.0);
+        ++k;
+    });
+}
+template <class M>
+void store_grads(M& m, std::vector<gc_param>& ps)
+{
+    std::size_t k = 0;
+    m.for_each_parameter([&](std::string_view, std::span<double>, std::span<double> g, std::span<const std::size_t>) {
+        std::copy(g.begin(), g.end(), ps[k].grad.begin());
+        ++k;
+    });
+}
+}  // namespace
+
+TEST_CASE("stargan: parameter names and shapes follow official StarGAN")
+{
+    generator<float, hand_embedded> g;
+    discriminator<float, hand_embedded> d;
+    std::map<std::string, std::vector<std::size_t>> gp, dp;
+    std::vector<std::string> order;
+    g.for_each_parameter([&](std::string_view n, std::span<float> v, std::span<float> gr, std::span<const std::size_t> s) {
+        CHECK(v.size() == gr.size());
+        gp[std::string(n)] = {s.begin(), s.end()};
+        order.emplace_back(n);
+    });
+    d.for_each_parameter([&](std::string_view n, std::span<float>, std::span<float>, std::span<const std::size_t> s) {
+        dp[std::string(n)] = {s.begin(), s.end()};
+    });
+    using V = std::vector<std::size_t>;
+    CHECK(order.front() == "main.0.weight");
+    CHECK(order.back() == "main.18.weight");
+    CHECK(gp["main.0.weight"] == V{32, 8, 7, 7});
+    CHECK(gp["main.1.weight"] == V{32});
+    CHECK(gp["main.1.bias"] == V{32});
+    CHECK(gp["main.3.weight"] == V{64, 32, 4, 4});
+    CHECK(gp["main.6.weight"] == V{128, 64, 4, 4});
+    CHECK(gp["main.9.main.0.weight"] == V{128, 128, 3, 3});
+    CHECK(gp["main.9.main.4.bias"] == V{128});
+    CHECK(gp["main.11.main.3.weight"] == V{128, 128, 3, 3});
+    CHECK(gp["main.12.weight"] == V{128, 64, 4, 4});  // ConvTranspose2d [in, out, k, k]
+    CHECK(gp["main.13.weight"] == V{64});
+    CHECK(gp["main.15.weight"] == V{64, 32, 4, 4});
+    CHECK(gp["main.16.bias"] == V{32});
+    CHECK(gp["main.18.weight"] == V{3, 32, 7, 7});
+    CHECK(gp.size() == 3 + 6 + 3 * 6 + 6 + 1);
+    CHECK(g.parameter_count() == 1231840);  // = sum(p.numel()) of reference_stargan.py G(32, 3)
+    CHECK(dp["main.0.weight"] == V{32, 3, 4, 4});
+    CHECK(dp["main.0.bias"] == V{32});
+    CHECK(dp["main.4.weight"] == V{128, 64, 4, 4});
+    CHECK(dp["conv1.weight"] == V{1, 128, 3, 3});
+    CHECK(dp["conv2.weight"] == V{5, 128, 1, 3});
+    CHECK(dp.size() == 8);
+    generator<float, hand_paper> gpaper;
+    CHECK(gpaper.parameter_count() == 8430528);
+    static_assert(dims<hand_embedded>::H == 12 && dims<hand_embedded>::W == 24);
+    static_assert(dims<body_embedded>::H == 12 && dims<body_embedded>::W == 24);
+    static_assert(discriminator<float, with_batch<body_embedded, 4>>::cls_shape::dims[1] == 8);
+}
+
+TEST_CASE("stargan: infer equals the tape forward; thread-pool batch split equals one thread")
+{
+    using cfg = with_batch<hand_embedded, 3>;
+    generator<float, cfg> g;
+    discriminator<float, cfg> d;
+    randomise(g, 1, 0.1);
+    randomise(d, 2, 0.1);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<float> x(3 * 3 * 12 * 24), lab(3 * 5, 0.f), out(x.size());
+    for (auto& v : x) v = u(rng);
+    lab[1] = lab[5 + 4] = lab[10] = 1;
+    tape<float> t1;
+    auto y1 = g.forward(t1, t1.input<shape<3, 3, 12, 24>>(x.data()), t1.input<shape<3, 5>>(lab.data()));
+    decltype(g)::workspace ws;
+    g.infer(x.data(), lab.data(), out.data(), ws);
+    for (std::size_t i = 0; i < out.size(); ++i) REQUIRE(out[i] == doctest::Approx(y1.data()[i]).epsilon(1e-4));
+
+    kernels::thread_pool pool(2);
+    tape<float> t2(1 << 20, &pool);
+    auto y2 = g.forward(t2, t2.input<shape<3, 3, 12, 24>>(x.data()), t2.input<shape<3, 5>>(lab.data()));
+    for (std::size_t i = 0; i < out.size(); ++i) REQUIRE(y2.data()[i] == doctest::Approx(y1.data()[i]).epsilon(1e-5));
+    // D + backward in both tapes: parameter gradients agree
+    std::vector<float> g1, g2;
+    auto grads = [&](tape<float>& t, decltype(y1) y, std::vector<float>& out_g) {
+        d.zero_grad();
+        auto o = d.forward(t, y);
+        t.backward(sum(o.src) + sum(square(o.cls)));
+        d.for_each_parameter([&](std::string_view, std::span<float>, std::span<float> gr, std::span<const std::size_t>) {
+            out_g.insert(out_g.end(), gr.begin(), gr.end());
+        });
+    };
+    grads(t1, y1, g1);
+    grads(t2, y2, g2);
+    REQUIRE(g1.size() == g2.size());
+    for (std::size_t i = 0; i < g1.size(); ++i) REQUIRE(g2[i] == doctest::Approx(g1[i]).epsilon(1e-4).scale(1e-3));
+}
+
+TEST_CASE("stargan: gradient check of a residual block (conv3 IN ReLU conv3 IN + skip)")
+{
+    std::mt19937 rng(11);
+    std::vector<gc_param> ps;
+    for (std::size_t n : {2 * 3 * 3 * 4, 3 * 3 * 3 * 3, 3, 3, 3 * 3 * 3 * 3, 3, 3}) ps.push_back(random_param(n, rng));
+    gradcheck(ps, [&](tape<double>& t) {
+        auto x = leaf<shape<2, 3, 3, 4>>(t, ps, 0);
+        auto a = relu(instance_norm(conv2d<1, 1>(x, leaf<shape<3, 3, 3, 3>>(t, ps, 1)), leaf<shape<3>>(t, ps, 2),
+                                    leaf<shape<3>>(t, ps, 3)));
+        auto b = instance_norm(conv2d<1, 1>(a, leaf<shape<3, 3, 3, 3>>(t, ps, 4)), leaf<shape<3>>(t, ps, 5),
+                               leaf<shape<3>>(t, ps, 6));
+        auto y = x + b;
+        return sum(square(y)).id;
+    });
+}
+
+TEST_CASE("stargan: gradient check of a small generator, discriminator and WGAN-GP penalty")
+{
+    generator<double, tiny> g;
+    discriminator<double, tiny> d;
+    randomise(g, 21);
+    randomise(d, 22);
+    using gen = generator<double, tiny>;
+    using dis = discriminator<double, tiny>;
+    std::mt19937 rng(23);
+    auto xp = random_param(gen::image_shape::size, rng);
+    const std::vector<double> lab = {0, 1, 0, 0, 0, 1};
+    const int cls_lab[2] = {2, 0};
+
+    SUBCASE("generator (all parameters and the input)")
+    {
+        auto ps = model_params(g);
+        ps.push_back(xp);
+        gradcheck(ps, [&](tape<double>& t) {
+            load_params(g, ps);
+            auto x = leaf<gen::image_shape>(t, ps, ps.size() - 1);
+            auto y = g.forward(t, x, t.input<gen::label_shape>(lab.data()));
+            return sum(square(y - x)).id;
+        }, 1e-6, 1e-9, 12, 1e-5, [&] { store_grads(g, ps); });
+    }
+    SUBCASE("discriminator (both heads)")
+    {
+        auto ps = model_params(d);
+        ps.push_back(xp);
+        gradcheck(ps, [&](tape<double>& t) {
+            load_params(d, ps);
+            auto o = d.forward(t, leaf<dis::image_shape>(t, ps, ps.size() - 1));
+            return (mean(o.src) + cross_entropy(o.cls, std::span<const int, 2>(cls_lab))).id;
+        }, 1e-6, 1e-9, 60, 1e-5, [&] { store_grads(d, ps); });
+    }
+    SUBCASE("gradient penalty through D: mean((||grad_x sum D_src(x)||_2 - 1)^2)")
+    {
+        auto ps = model_params(d);
+        gradcheck(ps, [&](tape<double>& t) {
+            load_params(d, ps);
+            auto x = t.input<dis::image_shape>(xp.value.data(), true);
+            auto o = d.forward(t, x);
+            auto gx = t.grad(sum(o.src), x);
+            auto cls = cross_entropy(o.cls, std::span<const int, 2>(cls_lab));
+            return (10.0 * mean(square(l2_norm_per_sample(gx) - 1.0)) + cls).id;
+        }, 1e-6, 1e-9, 60, 1e-5, [&] { store_grads(d, ps); });
+    }
+}
