@@ -1,0 +1,35 @@
+// Consumer smoke test: builds a clip, round-trips it through BVH text, writes and reads back a BMP.
+#include <handemo.hpp>
+#include <handemo/image.hpp>
+
+#include <cstdio>
+#include <filesystem>
+
+int main(int argc, char** argv)
+{
+    handemo::skeleton sk;
+    sk.joints.resize(2);
+    sk.joints[0].name = "root";
+    sk.joints[0].channels = {handemo::channel::xposition, handemo::channel::yposition, handemo::channel::zposition,
+                             handemo::channel::zrotation, handemo::channel::xrotation, handemo::channel::yrotation};
+    sk.joints[1].name = "tip";
+    sk.joints[1].parent = 0;
+    sk.joints[1].offset = {0, 1, 0};
+    handemo::clip c = handemo::clip::make(sk, 3, 30);
+    c.angle(2, 1, 0) = 45.5;
+    const handemo::clip r = handemo::parse_bvh(handemo::to_bvh_string(c), "consumer.bvh");
+    if (r.frames != 3 || r.angle(2, 1, 0) != 45.5) {
+        std::puts("consumer: BVH round trip failed");
+        return 1;
+    }
+    handemo::rgb_image im = handemo::rgb_image::make(23, 9);
+    im.at(8, 22)[2] = 255;
+    const std::filesystem::path p = std::filesystem::path(argc > 1 ? argv[1] : ".") / "consumer.bmp";
+    handemo::write_bmp(p, im);
+    if (!(handemo::read_image(p, 23, 9) == im)) {
+        std::puts("consumer: BMP round trip failed");
+        return 1;
+    }
+    std::puts("consumer: ok");
+    return 0;
+}
