@@ -177,3 +177,18 @@ TEST_CASE("conv kernels match the reference on random odd geometries")
     }
     CHECK(tested == 60);
 }
+
+TEST_CASE("conv kernels match the reference on random geometries with many channels (every dispatch route)")
+{
+    std::mt19937 rng(5u);
+    auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    int tested = 0;
+    while (tested < 16) {
+        const int k = pick(1, 7);
+        hk::conv_geometry g{pick(1, 3), pick(14, 40), pick(1, 9), pick(1, 9), pick(1, 40), k, k, pick(1, 2), pick(0, 3)};
+        if (!g.valid()) continue;
+        check_geometry<float>(g, 1e-5, unsigned(tested) + 77u);
+        ++tested;
+    }
+    CHECK(tested == 16);
+}

@@ -136,6 +136,23 @@ inline std::size_t padded_image_elements(const conv_geometry& g, int mr) noexcep
     return std::size_t(g.in_channels) * Hp * Wp + std::size_t(mr) + Wp;
 }
 
+/// The stride-1 path avoids packing, which matters when few output channels reuse each packed element;
+/// with many output channels the packed, batch-folded path keeps all lanes busy and wins (measured).
+inline bool use_stride1_forward(const conv_geometry& g) noexcept
+{
+    return g.stride == 1 && g.out_channels < 16;
+}
+
+/// Scratch elements of the forward pass alone.
+template <class T>
+inline std::size_t forward_scratch_elements(const conv_geometry& g) noexcept
+{
+    constexpr std::size_t MR = micro_mr<T>, NR = micro_nr;
+    const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
+    if (use_stride1_forward(g)) return padded_image_elements(g, int(MR)) + NR * MR;
+    return std::min<std::size_t>(K, forward_kc) * MR + NR * MR;
+}
+
 /// The geometry whose stride-1 forward pass is g's backward-data (gy padded by k-1-p, flipped weights).
 inline conv_geometry flipped_geometry(const conv_geometry& g) noexcept
 {
@@ -143,11 +160,11 @@ inline conv_geometry flipped_geometry(const conv_geometry& g) noexcept
             g.kernel_h - 1 - g.pad};
 }
 
-/// Stride 1, square-free kernels: the flipped-forward route of backward-data applies (pad <= k-1, kh == kw
-/// so one pad fits both axes).
+/// Stride 1, square kernels, pad <= k-1, and enough input channels that the flipped forward takes the
+/// packed path (measured: 54 vs 37 GFLOP/s on the 3x3 residual conv, 39 vs 31 the other way for 8 channels).
 inline bool backward_data_by_forward(const conv_geometry& g) noexcept
 {
-    return g.stride == 1 && g.kernel_h == g.kernel_w && g.pad <= g.kernel_h - 1;
+    return g.stride == 1 && g.kernel_h == g.kernel_w && g.pad <= g.kernel_h - 1 && g.in_channels >= 16;
 }
 
 /// Scratch elements of the fast path for geometry g (max over all passes), see each pass for its parts.
@@ -159,12 +176,10 @@ inline std::size_t scratch_elements(const conv_geometry& g) noexcept
     const std::size_t P = std::size_t(g.out_h()) * g.out_w();
     const std::size_t co_r = (std::size_t(g.out_channels) + NR - 1) / NR * NR;
     const std::size_t tile = NR * MR;
-    const std::size_t fwd = std::min<std::size_t>(K, forward_kc) * MR + tile;
+    const std::size_t fwd = forward_scratch_elements<T>(g);
     const std::size_t bwd_data = std::size_t(g.out_channels) * MR + tile;
     const std::size_t bwd_weight = P * MR + co_r * MR;
-    std::size_t s1 = 0;
-    if (g.stride == 1) s1 = padded_image_elements(g, int(MR)) + tile;
-    if (backward_data_by_forward(g)) s1 = std::max(s1, padded_image_elements(flipped_geometry(g), int(MR)) + tile + g.w_size());
+    const std::size_t s1 = backward_data_by_forward(g) ? forward_scratch_elements<T>(flipped_geometry(g)) + g.w_size() : 0;
     return std::max({fwd, bwd_data, bwd_weight, s1}) + 64 / sizeof(T);
 }
 
@@ -235,7 +250,7 @@ template <class T>
 inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
                     bool accumulate_out) noexcept
 {
-    if (g.stride == 1) return forward_stride1(g, x, w, bias, y, scratch, accumulate_out);
+    if (use_stride1_forward(g)) return forward_stride1(g, x, w, bias, y, scratch, accumulate_out);
     constexpr int MR = micro_mr<T>, NR = micro_nr, L = simd_lanes<T>;
     using B = simd_t<T>;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow, Ptot = P * g.batch;
@@ -302,6 +317,10 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
     }
 }
 
+template <class T>
+inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                    bool accumulate_out) noexcept;
+
 /// Backward-data of a stride-1 convolution as the stride-1 forward pass of gy (padded by k-1-p) with the
 /// flipped, channel-swapped kernel w'[c,o,u,v] = w[o,c,k-1-u,k-1-v]:
 /// gx[c,h,w] = sum_{o,u,v} gy[o, h+p-u, w+p-v] w[o,c,u,v] = sum_{o,u',v'} gy_pad'[o, h+u', w+v'] w'[c,o,u',v'].
@@ -316,7 +335,7 @@ inline void backward_data_stride1(const conv_geometry& g, const T* gy, const T* 
                 for (int v = 0; v < kw; ++v)
                     wf[((std::ptrdiff_t(c) * Co + o) * kh + (kh - 1 - u)) * kw + (kw - 1 - v)] =
                         w[((std::ptrdiff_t(o) * Ci + c) * kh + u) * kw + v];
-    forward_stride1(flipped_geometry(g), gy, wf, static_cast<const T*>(nullptr), gx, scratch + g.w_size(), true);
+    forward(flipped_geometry(g), gy, wf, static_cast<const T*>(nullptr), gx, scratch + g.w_size(), true);
 }
 
 /// Backward-data pass: gx += col2im(W^T gy), the GEMM done per image with V = W read in place
