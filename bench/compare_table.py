@@ -1,0 +1,78 @@
+#!/usr/bin/python3
+"""Prints the handemo vs PyTorch vs FMA-peak table of compare.sh from the outputs it collected.
+bench_stargan results are matched by name: a benchmark whose name contains `paper` or `64` (resp.
+`embedded` or `32`) and `infer` is the batch-1 generator inference, one containing `train` the training
+step (D+G, batch 16). Anything missing prints n/a."""
+import argparse, json, os, re
+
+def load_json(path):
+    try:
+        with open(path) as f:
+            return json.load(f).get("benchmarks", [])
+    except (OSError, ValueError):
+        return []
+
+def seconds(b):
+    unit = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}[b.get("time_unit", "ns")]
+    return b["real_time"] * unit  # wall time: what a user waits for
+
+def torch_results(path):
+    r = {}
+    try:
+        for line in open(path):
+            m = re.match(r"(\w+)\(.*?\): .*inference b1 ([0-9.]+) us, train step .* ([0-9.]+) ms", line)
+            if m:
+                r[m.group(1)] = (float(m.group(2)) * 1e-6, float(m.group(3)) * 1e-3)
+    except OSError:
+        pass
+    return r
+
+def fmt_t(s):
+    return "n/a" if s is None else (f"{s*1e6:.0f} us" if s < 1e-2 else f"{s*1e3:.1f} ms")
+
+def ratio(a, b):
+    return "n/a" if a is None or b is None or b == 0 else f"{a/b:.2f}x"
+
+ap = argparse.ArgumentParser()
+for a in ("--peak", "--torch1", "--torch2", "--conv", "--layers", "--stargan"):
+    ap.add_argument(a, default="")
+o = ap.parse_args()
+peak = float(o.peak or 0)
+t1, t2 = torch_results(o.torch1), torch_results(o.torch2)
+conv = {b["name"]: b for b in load_json(o.conv)}
+star = load_json(o.stargan) if os.path.exists(o.stargan) else []
+
+def star_find(cfg_keys, kind):
+    for b in star:
+        n = b["name"].lower()
+        if any(k in n for k in cfg_keys) and kind in n and b.get("run_type", "iteration") == "iteration":
+            return seconds(b)
+    return None
+
+print(f"FP32 FMA peak (1 core): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
+print()
+print("| config | measure | handemo | PyTorch 1 thr | PyTorch 2 thr | PyTorch / handemo | fraction of peak |")
+print("|---|---|---|---|---|---|---|")
+for cfg, keys, gname in (("paper", ("paper", "64"), "generator_convs/paper(64,6)/b1"),
+                         ("embedded", ("embedded", "32"), "generator_convs/embedded(32,3)/b1")):
+    g = conv.get(gname)
+    tp1 = t1.get(cfg, (None, None)); tp2 = t2.get(cfg, (None, None))
+    if g:
+        gs = seconds(g); gfl = g.get("GFLOPS", 0) / 1e9 if g.get("GFLOPS", 0) > 1e6 else g.get("GFLOPS", 0)
+        frac = f"{gfl/peak:.0%} ({gfl:.1f} GFLOP/s)" if peak else "n/a"
+        print(f"| {cfg} | G conv stack, batch 1 (bench_conv) | {fmt_t(gs)} | {fmt_t(tp1[0])} (whole G) | | {ratio(tp1[0], gs)} | {frac} |")
+    inf = star_find(keys, "infer")
+    print(f"| {cfg} | G inference, batch 1 | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(tp1[0], inf)} | |")
+    tr = star_find(keys, "train")
+    print(f"| {cfg} | train step D+G, batch 16 | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(tp2[1], tr)} (vs 2 thr) | |")
+print()
+layers = load_json(o.layers)
+if layers:
+    print("Per-layer conv kernels (CPU time GFLOP/s" + (f", fraction of {peak:.0f} GFLOP/s peak" if peak else "") + "):")
+    print("| layer / pass / batch | time | GFLOP/s | of peak |")
+    print("|---|---|---|---|")
+    for b in layers:
+        gfl = b.get("GFLOPS", 0)
+        gfl = gfl / 1e9 if gfl > 1e6 else gfl
+        print(f"| {b['name']} | {fmt_t(b['cpu_time'] * {'ns':1e-9,'us':1e-6,'ms':1e-3,'s':1.0}[b.get('time_unit','ns')])} | {gfl:.1f} | {gfl/peak:.0%} |" if peak else
+              f"| {b['name']} | | {gfl:.1f} | n/a |")
