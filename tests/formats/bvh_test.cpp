@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -349,4 +350,40 @@ TEST_CASE("bvh: absurd sizes are refused before allocating")
     s += "}\nMOTION\nFrames: 1\nFrame Time: 0.1\n0 0 0\n";
     // Joint number 10001 (0-based 10000) opens on line 5 + 5 * 9999 + 1.
     expect_error(s, 5 + 5 * 9999 + 1, "more than 10000 joints");
+}
+
+TEST_CASE("bvh: every truncation and random corruption gives a clip or a format_error, never anything else")
+{
+    // Truncation at every byte of the small file: a prefix that ends inside the last row or earlier must
+    // be refused; only prefixes that keep the whole last row may parse, and then they parse fully.
+    const std::size_t last_row = small_bvh.rfind("-10\t");
+    for (std::size_t n = 0; n < small_bvh.size(); ++n) {
+        CAPTURE(n);
+        const std::string cut = small_bvh.substr(0, n);
+        try {
+            const clip c = parse_bvh(cut, "cut.bvh");
+            CHECK(n > last_row);
+            CHECK(c.frames == 2);
+            CHECK_NOTHROW(c.validate());
+        } catch (const format_error&) {
+        }
+    }
+    // Random byte changes (digits, letters, separators, braces, line breaks).
+    std::mt19937 rng(12345);
+    const std::string alphabet = "0123456789-+.eE xyzXYZ{}\n\r\tnaif:#";
+    std::size_t parsed = 0, refused = 0;
+    for (int it = 0; it < 3000; ++it) {
+        std::string s = tiny;
+        const int edits = 1 + static_cast<int>(rng() % 3);
+        for (int e = 0; e < edits; ++e) s[rng() % s.size()] = alphabet[rng() % alphabet.size()];
+        try {
+            const clip c = parse_bvh(s, "fuzz.bvh");
+            CHECK_NOTHROW(c.validate());
+            ++parsed;
+        } catch (const format_error&) {
+            ++refused;
+        }
+    }
+    MESSAGE("random corruption: " << parsed << " parsed, " << refused << " refused");
+    CHECK(refused > 0);
 }
