@@ -21,6 +21,10 @@
 
 namespace handemo {
 
+/// Pixels of grid colour between and around the cells of a filmstrip. Cell (row r, column c) has its
+/// top-left corner at (gap + c (cell_width + gap), title_height + gap + r (cell_height + gap)).
+inline constexpr long filmstrip_gap = 3;
+
 /// @brief Layout of a filmstrip.
 struct filmstrip_options {
     std::size_t rows = 5;                ///< sampled frames per clip (one row each), 1..1000
@@ -66,13 +70,32 @@ inline std::string fit_text(std::string s, long max_px, int scale)
 
 }  // namespace detail
 
-/// @brief Renders clips side by side, one sampled frame per row (the paper's Figures 4-12).
-/// @param clips one column each; any skeletons (the camera comes from the first clip).
-/// @param opt rows, cell size, column titles, figure options.
-/// @return an RGB image of cols x rows cells plus a title band.
+/// @brief Everything a filmstrip's cells share: per-clip layouts, the camera, scale and tracking.
+struct filmstrip_plan {
+    std::vector<figure_layout> layouts;  ///< [clips]
+    figure_projection projection;        ///< view, view-space centre, pixels per unit, depth range
+    bool track = false;                  ///< whether each frame is centred on its horizontal centroid
+    point2 origin;                       ///< where the view-space centre lands in a cell, in cell pixels
+
+    /// @brief The tracking offset of a pose of clip `ci` (zero when not tracking).
+    vec3 track_offset(std::size_t ci, const pose_positions& P, const figure_options& o) const
+    {
+        return track ? detail::horizontal_centroid(layouts[ci], P, o.up) : vec3{};
+    }
+    /// @brief Pixel position inside a cell of a world point of a pose whose tracking offset is `offset`.
+    point2 project(vec3 p, vec3 offset = {}) const noexcept
+    {
+        const vec3 q = detail::v_sub(p, offset);
+        const view_basis& v = projection.view;
+        return {origin.x + (detail::v_dot(q, v.right) - projection.cx) * projection.scale,
+                origin.y - (detail::v_dot(q, v.up) - projection.cy) * projection.scale};
+    }
+};
+
+/// @brief Checks the inputs of a filmstrip and fits one camera and scale to every frame of every clip.
 /// @throws value_error for no clips, a clip with zero frames, a title count that is neither 0 nor the
 ///         clip count, rows or cell sizes out of range; shape_error / value_error from clip::validate.
-inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_options& opt = {})
+inline filmstrip_plan plan_filmstrip(std::span<const clip> clips, const filmstrip_options& opt)
 {
     const std::string fn = "render_filmstrip";
     if (clips.empty()) throw value_error(fn + ": no clips to draw (expected at least one)");
@@ -84,7 +107,8 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
     if (!opt.titles.empty() && opt.titles.size() != clips.size())
         throw value_error(fn + ": " + std::to_string(opt.titles.size()) + " titles for " + std::to_string(clips.size()) +
                           " clips (expected one title per clip, or none)");
-    std::vector<figure_layout> layouts;
+    filmstrip_plan plan;
+    std::vector<figure_layout>& layouts = plan.layouts;
     for (std::size_t i = 0; i < clips.size(); ++i) {
         const std::string what = fn + ": clip " + std::to_string(i) + (opt.titles.empty() ? "" : " ('" + opt.titles[i] + "')");
         if (clips[i].frames == 0) throw value_error(what + " has 0 frames (expected at least 1)");
@@ -94,13 +118,14 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
     const figure_layout& L0 = layouts.front();
     const bool hand = L0.kind == figure_kind::hand;
     const bool track = opt.figure.track < 0 ? !hand : opt.figure.track > 0;
-    figure_projection pr;
+    plan.track = track;
+    figure_projection& pr = plan.projection;
     pr.view = choose_view(clips, L0, opt.figure);
 
     // Pass 1: view-space bounding box and depth range over every frame of every clip.
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300, d0 = 1e300, d1 = -1e300;
     auto track_of = [&](std::size_t ci, const pose_positions& P) {
-        return track ? detail::horizontal_centroid(layouts[ci], P, opt.figure.up) : vec3{};
+        return plan.track_offset(ci, P, opt.figure);
     };
     for (std::size_t ci = 0; ci < clips.size(); ++ci) {
         for (std::size_t f = 0; f < clips[ci].frames; ++f) {
@@ -137,8 +162,22 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
     pr.depth_min = d0;
     pr.depth_max = d1;
 
+    plan.origin = {cw / 2, (ch - label_h) / 2};
+    return plan;
+}
+
+/// @brief Renders clips side by side, one sampled frame per row (the paper's Figures 4-12).
+/// @param clips one column each; any skeletons (the camera comes from the first clip).
+/// @param opt rows, cell size, column titles, figure options.
+/// @return an RGB image of cols x rows cells plus a title band.
+/// @throws value_error for no clips, a clip with zero frames, a title count that is neither 0 nor the
+///         clip count, rows or cell sizes out of range; shape_error / value_error from clip::validate.
+inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_options& opt = {})
+{
+    const filmstrip_plan plan = plan_filmstrip(clips, opt);
+    const figure_projection& pr = plan.projection;
     // Pass 2: layout and drawing.
-    const long gap = 3;
+    const long gap = filmstrip_gap;
     int ts = std::max(1, opt.title_scale);  // one scale for every title: the largest at which all fit
     for (const auto& t : opt.titles)
         while (ts > 1 && text_width(t, ts) > static_cast<long>(opt.cell_width) - 4) --ts;
@@ -161,8 +200,9 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
             const std::size_t f = detail::filmstrip_frame(static_cast<std::size_t>(r), opt.rows, cl.frames);
             canvas cell(opt.cell_width, opt.cell_height, opt.figure.background);
             const pose_positions P = clip_pose(cl, f);
-            const auto prims = figure_primitives(cl.skel, layouts[static_cast<std::size_t>(c)], P, track_of(static_cast<std::size_t>(c), P));
-            draw_figure(cell, prims, pr, {cw / 2, (ch - label_h) / 2}, opt.figure.background);
+            const auto prims = figure_primitives(cl.skel, plan.layouts[static_cast<std::size_t>(c)], P,
+                                                 plan.track_offset(static_cast<std::size_t>(c), P, opt.figure));
+            draw_figure(cell, prims, pr, plan.origin, opt.figure.background);
             if (opt.frame_labels)
                 draw_text(cell, 3, static_cast<long>(opt.cell_height) - 9, "f" + std::to_string(f), color::rgb8(140, 140, 140), 1);
             out.blit(cell, cx0, title_h + gap + r * (static_cast<long>(opt.cell_height) + gap));
