@@ -4,6 +4,7 @@
 #include <handemo/motion/csv.hpp>
 
 #include <filesystem>
+#include <random>
 #include <string>
 
 #include <unistd.h>
@@ -121,4 +122,34 @@ TEST_CASE("csv: writer refuses names that would break the format")
     clip c = parse_bvh(tiny_bvh, "tiny.bvh");
     c.skel.joints[1].name = "a,b";
     CHECK_THROWS_AS((void)to_csv_string(c), value_error);
+}
+
+TEST_CASE("csv: every truncation and random corruption gives a clip or a format_error, never anything else")
+{
+    const skeleton sk = parse_bvh(tiny_bvh, "tiny.bvh").skel;
+    for (std::size_t n = 0; n < tiny_csv.size(); ++n) {
+        CAPTURE(n);
+        try {
+            const clip c = parse_csv(tiny_csv.substr(0, n), "cut.csv", sk);
+            CHECK_NOTHROW(c.validate());
+            CHECK(c.frames >= 1);
+        } catch (const format_error&) {
+        }
+    }
+    std::mt19937 rng(777);
+    const std::string alphabet = "0123456789-+.eE,_ xyzp\n\r#naif=";
+    std::size_t refused = 0;
+    for (int it = 0; it < 3000; ++it) {
+        std::string s = tiny_csv;
+        for (int e = 0; e < 1 + static_cast<int>(rng() % 3); ++e) s[rng() % s.size()] = alphabet[rng() % alphabet.size()];
+        clip c;
+        try {
+            c = parse_csv(s, "fuzz.csv", sk);
+        } catch (const format_error&) {
+            ++refused;
+            continue;
+        }
+        CHECK_NOTHROW(c.validate());
+    }
+    CHECK(refused > 0);
 }

@@ -185,3 +185,30 @@ TEST_CASE("image: wrong and absurd sizes")
     CHECK_THROWS_WITH_AS(write_bmp(dir / "bad.bmp", bad), doctest::Contains("holds 47 bytes, expected height*width*3"), shape_error);
     CHECK_FALSE(fs::exists(dir / "bad.bmp"));
 }
+
+TEST_CASE("image: random corruption of BMP and PNG files gives an image or a handemo error, never a crash")
+{
+    temp_dir dir;
+    const rgb_image im = random_image(7, 5, 9);
+    write_bmp(dir / "a.bmp", im);
+    write_png(dir / "a.png", im);
+    std::mt19937 rng(4242);
+    std::size_t decoded = 0, refused = 0;
+    for (const char* name : {"a.bmp", "a.png"}) {
+        const std::string good = read_file(dir / name);
+        for (int it = 0; it < 1500; ++it) {
+            std::string s = good;
+            for (int e = 0; e < 1 + static_cast<int>(rng() % 4); ++e) s[rng() % s.size()] = static_cast<char>(rng() & 0xFF);
+            if (rng() % 4 == 0) s.resize(rng() % s.size());
+            try {
+                const rgb_image r = decode_image(s, name);
+                CHECK(r.pixels.size() == r.width * r.height * 3);
+                ++decoded;
+            } catch (const handemo::error&) {
+                ++refused;
+            }
+        }
+    }
+    MESSAGE("image corruption: " << decoded << " decoded, " << refused << " refused");
+    CHECK(refused > 0);
+}
