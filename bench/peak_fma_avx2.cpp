@@ -6,24 +6,37 @@
 
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 
-__attribute__((target("avx2,fma"))) static double run(long n, float& r)
+static double thread_cpu_seconds()
+{
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// Returns GFLOP/s over thread CPU time (robust when other processes share the core); wall_gflops gets
+/// the steady_clock figure the shared program prints.
+__attribute__((target("avx2,fma"))) static double run(long n, float& r, double& wall_gflops)
 {
     __m256 d[12];
     for (int i = 0; i < 12; i++) d[i] = _mm256_set1_ps(1.0f + float(i) * 1e-3f);
     const __m256 b = _mm256_set1_ps(0.9999f), c = _mm256_set1_ps(1e-6f);
     const auto t = std::chrono::steady_clock::now();
+    const double c0 = thread_cpu_seconds();
     for (long k = 0; k < n; k++) {
         for (int i = 0; i < 12; i++) d[i] = _mm256_fmadd_ps(d[i], b, c);
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    const double cpu = thread_cpu_seconds() - c0;
     r = 0;
     for (int i = 0; i < 12; i++) {
         float tmp[8];
         _mm256_storeu_ps(tmp, d[i]);
         for (float v : tmp) r += v;
     }
-    return double(n) * 12.0 * 8 * 2 / s / 1e9;
+    wall_gflops = double(n) * 12.0 * 8 * 2 / s / 1e9;
+    return double(n) * 12.0 * 8 * 2 / cpu / 1e9;
 }
 
 int main()
@@ -35,10 +48,12 @@ int main()
     }
     const long n = 200000000 / 12;
     float r = 0;
-    double best = 0;
-    for (int rep = 0; rep < 3; ++rep) {  // best of 3: other processes share the machine
-        const double g = run(n, r);
+    double best = 0, best_wall = 0;
+    for (int rep = 0; rep < 5; ++rep) {  // best of 5: other processes share the machine
+        double wall = 0;
+        const double g = run(n / 2, r, wall);
         best = g > best ? g : best;
+        best_wall = wall > best_wall ? wall : best_wall;
     }
-    std::printf("AVX2 FMA: %.1f GFLOP/s (r=%g)\n", best, double(r));
+    std::printf("AVX2 FMA: %.1f GFLOP/s (thread CPU time; wall clock %.1f) (r=%g)\n", best, best_wall, double(r));
 }
