@@ -443,9 +443,11 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
                 cur.fail(line, "row has " + std::to_string(n) + " values, expected " + std::to_string(columns.size()));
             }
             const auto [j, ch] = columns[k];
-            const std::string field = "frame " + std::to_string(frame) + " joint '" + out.skel.joints[j].name + "' " +
-                                      std::string(channel_name(ch));
-            const double v = cur.number({row.substr(b, p - b), line}, field);
+            double v = 0;
+            const std::string_view tok = row.substr(b, p - b);
+            if (detail::parse_number(tok, v) != detail::number_status::ok)  // slow path: name the field
+                (void)cur.number({tok, line}, "frame " + std::to_string(frame) + " joint '" + out.skel.joints[j].name +
+                                                  "' " + std::string(channel_name(ch)));
             const auto a = static_cast<std::size_t>(channel_axis(ch));
             (is_rotation(ch) ? out.angles : out.positions)[(frame * J + j) * 3 + a] = v;
             ++k;
