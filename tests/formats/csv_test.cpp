@@ -80,7 +80,7 @@ TEST_CASE("csv: columns are matched by name in any order; CRLF, blanks and comme
 TEST_CASE("csv: round trip of real clips is exact (Bandai with underscores in names, Xia)")
 {
     const fs::path dir = fs::temp_directory_path() / ("handemo_formats_csv_" + std::to_string(::getpid()));
-    for (const fs::path p : {shared_dir / "data/bandai/dataset-1_walk_sad_002.bvh", shared_dir / "data/xia/neutral_16_000.bvh"}) {
+    for (const fs::path& p : {shared_dir / "data/bandai/dataset-1_walk_sad_002.bvh", shared_dir / "data/xia/neutral_16_000.bvh"}) {
         CAPTURE(p);
         const clip a = read_bvh(p);
         const fs::path out = dir / (p.stem().string() + ".csv");
