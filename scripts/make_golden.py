@@ -13,7 +13,7 @@ Debian has no python3-safetensors, so the format (8-byte little-endian header le
 dtype/shape/data_offsets and optional __metadata__, raw little-endian data) is written and read here
 with struct + json, as the reference implementation lays it out (header padded with spaces to 8 bytes).
 
-Fixtures (float32 unless noted, seeded with torch.manual_seed):
+Fixtures (seeded with torch.manual_seed; float32 except the StarGAN one, computed and stored in float64):
   ops.safetensors      per op: inputs, output, a random upstream gradient `gy`, input gradients
   stargan_tiny.safetensors  a tiny StarGAN G and D with the layout of /work/shared/bench/reference_stargan.py
                        (official StarGAN parameter names), inputs, outputs, losses, parameter gradients of
@@ -233,20 +233,22 @@ def main(out_dir):
             h = s.main(x)
             return s.conv1(h), s.conv2(h).view(x.size(0), -1)
 
+    # float64: the reference is then exact to ~1e-15, so handemo's double model is checked tightly and
+    # its float model against the truth rather than against another float computation
     torch.manual_seed(1)
-    g = Generator(cfg["g_conv_dim"], cfg["g_repeat"])
-    d = Discriminator(cfg["d_conv_dim"], cfg["d_repeat"])
+    g = Generator(cfg["g_conv_dim"], cfg["g_repeat"]).double()
+    d = Discriminator(cfg["d_conv_dim"], cfg["d_repeat"]).double()
     # make the InstanceNorm affine parameters non-trivial so that their gradients are tested
     with torch.no_grad():
         for name, p in g.named_parameters():
             if p.dim() == 1:
                 p.add_(torch.randn_like(p) * 0.1)
-    x = torch.rand(B, 3, H, W) * 2 - 1
+    x = (torch.rand(B, 3, H, W) * 2 - 1).double()
     label_org = torch.tensor([1, 3])
     label_trg = torch.tensor([4, 0])
-    c_org = torch.eye(C)[label_org]
-    c_trg = torch.eye(C)[label_trg]
-    alpha = torch.tensor([0.3, 0.8]).view(B, 1, 1, 1)
+    c_org = torch.eye(C, dtype=torch.float64)[label_org]
+    c_trg = torch.eye(C, dtype=torch.float64)[label_trg]
+    alpha = torch.tensor([0.3, 0.8], dtype=torch.float64).view(B, 1, 1, 1)
 
     # D loss (reference_stargan.py step(), D half)
     out_src, out_cls = d(x)
@@ -277,23 +279,23 @@ def main(out_dir):
 
     sg = []
     for n_, p in g.named_parameters():
-        sg.append(T("G." + n_, p))
+        sg.append(T("G." + n_, p, "F64"))
     for n_, p in d.named_parameters():
-        sg.append(T("D." + n_, p))
-    sg += [T("input.x", x), ("input.label_org", "I64", [B], label_org.tolist()),
-           ("input.label_trg", "I64", [B], label_trg.tolist()), T("input.c_org", c_org), T("input.c_trg", c_trg),
-           T("input.alpha", alpha),
-           T("out.d_src_real", out_src), T("out.d_cls_real", out_cls), T("out.g_fake", fake),
-           T("out.d_src_fake", f_src), T("out.gp_grad_x", gr), T("out.g_rec", rec), T("out.d_cls_fake", cls_fake)]
+        sg.append(T("D." + n_, p, "F64"))
+    sg += [T("input.x", x, "F64"), ("input.label_org", "I64", [B], label_org.tolist()),
+           ("input.label_trg", "I64", [B], label_trg.tolist()), T("input.c_org", c_org, "F64"), T("input.c_trg", c_trg, "F64"),
+           T("input.alpha", alpha, "F64"),
+           T("out.d_src_real", out_src, "F64"), T("out.d_cls_real", out_cls, "F64"), T("out.g_fake", fake, "F64"),
+           T("out.d_src_fake", f_src, "F64"), T("out.gp_grad_x", gr, "F64"), T("out.g_rec", rec, "F64"), T("out.d_cls_fake", cls_fake, "F64")]
     for k, v in [("d_real", d_real), ("d_fake", d_fake), ("d_cls", d_cls), ("d_gp", gp), ("d_total", ld),
                  ("g_fake", g_fake), ("g_rec", g_rec), ("g_cls", g_cls), ("g_total", lg)]:
         sg.append(("loss." + k, "F64", [], [float(v)]))
     for (n_, _), gg in zip(d.named_parameters(), grad_d):
-        sg.append(T("grad_d." + n_, gg))
+        sg.append(T("grad_d." + n_, gg, "F64"))
     for (n_, _), gg in zip(d.named_parameters(), grad_gp):
-        sg.append(T("grad_gp." + n_, gg))
+        sg.append(T("grad_gp." + n_, gg, "F64"))
     for (n_, _), gg in zip(g.named_parameters(), grad_g):
-        sg.append(T("grad_g." + n_, gg))
+        sg.append(T("grad_g." + n_, gg, "F64"))
     meta = {k: str(v) for k, v in cfg.items()}
     meta.update({"generator": "scripts/make_golden.py", "torch": torch.__version__,
                  "L_D": "-mean(src(x)) + mean(src(G(x,c_trg))) + lambda_cls CE(cls(x), label_org) + lambda_gp GP",

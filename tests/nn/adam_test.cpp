@@ -14,7 +14,7 @@ namespace {
 template <class T>
 void run_adam_golden(const char* dt, double tol)
 {
-    const auto f = fixture("adam.safetensors");
+    const auto& f = fixture("adam.safetensors");
     const std::string p = dt;
     std::vector<T> param = f.get<T>(p + ".p0");
     const std::vector<double> lrs = f.get<double>(p + ".lr");

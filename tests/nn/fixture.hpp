@@ -3,7 +3,7 @@
 #pragma once
 
 #include <doctest/doctest.h>
-#include <handemo/nn/safetensors.hpp>
+#include <handemo/nn/tensor_file.hpp>
 
 #include <cmath>
 #include <string>
@@ -11,10 +11,9 @@
 
 namespace handemo::test {
 
-inline safetensors_file fixture(const std::string& name)
-{
-    return read_safetensors(std::string(HANDEMO_FIXTURE_DIR) + "/" + name);
-}
+/// The fixture file `name` under HANDEMO_FIXTURE_DIR, parsed once per program (fixture.cpp, the only
+/// translation unit of the golden tests that compiles the JSON parser).
+const safetensors_file& fixture(const std::string& name);
 
 /// Largest |a - b| / (|b| + floor) over the elements; floor keeps near-zero references meaningful.
 template <class A, class B>
@@ -29,16 +28,17 @@ double max_rel_error(const A& a, const B& b, double floor)
     return e;
 }
 
-/// CHECKs |got - want| <= rtol * max(|want|, 0.01 max|want|) element-wise (relative error, with a floor
-/// of 1 % of the tensor's scale so that values that cancel to ~0 are compared at the tensor's precision).
+/// CHECKs |got - want| <= rtol * max(|want|, floor_frac * max|want|) element-wise: the relative error,
+/// with a floor at a fraction of the tensor's largest magnitude so that values that cancel to ~0 are
+/// compared at the tensor's precision (floor_frac 1: error relative to the tensor's scale).
 template <class A, class B>
-void check_close(const std::string& what, const A& got, const B& want, double rtol)
+void check_close(const std::string& what, const A& got, const B& want, double rtol, double floor_frac = 1e-2)
 {
     INFO(what);
     REQUIRE(got.size() == want.size());
     double scale = 0;
     for (std::size_t i = 0; i < want.size(); ++i) scale = std::max(scale, std::abs(static_cast<double>(want[i])));
-    const double floor = std::max(scale * 1e-2, 1e-30);
+    const double floor = std::max(scale * floor_frac, 1e-30);
     double worst = 0;
     std::size_t at = 0;
     for (std::size_t i = 0; i < want.size(); ++i) {

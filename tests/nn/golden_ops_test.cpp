@@ -13,8 +13,7 @@ namespace {
 
 const handemo::safetensors_file& ops()
 {
-    static const handemo::safetensors_file f = handemo::test::fixture("ops.safetensors");
-    return f;
+    return handemo::test::fixture("ops.safetensors");
 }
 
 template <class S>

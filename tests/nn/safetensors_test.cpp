@@ -101,7 +101,7 @@ TEST_CASE("safetensors written by handemo reads back in the Python reader of mak
 
 TEST_CASE("safetensors reads the files written by the Python writer of make_golden.py")
 {
-    const auto f = handemo::test::fixture("ops.safetensors");
+    const auto& f = handemo::test::fixture("ops.safetensors");
     CHECK(f.metadata.at("generator") == "scripts/make_golden.py");
     CHECK(f.at("conv2d_s2.x").shape == std::vector<std::size_t>{2, 3, 8, 8});
     CHECK(f.at("conv2d_s2.y").shape == std::vector<std::size_t>{2, 4, 4, 4});
