@@ -30,15 +30,15 @@ void instance_norm_backward(tape<T>& t, int self)
             const std::size_t o = (std::size_t(b) * C + c) * M;
             const T mu = n.aux[2 * (b * C + c)], r = n.aux[2 * (b * C + c) + 1];
             const T* g = n.adjoint + o;
-            T sg = 0, sgx = 0;
+            double sg = 0, sgx = 0;  // statistics accumulate in double (float sums lose digits here)
             for (int m = 0; m < M; ++m) {
                 sg += g[m];
-                sgx += g[m] * (x[o + m] - mu) * r;
+                sgx += double(g[m]) * ((x[o + m] - mu) * r);
             }
-            if (gb) gb[c] += sg;
-            if (gg) gg[c] += sgx;
+            if (gb) gb[c] += T(sg);
+            if (gg) gg[c] += T(sgx);
             if (gx) {
-                const T k = gamma[c] * r, mg = sg / T(M), mgx = sgx / T(M);
+                const T k = gamma[c] * r, mg = T(sg / M), mgx = T(sgx / M);
                 for (int m = 0; m < M; ++m) gx[o + m] += k * (g[m] - mg - (x[o + m] - mu) * r * mgx);
             }
         }
@@ -57,16 +57,16 @@ int instance_norm_raw(tape<T>& t, int x, int gamma, int beta, int N, int C, int 
     for (int b = 0; b < N; ++b)
         for (int c = 0; c < C; ++c) {
             const std::size_t o = (std::size_t(b) * C + c) * M;
-            T s = 0;
+            double s = 0;  // two-pass statistics, accumulated in double
             for (int m = 0; m < M; ++m) s += xv[o + m];
-            const T mu = s / T(M);
-            T v = 0;
-            for (int m = 0; m < M; ++m) v += (xv[o + m] - mu) * (xv[o + m] - mu);
-            const T r = T(1) / std::sqrt(v / T(M) + eps);
+            const double mud = s / M;
+            double v = 0;
+            for (int m = 0; m < M; ++m) v += (xv[o + m] - mud) * (xv[o + m] - mud);
+            const T mu = T(mud), r = T(1.0 / std::sqrt(v / M + double(eps)));
             n.aux[2 * (b * C + c)] = mu;
             n.aux[2 * (b * C + c) + 1] = r;
-            const T k = gv[c] * r, d = bv[c] - gv[c] * r * mu;
-            for (int m = 0; m < M; ++m) n.value[o + m] = k * xv[o + m] + d;
+            const T k = gv[c] * r;  // k (x - mu) + beta: no cancellation between k x and k mu
+            for (int m = 0; m < M; ++m) n.value[o + m] = k * (xv[o + m] - mu) + bv[c];
         }
     return id;
 }

@@ -145,16 +145,17 @@ void instance_norm_relu_inplace(T* x, const T* gamma, const T* beta, int N, int 
     for (int b = 0; b < N; ++b)
         for (int c = 0; c < C; ++c) {
             T* v = x + (std::size_t(b) * C + c) * M;
-            T s = 0;
+            double s = 0;  // two-pass statistics accumulated in double, as instance_norm on the tape
             for (int m = 0; m < M; ++m) s += v[m];
-            const T mu = s / T(M);
-            T q = 0;
+            const double mu = s / M;
+            double q = 0;
             for (int m = 0; m < M; ++m) q += (v[m] - mu) * (v[m] - mu);
-            const T k = gamma[c] / std::sqrt(q / T(M) + eps), d = beta[c] - k * mu;
+            const double kd = gamma[c] / std::sqrt(q / M + double(eps));
+            const T k = T(kd), mt = T(mu), b = beta[c];
             if (relu)
-                for (int m = 0; m < M; ++m) v[m] = std::max(k * v[m] + d, T(0));
+                for (int m = 0; m < M; ++m) v[m] = std::max(k * (v[m] - mt) + b, T(0));
             else
-                for (int m = 0; m < M; ++m) v[m] = k * v[m] + d;
+                for (int m = 0; m < M; ++m) v[m] = k * (v[m] - mt) + b;
         }
 }
 
