@@ -1,0 +1,79 @@
+// Named StarGAN configurations and their run-time dispatch: the network sizes are compile-time
+// (shapes live in the types), the CLI chooses one by name. Domain names are the emotion labels in
+// label order; `neutral` is the domain transfers usually start from and tempo factors are relative to.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/stargan/model.hpp>
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace handemo::stargan {
+
+/// A small configuration for tests and quick experiments: the hand image, conv_dim 8, 1 residual block.
+struct hand_tiny {
+    static constexpr std::size_t joints = 23, keyframes = 9, domains = 5, conv_dim = 8, res_blocks = 1,
+                                 d_repeat = 3, batch = 1;
+};
+
+/// @brief Run-time description of a named configuration.
+struct config_info {
+    std::string name;
+    std::size_t joints, keyframes, domains, conv_dim, res_blocks, d_repeat;
+    std::vector<std::string> domain_names;  ///< label order
+    std::string neutral;                    ///< the neutral domain
+};
+
+/// The hand paper's emotions (Table 1) in label order.
+inline std::vector<std::string> hand_domains() { return {"angry", "happy", "neutral", "sad", "fearful"}; }
+/// The Bandai dataset-1 styles (`style_label.txt` order of the subset in ../shared/data/bandai).
+inline std::vector<std::string> body_domains()
+{
+    return {"normal", "happy", "sad", "angry", "proud", "not-confident", "tired", "active"};
+}
+
+template <stargan_config C>
+config_info make_info(std::string name, std::vector<std::string> domains, std::string neutral)
+{
+    if (domains.size() != C::domains)
+        throw value_error("config " + name + ": " + std::to_string(domains.size()) + " domain names for " +
+                          std::to_string(C::domains) + " domains");
+    return {std::move(name), C::joints,    C::keyframes, C::domains,          C::conv_dim,
+            C::res_blocks,   C::d_repeat,  std::move(domains), std::move(neutral)};
+}
+
+/// Names accepted by with_config().
+inline std::vector<std::string> config_names() { return {"hand-embedded", "hand-paper", "body-embedded", "hand-tiny"}; }
+
+/// @brief Calls `f.template operator()<Config>(info)` for the configuration called `name`.
+/// @throws value_error listing the known names when `name` is unknown.
+template <class F>
+decltype(auto) with_config(std::string_view name, F&& f)
+{
+    if (name == "hand-embedded")
+        return f.template operator()<hand_embedded>(make_info<hand_embedded>("hand-embedded", hand_domains(), "neutral"));
+    if (name == "hand-paper")
+        return f.template operator()<hand_paper>(make_info<hand_paper>("hand-paper", hand_domains(), "neutral"));
+    if (name == "body-embedded")
+        return f.template operator()<body_embedded>(make_info<body_embedded>("body-embedded", body_domains(), "normal"));
+    if (name == "hand-tiny")
+        return f.template operator()<hand_tiny>(make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral"));
+    std::string known;
+    for (const auto& n : config_names()) known += (known.empty() ? "" : ", ") + n;
+    throw value_error("config: unknown configuration '" + std::string(name) + "', expected one of " + known);
+}
+
+/// @brief Index of a domain name.
+/// @throws value_error naming the unknown emotion and the known ones.
+inline std::size_t domain_index(const config_info& c, std::string_view emotion)
+{
+    for (std::size_t i = 0; i < c.domain_names.size(); ++i)
+        if (c.domain_names[i] == emotion) return i;
+    std::string known;
+    for (const auto& n : c.domain_names) known += (known.empty() ? "" : ", ") + n;
+    throw value_error("config " + c.name + ": unknown emotion '" + std::string(emotion) + "', expected one of " + known);
+}
+
+}  // namespace handemo::stargan

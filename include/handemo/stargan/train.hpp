@@ -1,0 +1,547 @@
+// StarGAN training for emotion transfer (Section 3.3 of the hand paper, Eq. 4-5; the losses exactly as
+// StarGAN trains them, Choi et al. 2018):
+//   L_D = -mean D_src(x) + mean D_src(G(x,c)) + lambda_cls CE(D_cls(x), c_org) + lambda_gp GP,
+//   GP  = mean_n (||grad_{x_hat} D_src(x_hat)||_2 - 1)^2,  x_hat = a x + (1-a) G(x,c),  a ~ U(0,1) per sample,
+//   L_G = -mean D_src(G(x,c)) + lambda_cls CE(D_cls(G(x,c)), c) + lambda_rec mean |x - G(G(x,c), c_org)|,
+// G updated every n_critic D steps, Adam (beta1 0.5, beta2 0.999), target labels a shuffle of the batch's
+// labels, the learning rate constant and then decaying linearly to 0 over the last part of training.
+// Data: K keyframes per clip (uniform in time), Eq. 3 with the training set's p_min/p_max (quantised to
+// 8 bits as the paper's BMP images), mapped to [-1, 1] and zero-padded from K x J to the network's H x W
+// (bottom and right; G's two stride-2 stages and D's stride-2 convolutions need H, W divisible by 4 and
+// zero is the middle of the tanh range, so padding adds no spurious signal). Outputs are cropped back.
+// Checkpoints (one safetensors file, atomic, FNV-1a checksum) hold everything needed for a bitwise resume.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/core/io.hpp>
+#include <handemo/core/progress.hpp>
+#include <handemo/kernels/thread_pool.hpp>
+#include <handemo/motion/codec.hpp>
+#include <handemo/motion/keyframes.hpp>
+#include <handemo/nn/adam.hpp>
+#include <handemo/nn/init.hpp>
+#include <handemo/nn/rng.hpp>
+#include <handemo/nn/safetensors.hpp>
+#include <handemo/stargan/configs.hpp>
+#include <handemo/stargan/dataset.hpp>
+#include <handemo/stargan/model.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <numeric>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace handemo::stargan {
+
+/// @brief Hyper-parameters and run options of training (defaults: the StarGAN paper's, as the issue asks).
+struct train_options {
+    long iters = 4000;          ///< D iterations (G every n_critic of them)
+    int n_critic = 5;
+    double lambda_cls = 1.0, lambda_rec = 10.0, lambda_gp = 10.0;
+    double g_lr = 1e-4, d_lr = 1e-4, beta1 = 0.5, beta2 = 0.999;
+    double decay_start = 0.5;   ///< the learning rate decays linearly to 0 over [decay_start * iters, iters]
+    std::uint64_t seed = 1;
+    unsigned threads = 0;       ///< 0: all cores
+    long checkpoint_every = 500;
+    long log_every = 10;
+    long stop_at = -1;          ///< stop (after a checkpoint) at this step, as if interrupted; -1: never
+    std::FILE* progress_out = stderr;
+
+    /// @throws value_error naming the option.
+    void validate() const
+    {
+        auto bad = [](const std::string& what) { throw value_error("train: " + what); };
+        if (iters < 1) bad("iters " + std::to_string(iters) + " is below 1");
+        if (n_critic < 1) bad("n_critic " + std::to_string(n_critic) + " is below 1");
+        for (double v : {lambda_cls, lambda_rec, lambda_gp, g_lr, d_lr})
+            if (!(v >= 0) || !std::isfinite(v)) bad("a loss weight or learning rate is negative or not finite");
+        if (!(beta1 >= 0 && beta1 < 1) || !(beta2 >= 0 && beta2 < 1)) bad("betas must be in [0, 1)");
+        if (!(decay_start >= 0 && decay_start <= 1)) bad("decay_start must be in [0, 1]");
+        if (checkpoint_every < 1) bad("checkpoint_every is below 1");
+        if (log_every < 1) bad("log_every is below 1");
+    }
+    nlohmann::json to_json() const
+    {
+        return {{"iters", iters},       {"n_critic", n_critic}, {"lambda_cls", lambda_cls}, {"lambda_rec", lambda_rec},
+                {"lambda_gp", lambda_gp}, {"g_lr", g_lr},        {"d_lr", d_lr},             {"beta1", beta1},
+                {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed}};
+    }
+};
+
+/// Columns of the loss log (log.csv): D terms as in L_D, G terms as in L_G, the learning rate, and the
+/// accuracy of D's domain classifier on the real batch.
+inline const std::vector<std::string>& loss_columns()
+{
+    static const std::vector<std::string> c{"D/real", "D/fake", "D/cls", "D/gp", "D/total", "D/acc",
+                                            "G/fake", "G/cls",  "G/rec", "G/total", "lr"};
+    return c;
+}
+
+/// @brief A training set in network form.
+struct prepared_data {
+    std::size_t H = 0, W = 0, K = 0, J = 0;
+    std::vector<float> images;             ///< [M, 3, H, W] in [-1, 1], zero padded
+    std::vector<int> labels;               ///< [M] domain index
+    std::vector<std::string> contents;     ///< [M] content (motion type) names
+    std::vector<std::string> sources;      ///< [M] file names, for messages
+    angle_range range;                     ///< p_min/p_max of Eq. 3
+    std::vector<double> tempo;             ///< [C] tempo factor per domain
+    std::vector<std::string> joint_names;  ///< skeleton the model is trained for
+    std::size_t size() const noexcept { return labels.size(); }
+};
+
+/// @brief Pads a [3, K, J] network image into [3, H, W] (zeros bottom/right).
+inline void pad_image(const float* src, std::size_t K, std::size_t J, float* dst, std::size_t H, std::size_t W) noexcept
+{
+    for (std::size_t c = 0; c < 3; ++c)
+        for (std::size_t i = 0; i < H; ++i)
+            for (std::size_t j = 0; j < W; ++j)
+                dst[(c * H + i) * W + j] = (i < K && j < J) ? src[(c * K + i) * J + j] : 0.0f;
+}
+
+/// @brief Crops a [3, H, W] network image back to [3, K, J].
+inline void crop_image(const float* src, std::size_t H, std::size_t W, float* dst, std::size_t K, std::size_t J) noexcept
+{
+    for (std::size_t c = 0; c < 3; ++c)
+        for (std::size_t i = 0; i < K; ++i)
+            for (std::size_t j = 0; j < J; ++j) dst[(c * K + i) * J + j] = src[(c * H + i) * W + j];
+}
+
+/// @brief Keyframes, Eq. 3 images, labels and tempo factors of a labelled dataset for a configuration.
+/// @param range p_min/p_max to use (a resumed run keeps its own); default: computed over `clips`.
+/// @throws shape_error when the clips' joint count is not the configuration's; value_error for an
+///         emotion the configuration does not know (naming the file).
+template <stargan_config Config>
+prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
+                           std::optional<angle_range> range = {})
+{
+    constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
+    if (clips.empty()) throw value_error("train: no clips to train on");
+    prepared_data p;
+    p.H = H, p.W = W, p.K = K, p.J = J;
+    std::vector<keyframes<K>> kfs;
+    for (const auto& c : clips) {
+        if (c.motion.skel.size() != J)
+            throw shape_error("train: " + c.path.string() + " has " + std::to_string(c.motion.skel.size()) +
+                              " joints, configuration " + info.name + " expects " + std::to_string(J) +
+                              " (wrong skeleton for this configuration)");
+        p.labels.push_back(static_cast<int>(domain_index(info, c.emotion)));
+        p.contents.push_back(c.content);
+        p.sources.push_back(c.path.filename().string());
+        kfs.push_back(extract_keyframes<K>(c.motion));
+    }
+    for (const auto& j : clips.front().motion.skel.joints) p.joint_names.push_back(j.name);
+    p.range = range ? *range : compute_range(kfs);
+    p.range.keyframes = K;
+    p.range.joints = J;
+    p.tempo = tempo_factors(clips, info.domain_names, info.neutral);
+    p.images.resize(clips.size() * 3 * H * W);
+    for (std::size_t m = 0; m < clips.size(); ++m) {
+        const auto net = to_network(encode(kfs[m], p.range));
+        pad_image(net.data.data(), K, J, p.images.data() + m * 3 * H * W, H, W);
+    }
+    return p;
+}
+
+namespace detail {
+
+/// FNV-1a 64 over bytes.
+inline std::uint64_t fnv1a(std::string_view s, std::uint64_t h = 14695981039346656037ULL) noexcept
+{
+    for (unsigned char ch : s) h = (h ^ ch) * 1099511628211ULL;
+    return h;
+}
+
+/// Checksum of a checkpoint: every tensor's name, dtype, shape and bytes, and every metadata entry but
+/// the checksum itself.
+inline std::string checkpoint_checksum(const safetensors_file& f)
+{
+    std::uint64_t h = 14695981039346656037ULL;
+    for (const auto& t : f.tensors) {
+        h = fnv1a(t.name, h);
+        h = fnv1a(st_dtype_name(t.dtype), h);
+        for (auto d : t.shape) h = fnv1a(std::to_string(d) + ",", h);
+        h = fnv1a(t.data, h);
+    }
+    for (const auto& [k, v] : f.metadata)
+        if (k != "checksum") h = fnv1a(k + "=" + v + ";", h);
+    char buf[24];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+    return buf;
+}
+
+inline std::vector<double> json_doubles(const nlohmann::json& j)
+{
+    std::vector<double> v;
+    for (const auto& x : j) v.push_back(x.get<double>());
+    return v;
+}
+
+}  // namespace detail
+
+/// @brief The run-time description stored in a checkpoint.
+struct checkpoint_info {
+    std::string config;
+    std::vector<std::string> domains;
+    std::string neutral;
+    angle_range range;
+    std::vector<double> tempo;
+    std::vector<std::string> joint_names;
+    long step = 0;
+    nlohmann::json options;
+};
+
+/// @brief Reads and verifies a checkpoint file (format, checksum, metadata fields).
+/// @throws io_error for a missing file; format_error naming the file and the field for a truncated,
+///         corrupted or foreign file.
+inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::filesystem::path& path)
+{
+    safetensors_file f = read_safetensors(path);
+    const auto fail = [&](const std::string& what) -> format_error {
+        return format_error("checkpoint: " + path.string() + ": " + what);
+    };
+    auto meta = [&](const char* key) -> const std::string& {
+        auto it = f.metadata.find(key);
+        if (it == f.metadata.end()) throw fail(std::string("metadata field '") + key + "' is missing");
+        return it->second;
+    };
+    if (meta("format") != "handemo-checkpoint/1")
+        throw fail("format '" + meta("format") + "' is not handemo-checkpoint/1");
+    if (meta("checksum") != detail::checkpoint_checksum(f))
+        throw fail("checksum mismatch (stored " + meta("checksum") + ", computed " + detail::checkpoint_checksum(f) +
+                   "): the file is corrupted");
+    checkpoint_info info;
+    try {
+        const auto j = nlohmann::json::parse(meta("handemo"));
+        info.config = j.at("config").get<std::string>();
+        info.domains = j.at("domains").get<std::vector<std::string>>();
+        info.neutral = j.at("neutral").get<std::string>();
+        info.range.p_min = j.at("p_min").get<double>();
+        info.range.p_max = j.at("p_max").get<double>();
+        info.range.keyframes = j.at("keyframes").get<std::size_t>();
+        info.range.joints = j.at("joints").get<std::size_t>();
+        info.tempo = detail::json_doubles(j.at("tempo"));
+        info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
+        info.step = j.at("step").get<long>();
+        info.options = j.at("options");
+    } catch (const nlohmann::json::exception& e) {
+        throw fail(std::string("metadata 'handemo' is malformed: ") + e.what());
+    }
+    info.range.validate(("checkpoint: " + path.string() + ": range").c_str());
+    if (info.tempo.size() != info.domains.size()) throw fail("tempo has " + std::to_string(info.tempo.size()) + " entries for " + std::to_string(info.domains.size()) + " domains");
+    return {std::move(f), std::move(info)};
+}
+
+/// @brief One row of the loss log.
+struct loss_row {
+    long step = 0;
+    std::vector<double> values;  ///< loss_columns() order
+};
+
+/// @brief Writes the loss log as CSV (`step,D/real,...`).
+inline std::string loss_log_csv(const std::vector<loss_row>& rows)
+{
+    std::string s = "step";
+    for (const auto& c : loss_columns()) s += "," + c;
+    s += "\n";
+    char buf[64];
+    for (const auto& r : rows) {
+        s += std::to_string(r.step);
+        for (double v : r.values) {
+            std::snprintf(buf, sizeof buf, ",%.9g", v);
+            s += buf;
+        }
+        s += "\n";
+    }
+    return s;
+}
+
+/// @brief StarGAN trainer for one configuration and batch size.
+template <stargan_config Base, std::size_t Batch = 16>
+class trainer {
+public:
+    using cfg = with_batch<Base, Batch>;
+    static constexpr std::size_t N = Batch, C = Base::domains, H = dims<cfg>::H, W = dims<cfg>::W;
+    using image_shape = shape<N, 3, H, W>;
+    using label_shape = shape<N, C>;
+
+    trainer(config_info info, prepared_data data, train_options opt)
+        : info_(std::move(info)), data_(std::move(data)), opt_(opt),
+          pool_(opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency())),
+          tape_(std::size_t{1} << 22, &pool_), gen_(opt.seed)
+    {
+        opt_.validate();
+        if (data_.H != H || data_.W != W) throw shape_error("train: prepared data is for another configuration");
+        rng init_rng(opt_.seed ^ 0x9E3779B97F4A7C15ULL);
+        init_pytorch_default(g_, init_rng);
+        init_pytorch_default(d_, init_rng);
+        adam_options ao;
+        ao.beta1 = opt_.beta1;
+        ao.beta2 = opt_.beta2;
+        og_.emplace(g_, ao);
+        od_.emplace(d_, ao);
+        perm_.resize(data_.size());
+        std::iota(perm_.begin(), perm_.end(), 0);
+        cursor_ = perm_.size();  // shuffle before the first batch
+        x_.resize(image_shape::size);
+        xh_.resize(image_shape::size);
+        org_.resize(label_shape::size);
+        trg_.resize(label_shape::size);
+    }
+
+    generator<float, cfg>& gen() noexcept { return g_; }
+    discriminator<float, cfg>& disc() noexcept { return d_; }
+    long step() const noexcept { return step_; }
+    const std::vector<loss_row>& log() const noexcept { return log_; }
+    const prepared_data& data() const noexcept { return data_; }
+
+    /// @brief One D iteration (and a G iteration every n_critic). Returns false (and throws nothing)
+    /// never: a non-finite loss throws value_error naming the step and the term.
+    void train_step()
+    {
+        next_batch();
+        const double lr_d = lr_schedule{opt_.d_lr, opt_.iters, opt_.decay_start}(step_);
+        const double lr_g = lr_schedule{opt_.g_lr, opt_.iters, opt_.decay_start}(step_);
+        auto& t = tape_;
+        // ---- D: real, fake (G without gradients), gradient penalty at x_hat
+        t.reset();
+        d_.zero_grad();
+        g_.set_requires_grad(false);
+        d_.set_requires_grad(true);
+        auto xv = t.template input<image_shape>(x_.data());
+        auto real = d_.forward(t, xv);
+        auto fake = g_.forward(t, xv, t.template input<label_shape>(trg_.data()));
+        auto fk = d_.forward(t, fake);
+        constexpr std::size_t per = image_shape::size / N;
+        for (std::size_t n = 0; n < N; ++n) {
+            const float a = static_cast<float>(gen_.uniform01());
+            const float* f = fake.data() + n * per;
+            for (std::size_t i = 0; i < per; ++i) xh_[n * per + i] = a * x_[n * per + i] + (1 - a) * f[i];
+        }
+        auto xhv = t.template input<image_shape>(xh_.data(), true);
+        auto oh = d_.forward(t, xhv);
+        using namespace handemo::autodiff;
+        auto gp = mean(square(l2_norm_per_sample(t.grad(sum(oh.src), xhv)) - 1.0f));
+        auto d_real = -mean(real.src);
+        auto d_fake = mean(fk.src);
+        auto d_cls = cross_entropy(real.cls, std::span<const int, N>(lab_));
+        auto ld = d_real + d_fake + float(opt_.lambda_cls) * d_cls + float(opt_.lambda_gp) * gp;
+        check_finite({{"D/real", d_real.item()}, {"D/fake", d_fake.item()}, {"D/cls", d_cls.item()},
+                      {"D/gp", gp.item()}});
+        last_[0] = d_real.item(), last_[1] = d_fake.item(), last_[2] = d_cls.item(), last_[3] = gp.item();
+        last_[4] = ld.item();
+        last_[5] = accuracy(real.cls.data());
+        t.backward(ld);
+        od_->step(d_, lr_d);
+        // ---- G: adversarial + classification + reconstruction
+        if ((step_ + 1) % opt_.n_critic == 0) {
+            t.reset();
+            g_.zero_grad();
+            g_.set_requires_grad(true);
+            d_.set_requires_grad(false);
+            auto x2 = t.template input<image_shape>(x_.data());
+            auto f2 = g_.forward(t, x2, t.template input<label_shape>(trg_.data()));
+            auto o2 = d_.forward(t, f2);
+            auto rec = g_.forward(t, f2, t.template input<label_shape>(org_.data()));
+            auto g_fake = -mean(o2.src);
+            auto g_cls = cross_entropy(o2.cls, std::span<const int, N>(tl_));
+            auto g_rec = l1_loss(x2, rec);
+            auto lg = g_fake + float(opt_.lambda_cls) * g_cls + float(opt_.lambda_rec) * g_rec;
+            check_finite({{"G/fake", g_fake.item()}, {"G/cls", g_cls.item()}, {"G/rec", g_rec.item()}});
+            last_[6] = g_fake.item(), last_[7] = g_cls.item(), last_[8] = g_rec.item(), last_[9] = lg.item();
+            t.backward(lg);
+            og_->step(g_, lr_g);
+            d_.set_requires_grad(true);
+        }
+        last_[10] = lr_d;
+        ++step_;
+        if (step_ % opt_.log_every == 0 || step_ == opt_.iters) log_.push_back({step_, std::vector<double>(last_.begin(), last_.end())});
+    }
+
+    /// @brief Trains to opt.iters (or opt.stop_at) with progress, checkpoints into `out_dir`.
+    /// With `resume`, continues from out_dir/checkpoint.safetensors.
+    void run(const std::filesystem::path& out_dir, bool resume = false)
+    {
+        namespace fs = std::filesystem;
+        fs::create_directories(out_dir);
+        const fs::path ck = out_dir / "checkpoint.safetensors";
+        if (resume) {
+            if (!fs::exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
+            load(ck);
+        }
+        progress bar("train " + info_.name, opt_.iters, opt_.progress_out);
+        const long end = opt_.stop_at >= 0 ? std::min(opt_.stop_at, opt_.iters) : opt_.iters;
+        char status[160];
+        while (step_ < end) {
+            train_step();
+            std::snprintf(status, sizeof status, "D %.3f (cls %.3f gp %.3f acc %.0f%%) G %.3f (cls %.3f rec %.4f)", last_[4],
+                          last_[2], last_[3], 100 * last_[5], last_[9], last_[7], last_[8]);
+            bar.update(step_, status);
+            if (step_ % opt_.checkpoint_every == 0 || step_ == end) save(out_dir);
+        }
+        bar.finish();
+    }
+
+    /// @brief Writes checkpoint.safetensors (everything), generator.safetensors (G only, PyTorch names),
+    /// range.json and log.csv into `out_dir`, each atomically.
+    void save(const std::filesystem::path& out_dir)
+    {
+        safetensors_file f;
+        f.source = (out_dir / "checkpoint.safetensors").string();
+        add_parameters(f, g_, "G.");
+        add_parameters(f, d_, "D.");
+        add_adam(f, "adam.G.", *og_);
+        add_adam(f, "adam.D.", *od_);
+        const auto st = gen_.state();
+        f.add<std::uint64_t>("rng.state", std::span<const std::uint64_t>(st.data(), st.size()), {st.size()});
+        std::vector<std::int64_t> perm(perm_.begin(), perm_.end());
+        perm.push_back(static_cast<std::int64_t>(cursor_));
+        f.add<std::int64_t>("data.perm_cursor", perm, {perm.size()});
+        std::vector<double> lg;
+        for (const auto& r : log_) {
+            lg.push_back(static_cast<double>(r.step));
+            lg.insert(lg.end(), r.values.begin(), r.values.end());
+        }
+        f.add<double>("log", lg, {log_.size(), loss_columns().size() + 1});
+        nlohmann::json j = {{"config", info_.name},
+                            {"domains", info_.domain_names},
+                            {"neutral", info_.neutral},
+                            {"p_min", data_.range.p_min},
+                            {"p_max", data_.range.p_max},
+                            {"keyframes", Base::keyframes},
+                            {"joints", Base::joints},
+                            {"tempo", data_.tempo},
+                            {"joint_names", data_.joint_names},
+                            {"step", step_},
+                            {"options", opt_.to_json()}};
+        f.metadata["format"] = "handemo-checkpoint/1";
+        f.metadata["handemo"] = j.dump();
+        f.metadata["checksum"] = detail::checkpoint_checksum(f);
+        write_safetensors(out_dir / "checkpoint.safetensors", f);
+        save_parameters(out_dir / "generator.safetensors", g_,
+                        {{"format", "pytorch-state-dict"}, {"config", info_.name}, {"step", std::to_string(step_)}});
+        save_range(out_dir / "range.json", data_.range);
+        write_file_atomic(out_dir / "log.csv", loss_log_csv(log_));
+    }
+
+    /// @brief Restores every piece of state from a checkpoint written by save().
+    /// @throws format_error / shape_error naming the file and field; value_error when the checkpoint is
+    ///         of another configuration.
+    void load(const std::filesystem::path& path)
+    {
+        auto [f, info] = read_checkpoint(path);
+        if (info.config != info_.name)
+            throw value_error("train: " + path.string() + " is a " + info.config + " checkpoint, not " + info_.name);
+        load_parameters(f, g_, "G.");
+        load_parameters(f, d_, "D.");
+        load_adam(f, "adam.G.", *og_);
+        load_adam(f, "adam.D.", *od_);
+        const auto st = f.get<std::uint64_t>("rng.state", std::vector<std::size_t>{rng::state_size});
+        gen_.set_state(st);
+        const auto pc = f.get<std::int64_t>("data.perm_cursor", std::vector<std::size_t>{perm_.size() + 1});
+        for (std::size_t i = 0; i < perm_.size(); ++i) {
+            if (pc[i] < 0 || static_cast<std::size_t>(pc[i]) >= perm_.size())
+                throw format_error("checkpoint: " + path.string() + ": data.perm_cursor entry out of range (different data set?)");
+            perm_[i] = static_cast<std::size_t>(pc[i]);
+        }
+        cursor_ = static_cast<std::size_t>(pc.back());
+        const auto& lt = f.at("log");
+        const auto lg = lt.to_vector<double>();
+        const std::size_t cols = loss_columns().size() + 1;
+        log_.clear();
+        for (std::size_t i = 0; i + cols <= lg.size(); i += cols)
+            log_.push_back({static_cast<long>(lg[i]), std::vector<double>(lg.begin() + long(i) + 1, lg.begin() + long(i + cols))});
+        data_.range = info.range;
+        step_ = info.step;
+    }
+
+private:
+    template <class A>
+    static void add_adam(safetensors_file& f, const std::string& p, const A& a)
+    {
+        f.add<float>(p + "m", std::span<const float>(a.m()), {a.m().size()});
+        f.add<float>(p + "v", std::span<const float>(a.v()), {a.v().size()});
+        f.add<std::int64_t>(p + "steps", std::span<const std::int64_t>(a.steps()), {a.steps().size()});
+    }
+    template <class A>
+    static void load_adam(const safetensors_file& f, const std::string& p, A& a)
+    {
+        const auto m = f.get<float>(p + "m", std::vector<std::size_t>{a.m().size()});
+        const auto v = f.get<float>(p + "v", std::vector<std::size_t>{a.v().size()});
+        const auto s = f.get<std::int64_t>(p + "steps", std::vector<std::size_t>{a.steps().size()});
+        std::copy(m.begin(), m.end(), a.m().begin());
+        std::copy(v.begin(), v.end(), a.v().begin());
+        std::copy(s.begin(), s.end(), a.steps().begin());
+    }
+
+    void next_batch()
+    {
+        constexpr std::size_t per = 3 * H * W;
+        for (std::size_t n = 0; n < N; ++n) {
+            if (cursor_ >= perm_.size()) {
+                for (std::size_t i = perm_.size(); i > 1; --i) std::swap(perm_[i - 1], perm_[gen_.below(i)]);
+                cursor_ = 0;
+            }
+            const std::size_t m = perm_[cursor_++];
+            std::copy_n(data_.images.data() + m * per, per, x_.data() + n * per);
+            lab_[n] = data_.labels[m];
+        }
+        // target labels: a random permutation of the batch's own labels (as the StarGAN reference)
+        std::array<std::size_t, N> idx;
+        std::iota(idx.begin(), idx.end(), 0);
+        for (std::size_t i = N; i > 1; --i) std::swap(idx[i - 1], idx[gen_.below(i)]);
+        std::fill(org_.begin(), org_.end(), 0.f);
+        std::fill(trg_.begin(), trg_.end(), 0.f);
+        for (std::size_t n = 0; n < N; ++n) {
+            tl_[n] = lab_[idx[n]];
+            org_[n * C + static_cast<std::size_t>(lab_[n])] = 1.f;
+            trg_[n * C + static_cast<std::size_t>(tl_[n])] = 1.f;
+        }
+    }
+
+    double accuracy(const float* logits) const noexcept
+    {
+        int ok = 0;
+        for (std::size_t n = 0; n < N; ++n) {
+            const float* z = logits + n * C;
+            if (std::max_element(z, z + C) - z == lab_[n]) ++ok;
+        }
+        return static_cast<double>(ok) / N;
+    }
+
+    void check_finite(std::initializer_list<std::pair<const char*, float>> terms) const
+    {
+        for (const auto& [name, v] : terms)
+            if (!std::isfinite(v))
+                throw value_error("train: step " + std::to_string(step_ + 1) + ": loss term " + name + " is " +
+                                  (std::isnan(v) ? "NaN" : "infinite") +
+                                  "; stopped, the last good checkpoint is kept");
+    }
+
+    config_info info_;
+    prepared_data data_;
+    train_options opt_;
+    kernels::thread_pool pool_;
+    autodiff::tape<float> tape_;
+    rng gen_;
+    generator<float, cfg> g_;
+    discriminator<float, cfg> d_;
+    std::optional<adam<float>> og_, od_;
+    std::vector<std::size_t> perm_;
+    std::size_t cursor_ = 0;
+    std::vector<float> x_, xh_, org_, trg_;
+    std::array<int, N> lab_{}, tl_{};
+    std::array<double, 11> last_{};
+    std::vector<loss_row> log_;
+    long step_ = 0;
+};
+
+}  // namespace handemo::stargan

@@ -1,0 +1,166 @@
+// Emotion transfer of new motions with a trained model (Section 3.4 of the hand paper): keyframes ->
+// Eq. 3 image -> G(image, target) -> image -> Eq. 6 keyframes -> full-rate motion by interpolation.
+// Tempo: the output lasts the input's duration times tempo[target] / tempo[source] (the median duration
+// ratios learned from the training data, see dataset.hpp), because time-normalised keyframes cannot carry
+// Table 1's "fast" and "slow". Position channels (a body's root translation) are kept from the input and
+// stretched in time to the new length.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/motion/codec.hpp>
+#include <handemo/motion/keyframes.hpp>
+#include <handemo/stargan/train.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace handemo::stargan {
+
+/// @brief The result of one transfer.
+struct transfer_result {
+    clip motion;                      ///< the full-rate output clip
+    keyframe_pixels<dynamic_keyframes> image;  ///< the generated K x J motion image (Eq. 3 pixels)
+    std::size_t clamped_values = 0;   ///< input keyframe angles outside [p_min, p_max] (clamped by Eq. 3)
+    double tempo = 1.0;               ///< duration factor applied
+};
+
+/// @brief Resamples every position channel of `c` to `frames` frames (linear in time).
+inline std::vector<double> stretch_positions(const clip& c, std::size_t frames)
+{
+    const std::size_t J3 = c.skel.size() * 3;
+    std::vector<double> out(frames * J3);
+    for (std::size_t f = 0; f < frames; ++f) {
+        const double t = frames > 1 ? static_cast<double>(f) * static_cast<double>(c.frames - 1) / static_cast<double>(frames - 1) : 0.0;
+        const auto f0 = static_cast<std::size_t>(std::floor(t));
+        const std::size_t f1 = std::min(f0 + 1, c.frames - 1);
+        const double a = t - static_cast<double>(f0);
+        for (std::size_t i = 0; i < J3; ++i)
+            out[f * J3 + i] = (1 - a) * c.positions[f0 * J3 + i] + a * c.positions[f1 * J3 + i];
+    }
+    return out;
+}
+
+/// @brief A trained emotion-transfer model loaded from a checkpoint, whatever its configuration.
+class emotion_model {
+public:
+    virtual ~emotion_model() = default;
+    const checkpoint_info& info() const noexcept { return info_; }
+    std::size_t joints() const noexcept { return info_.range.joints; }
+    std::size_t keyframes() const noexcept { return info_.range.keyframes; }
+
+    /// @brief Index of an emotion. @throws value_error naming it and the known ones.
+    std::size_t domain(std::string_view emotion) const
+    {
+        for (std::size_t i = 0; i < info_.domains.size(); ++i)
+            if (info_.domains[i] == emotion) return i;
+        std::string known;
+        for (const auto& n : info_.domains) known += (known.empty() ? "" : ", ") + n;
+        throw value_error("transfer: unknown emotion '" + std::string(emotion) + "', the model knows " + known);
+    }
+
+    /// @brief Translates one K x J motion image to the target domain (G of the paper, batch 1).
+    /// @throws shape_error for a wrong image size; value_error when G produces a non-finite value.
+    keyframe_pixels<dynamic_keyframes> translate(const keyframe_pixels<dynamic_keyframes>& px, std::size_t target) const
+    {
+        if (px.count() != keyframes() || px.joints != joints())
+            throw shape_error("transfer: motion image is " + std::to_string(px.count()) + "x" + std::to_string(px.joints) +
+                              " (keyframes x joints), the model expects " + std::to_string(keyframes()) + "x" +
+                              std::to_string(joints()));
+        if (target >= info_.domains.size()) throw value_error("transfer: target domain out of range");
+        const auto net = to_network(px);
+        network_image<dynamic_keyframes> out = net;
+        run_generator(net.data.data(), target, out.data.data());
+        for (float v : out.data)
+            if (!std::isfinite(v)) throw value_error("transfer: the generator produced a non-finite value (corrupted weights?)");
+        return from_network(out);
+    }
+
+    /// @brief Transfers a clip to `target` emotion (source emotion defaults to the neutral domain).
+    /// @throws shape_error when the clip's skeleton is not the model's (joint count or names).
+    transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
+    {
+        check_skeleton(in.skel);
+        in.validate("transfer: input");
+        const std::size_t t = domain(target), s = domain(source ? *source : std::string_view(info_.neutral));
+        const auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
+        transfer_result r;
+        for (double a : kf.angles) r.clamped_values += (a < info_.range.p_min || a > info_.range.p_max) ? 1 : 0;
+        r.image = translate(encode(kf, info_.range), t);
+        auto out_kf = decode(r.image, info_.range);
+        r.tempo = info_.tempo[t] / info_.tempo[s];
+        const auto frames = static_cast<std::size_t>(std::max(2.0, std::round(static_cast<double>(in.frames) * r.tempo)));
+        r.motion = reconstruct(out_kf, in.skel, frames, in.fps);
+        r.motion.positions = stretch_positions(in, frames);
+        return r;
+    }
+
+    /// @brief Checks a skeleton against the one the model was trained on.
+    void check_skeleton(const skeleton& s) const
+    {
+        if (s.size() != joints())
+            throw shape_error("transfer: clip has " + std::to_string(s.size()) + " joints, the model (" + info_.config +
+                              ") was trained on " + std::to_string(joints()) + " (wrong skeleton for the model)");
+        for (std::size_t j = 0; j < s.size() && j < info_.joint_names.size(); ++j)
+            if (s.joints[j].name != info_.joint_names[j])
+                throw shape_error("transfer: joint " + std::to_string(j) + " is '" + s.joints[j].name + "', the model expects '" +
+                                  info_.joint_names[j] + "' (wrong skeleton for the model)");
+    }
+
+protected:
+    explicit emotion_model(checkpoint_info info) : info_(std::move(info)) {}
+    /// x, out: [3, K, J] in [-1, 1].
+    virtual void run_generator(const float* x, std::size_t target, float* out) const = 0;
+    checkpoint_info info_;
+};
+
+namespace detail {
+
+template <stargan_config Base>
+class emotion_model_impl final : public emotion_model {
+public:
+    using cfg = with_batch<Base, 1>;
+    static constexpr std::size_t H = dims<cfg>::H, W = dims<cfg>::W, K = Base::keyframes, J = Base::joints;
+    emotion_model_impl(const safetensors_file& f, checkpoint_info info) : emotion_model(std::move(info))
+    {
+        if (info_.range.keyframes != K || info_.range.joints != J)
+            throw format_error("checkpoint: " + f.source + ": range is for " + std::to_string(info_.range.keyframes) + "x" +
+                               std::to_string(info_.range.joints) + ", configuration " + info_.config + " is " +
+                               std::to_string(K) + "x" + std::to_string(J));
+        load_parameters(f, g_, "G.");
+        g_.set_requires_grad(false);
+    }
+
+private:
+    void run_generator(const float* x, std::size_t target, float* out) const override
+    {
+        std::vector<float> label(Base::domains, 0.f);
+        label[target] = 1.f;
+        pad_image(x, K, J, in_.data(), H, W);
+        g_.infer(in_.data(), label.data(), out_.data(), ws_);
+        crop_image(out_.data(), H, W, out, K, J);
+    }
+    generator<float, cfg> g_;
+    mutable typename generator<float, cfg>::workspace ws_;
+    mutable std::vector<float> in_ = std::vector<float>(3 * H * W), out_ = std::vector<float>(3 * H * W);
+};
+
+}  // namespace detail
+
+/// @brief Loads a model from a checkpoint file, or from a training output folder holding one.
+/// @throws io_error, format_error (corrupted, truncated, foreign file), value_error (unknown configuration).
+inline std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path)
+{
+    const auto file = std::filesystem::is_directory(path) ? path / "checkpoint.safetensors" : path;
+    auto [f, info] = read_checkpoint(file);
+    const std::string config = info.config;
+    return with_config(config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
+        return std::make_unique<detail::emotion_model_impl<Config>>(f, info);
+    });
+}
+
+}  // namespace handemo::stargan

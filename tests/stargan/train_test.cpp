@@ -1,0 +1,209 @@
+#include <doctest/doctest.h>
+#include <handemo/motion/synth.hpp>
+#include <handemo/stargan.hpp>
+
+#include <cstring>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+using namespace handemo;
+using namespace handemo::stargan;
+
+namespace {
+
+/// A toy set: 3 motion types x 5 emotions x 1 take of the synthetic hand data, as labelled clips.
+std::vector<labelled_clip> toy_set()
+{
+    std::vector<labelled_clip> out;
+    for (auto& it : synthesize_dataset(1, 7)) {
+        if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing)
+            continue;
+        labelled_clip c;
+        c.path = it.file_stem + ".bvh";
+        const auto n = parse_clip_name(it.file_stem);
+        c.content = n.content;
+        c.emotion = n.emotion;
+        c.take = n.take;
+        c.motion = it.c;
+        out.push_back(std::move(c));
+    }
+    return out;
+}
+
+config_info tiny_info() { return make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral"); }
+
+train_options quiet(long iters)
+{
+    train_options o;
+    o.iters = iters;
+    o.threads = 2;
+    o.checkpoint_every = 1000;
+    o.log_every = 1;
+    o.progress_out = nullptr;
+    o.seed = 11;
+    return o;
+}
+
+template <class M>
+std::vector<float> params_of(M& m)
+{
+    std::vector<float> v;
+    m.for_each_parameter([&](std::string_view, std::span<float> val, std::span<float>, std::span<const std::size_t>) {
+        v.insert(v.end(), val.begin(), val.end());
+    });
+    return v;
+}
+
+fs::path fresh_dir(const char* name)
+{
+    const fs::path d = fs::temp_directory_path() / name;
+    fs::remove_all(d);
+    return d;
+}
+
+}  // namespace
+
+TEST_CASE("prepare_data: keyframes, Eq. 3 range, labels, padding, tempo")
+{
+    const auto clips = toy_set();
+    REQUIRE(clips.size() == 15);
+    const auto p = prepare_data<hand_tiny>(clips, tiny_info());
+    CHECK(p.size() == 15);
+    CHECK(p.H == 12);
+    CHECK(p.W == 24);
+    CHECK(p.range.p_min < p.range.p_max);
+    // padding rows/columns are zero, the image part is in [-1, 1]
+    for (std::size_t m = 0; m < p.size(); ++m)
+        for (std::size_t c = 0; c < 3; ++c)
+            for (std::size_t i = 0; i < 12; ++i)
+                for (std::size_t j = 0; j < 24; ++j) {
+                    const float v = p.images[((m * 3 + c) * 12 + i) * 24 + j];
+                    if (i >= 9 || j >= 23)
+                        CHECK(v == 0.0f);
+                    else
+                        CHECK((v >= -1.0f && v <= 1.0f));
+                }
+    // Table 1: angry is fast, sad is slow (tempo = duration ratio to neutral)
+    CHECK(p.tempo[domain_index(tiny_info(), "angry")] < 1.0);
+    CHECK(p.tempo[domain_index(tiny_info(), "sad")] > 1.0);
+    CHECK(p.tempo[domain_index(tiny_info(), "neutral")] == 1.0);
+    // a clip of another skeleton is refused
+    auto bad = clips;
+    bad[0].motion = clip::make(skeleton{"two", {joint{"a"}, joint{"b", 0}}}, 10, 30);
+    CHECK_THROWS_AS(prepare_data<hand_tiny>(bad, tiny_info()), shape_error);
+    auto unknown = clips;
+    unknown[0].emotion = "bored";
+    CHECK_THROWS_WITH_AS(prepare_data<hand_tiny>(unknown, tiny_info()), doctest::Contains("bored"), value_error);
+}
+
+TEST_CASE("a tiny StarGAN learns: D's classification loss falls on a toy set")
+{
+    const auto clips = toy_set();
+    auto o = quiet(150);
+    o.d_lr = o.g_lr = 1e-3;  // a tiny net and few steps: a larger step size than StarGAN's 1e-4
+    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(clips, tiny_info()), o);
+    for (int i = 0; i < 150; ++i) tr.train_step();
+    const auto& log = tr.log();
+    REQUIRE(log.size() == 150);
+    auto mean_cls = [&](std::size_t from, std::size_t to) {
+        double s = 0;
+        for (std::size_t i = from; i < to; ++i) s += log[i].values[2];
+        return s / double(to - from);
+    };
+    const double first = mean_cls(0, 20), last = mean_cls(130, 150);
+    MESSAGE("D/cls first 20 steps " << first << ", last 20 " << last);
+    CHECK(first > 1.3);  // ~ln 5 at the start
+    CHECK(last < 0.7 * first);
+    for (const auto& r : log)
+        for (double v : r.values) CHECK(std::isfinite(v));
+}
+
+TEST_CASE("checkpoint round trip, bitwise resume, corrupted checkpoints refused")
+{
+    const auto clips = toy_set();
+    const auto data = prepare_data<hand_tiny>(clips, tiny_info());
+    const fs::path a = fresh_dir("handemo_train_a"), b = fresh_dir("handemo_train_b");
+    {
+        trainer<hand_tiny> full(tiny_info(), data, quiet(20));
+        full.run(a);
+        auto o = quiet(20);
+        o.stop_at = 10;
+        trainer<hand_tiny> first(tiny_info(), data, o);
+        first.run(b);
+        CHECK(first.step() == 10);
+        trainer<hand_tiny> second(tiny_info(), data, quiet(20));
+        second.run(b, /*resume=*/true);
+        CHECK(second.step() == 20);
+        CHECK(params_of(second.gen()) == params_of(full.gen()));
+        CHECK(params_of(second.disc()) == params_of(full.disc()));
+        CHECK(second.log().size() == full.log().size());
+        // load() restores exactly what save() wrote
+        trainer<hand_tiny> loaded(tiny_info(), data, quiet(20));
+        loaded.load(a / "checkpoint.safetensors");
+        CHECK(loaded.step() == 20);
+        CHECK(params_of(loaded.gen()) == params_of(full.gen()));
+    }
+    CHECK(fs::exists(a / "generator.safetensors"));
+    CHECK(fs::exists(a / "log.csv"));
+    CHECK(fs::exists(a / "range.json"));
+
+    // a flipped byte in the data section: checksum mismatch
+    std::string bytes = read_file(a / "checkpoint.safetensors");
+    const fs::path bad = fresh_dir("handemo_train_bad");
+    fs::create_directories(bad);
+    std::string flipped = bytes;
+    flipped[flipped.size() - 100] ^= 0x5a;
+    write_file_atomic(bad / "checkpoint.safetensors", flipped);
+    CHECK_THROWS_WITH_AS(read_checkpoint(bad / "checkpoint.safetensors"), doctest::Contains("checksum"), format_error);
+    CHECK_THROWS_AS(load_model(bad), format_error);
+    // truncated
+    write_file_atomic(bad / "checkpoint.safetensors", bytes.substr(0, bytes.size() / 2));
+    CHECK_THROWS_AS(load_model(bad), format_error);
+    // resuming from it is refused too, and a missing one is an io_error
+    trainer<hand_tiny> t3(tiny_info(), data, quiet(20));
+    CHECK_THROWS_AS(t3.run(bad, true), format_error);
+    CHECK_THROWS_AS(t3.run(fresh_dir("handemo_train_none"), true), io_error);
+}
+
+TEST_CASE("a NaN loss stops training naming the step and term, and keeps the last good checkpoint")
+{
+    const auto clips = toy_set();
+    auto data = prepare_data<hand_tiny>(clips, tiny_info());
+    const fs::path d = fresh_dir("handemo_train_nan");
+    {
+        trainer<hand_tiny> ok(tiny_info(), data, quiet(10));
+        ok.run(d);
+    }
+    const std::string before = read_file(d / "checkpoint.safetensors");
+    for (std::size_t i = 0; i < data.images.size(); i += 97) data.images[i] = std::nanf("");
+    trainer<hand_tiny> poisoned(tiny_info(), data, quiet(20));
+    CHECK_THROWS_WITH_AS(poisoned.run(d, true), doctest::Contains("step 11: loss term D/real is NaN"), value_error);
+    CHECK(read_file(d / "checkpoint.safetensors") == before);
+}
+
+TEST_CASE("transfer: shapes, durations from the tempo factors, skeleton and emotion checks")
+{
+    const auto clips = toy_set();
+    const fs::path d = fresh_dir("handemo_train_transfer");
+    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(clips, tiny_info()), quiet(10));
+    tr.run(d);
+    const auto model = load_model(d);
+    CHECK(model->info().config == "hand-tiny");
+    const clip& in = clips[2].motion;  // gripping neutral
+    REQUIRE(clips[2].emotion == "neutral");
+    for (const char* e : {"angry", "sad", "neutral"}) {
+        const auto r = model->transfer(in, e);
+        CHECK(r.motion.skel.size() == 23);
+        CHECK(r.motion.fps == in.fps);
+        CHECK(r.image.count() == 9);
+        CHECK(r.image.joints == 23);
+        const double expect = std::round(double(in.frames) * tr.data().tempo[domain_index(tiny_info(), e)]);
+        CHECK(double(r.motion.frames) == expect);
+        r.motion.validate("out");
+    }
+    CHECK(model->transfer(in, "sad").motion.frames > in.frames);
+    CHECK(model->transfer(in, "angry").motion.frames < in.frames);
+    CHECK_THROWS_WITH_AS(model->transfer(in, "bored"), doctest::Contains("bored"), value_error);
+    const clip body = read_bvh(fs::path(HANDEMO_SHARED_DIR) / "data" / "xia" / "neutral_16_000.bvh");
+    CHECK_THROWS_WITH_AS(model->transfer(body, "sad"), doctest::Contains("wrong skeleton"), shape_error);
+}
