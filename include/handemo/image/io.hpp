@@ -110,11 +110,10 @@ inline rgb_image decode_image(std::string_view data, std::string_view source_nam
         throw format_error(what + ": corrupt " + (is_png ? "PNG" : "BMP") + " header: " + detail::stb_reason());
     if (w <= 0 || h <= 0) throw format_error(what + ": size " + std::to_string(w) + "x" + std::to_string(h) + " is empty");
     detail::check_image_size(what, static_cast<std::size_t>(w), static_cast<std::size_t>(h));
-    if (stbi_is_16_bit_from_memory(buf, len))
-        throw format_error(what + ": 16 bits per channel, expected 8-bit RGB");
-    if (comp != 3)
+    const bool deep = stbi_is_16_bit_from_memory(buf, len) != 0;
+    if (comp != 3 || deep)
         throw format_error(what + ": " + std::to_string(comp) + " channel" + (comp == 1 ? "" : "s") +
-                           " found, expected 3 (8-bit RGB)");
+                           (deep ? " of 16 bits" : "") + " found, expected 3 (8-bit RGB)");
     if (is_bmp && data.size() >= 34) {
         // stb_image fills missing BMP pixel data with zeros; refuse truncated files explicitly.
         const std::uint32_t declared = detail::read_le32(data, 2), offset = detail::read_le32(data, 10);
