@@ -322,22 +322,27 @@ inline view_basis choose_view(std::span<const clip> clips, const figure_layout& 
         if (side < 0) normal = detail::v_mul(normal, -1.0);
         return detail::basis_from(up, normal, o.hand_yaw_deg, o.hand_pitch_deg);
     }
-    // Body: facing from the feet.
+    // Body: facing from the feet, averaged over the first clip's frames (a single frame can be mid-stride
+    // with the foot pitched): the horizontal part of (toe end - toe joint), or (toe joint - ankle) where the
+    // end site has zero length, summed unnormalised over the lowest leaves of each sampled pose.
     const vec3 up = detail::v_unit(o.up, {0, 1, 0});
-    double hmin = 1e300, hmax = -1e300;
-    for (std::size_t j = 0; j < s.size(); ++j) {
-        if (L.hidden[j]) continue;
-        hmin = std::min(hmin, detail::v_dot(P0.end_sites[j], up));
-        hmax = std::max(hmax, detail::v_dot(P0.end_sites[j], up));
-    }
     vec3 front{};
-    for (std::size_t j = 0; j < s.size(); ++j) {
-        if (L.hidden[j] || L.children_count[j] != 0 || s.joints[j].parent < 0) continue;
-        if (detail::v_dot(P0.end_sites[j], up) > hmin + 0.2 * (hmax - hmin)) continue;
-        const auto p = static_cast<std::size_t>(s.joints[j].parent);
-        vec3 d = detail::v_sub(P0.end_sites[j], P0.joints[j]);
-        if (detail::v_norm(detail::v_reject(d, up)) < 1e-9) d = detail::v_sub(P0.joints[j], P0.joints[p]);
-        front = detail::v_add(front, detail::v_unit(detail::v_reject(d, up), {}));
+    for (auto f : detail::sample_frames(c0.frames, 64)) {
+        const pose_positions P = clip_pose(c0, f);
+        double hmin = 1e300, hmax = -1e300;
+        for (std::size_t j = 0; j < s.size(); ++j) {
+            if (L.hidden[j]) continue;
+            hmin = std::min(hmin, detail::v_dot(P.end_sites[j], up));
+            hmax = std::max(hmax, detail::v_dot(P.end_sites[j], up));
+        }
+        for (std::size_t j = 0; j < s.size(); ++j) {
+            if (L.hidden[j] || L.children_count[j] != 0 || s.joints[j].parent < 0) continue;
+            if (detail::v_dot(P.end_sites[j], up) > hmin + 0.2 * (hmax - hmin)) continue;
+            const auto p = static_cast<std::size_t>(s.joints[j].parent);
+            vec3 d = detail::v_sub(P.end_sites[j], P.joints[j]);
+            if (detail::v_norm(d) < 1e-9) d = detail::v_sub(P.joints[j], P.joints[p]);
+            front = detail::v_add(front, detail::v_reject(d, up));
+        }
     }
     if (detail::v_norm(front) < 1e-6) front = {0, 0, 1};
     return detail::basis_from(up, front, o.yaw_deg, o.pitch_deg);
