@@ -375,14 +375,15 @@ inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
             kv[i] = v;
             koff[i] = c * HW + std::ptrdiff_t(u) * g.in_w + v;
         }
-        const T* vsrc = w + k0;
-        std::ptrdiff_t vk = K;
-        if (nk < MR) {  // partial panel: copy with zero lanes so no load runs past w
+        // Pack the panel (contiguous Co x MR, zero lanes past K): read in place, its Co rows sit K apart
+        // and thrash L1 across the pixel tiles (measured on the convT 4x4 s2 layers: 36 -> 46 GFLOP/s at
+        // batch 1, 45 -> 61 at batch 16).
+        {
             for (int o = 0; o < Co; ++o)
                 for (int i = 0; i < MR; ++i) vpack[std::ptrdiff_t(o) * MR + i] = i < nk ? w[std::ptrdiff_t(o) * K + k0 + i] : T(0);
-            vsrc = vpack;
-            vk = MR;
         }
+        const T* vsrc = vpack;
+        const std::ptrdiff_t vk = MR;
         for (int n = 0; n < g.batch; ++n) {
             const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
             T* gxn = gx + std::ptrdiff_t(n) * g.in_channels * HW;
