@@ -158,6 +158,15 @@ inline bool use_stride1_forward(const conv_geometry& g) noexcept
     return g.stride == 1 && g.out_channels < 16;
 }
 
+/// Backward-weight on the wide grid (backward_weight_stride1) pays for stride 1, few output channels and
+/// enough pixels per image for its dot products (D's 1x3 heads stay on the packed path: 6 vs 1 GFLOP/s).
+template <class T>
+inline bool use_stride1_backward_weight(const conv_geometry& g) noexcept
+{
+    const long wide = long(g.out_h() - 1) * (g.in_w + 2 * g.pad) + g.out_w();
+    return use_stride1_forward(g) && wide >= 8 * simd_lanes<T>;
+}
+
 /// Reduction block of the dot path (multiple of every SIMD width): long blocks amortise the horizontal
 /// sums (measured on the residual conv at batch 1: 62 GFLOP/s with 512, 66 with 2304).
 inline constexpr int dot_kc = 4096;
@@ -223,7 +232,10 @@ inline std::size_t scratch_elements(const conv_geometry& g) noexcept
     const std::size_t tile = NR * MR;
     const std::size_t fwd = forward_scratch_elements<T>(g);
     const std::size_t bwd_data = std::size_t(g.out_channels) * MR + tile;
-    const std::size_t bwd_weight = P * MR + co_r * MR;
+    const std::size_t Pwl = (std::size_t(g.out_h() - 1) * (g.in_w + 2 * g.pad) + g.out_w() + simd_lanes<T> - 1) /
+                            simd_lanes<T> * simd_lanes<T>;
+    const std::size_t bwd_weight = use_stride1_backward_weight<T>(g) ? padded_image_elements(g, int(MR)) + std::size_t(g.out_channels) * Pwl
+                                                          : P * MR + co_r * MR;
     const std::size_t s1 = backward_data_by_forward(g) ? forward_scratch_elements<T>(flipped_geometry(g)) + g.w_size() : 0;
     return std::max({fwd, bwd_data, bwd_weight, s1}) + 64 / sizeof(T);
 }
@@ -528,12 +540,57 @@ inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
     }
 }
 
+/// Backward-weight for stride 1 and few output channels (the packed path would pack every im2col element
+/// to reuse it only out_channels times): with x zero-padded and gy laid out on the same wide grid (zeros
+/// in the dropped columns), gw[o,(c,u,v)] = sum_n sum_p' gy_wide[o,p'] xpad[c*Hp*Wp + u*Wp + v + p'],
+/// one dot product of contiguous rows per weight; consecutive v share the call (c rows 1 element apart).
+template <class T>
+inline void backward_weight_stride1(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
+{
+    constexpr int L = simd_lanes<T>, MR = micro_mr<T>;
+    const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
+    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
+    const int Pw = (oh - 1) * Wp + ow, Pwl = (Pw + L - 1) / L * L;
+    const std::size_t npad = padded_image_elements(g, MR);
+    T* xp = scratch;
+    T* gyw = scratch + npad;
+    for (std::size_t i = 0; i < npad; ++i) xp[i] = T(0);
+    for (std::ptrdiff_t i = 0; i < std::ptrdiff_t(Co) * Pwl; ++i) gyw[i] = T(0);
+    T out[16];
+    for (int n = 0; n < g.batch; ++n) {
+        const T* xn = x + std::ptrdiff_t(n) * g.in_channels * g.in_h * g.in_w;
+        for (int c = 0; c < g.in_channels; ++c)
+            for (int r = 0; r < g.in_h; ++r) {
+                const T* src = xn + (std::ptrdiff_t(c) * g.in_h + r) * g.in_w;
+                T* dst = xp + (std::ptrdiff_t(c) * Hp + r + g.pad) * Wp + g.pad;
+                for (int q = 0; q < g.in_w; ++q) dst[q] = src[q];
+            }
+        const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
+        for (int o = 0; o < Co; ++o)
+            for (int r = 0; r < oh; ++r)
+                for (int q = 0; q < ow; ++q) gyw[std::ptrdiff_t(o) * Pwl + r * Wp + q] = gyn[std::ptrdiff_t(o) * P + r * ow + q];
+        for (int c = 0; c < g.in_channels; ++c)
+            for (int u = 0; u < kh; ++u)
+                for (int v0 = 0; v0 < kw; v0 += 3) {
+                    const int nv = std::min(3, kw - v0), k0 = (c * kh + u) * kw + v0;
+                    const T* xr = xp + (std::ptrdiff_t(c) * Hp + u) * Wp + v0;
+                    for (int o0 = 0; o0 < Co; o0 += 4) {
+                        const int no = std::min(4, Co - o0);
+                        micro_dot_dispatch<T>(no, nv, Pwl / L, gyw + std::ptrdiff_t(o0) * Pwl, Pwl, xr, 1, out);
+                        for (int o = 0; o < no; ++o)
+                            for (int j = 0; j < nv; ++j) gw[std::ptrdiff_t(o0 + o) * K + k0 + j] += out[o * nv + j];
+                    }
+                }
+    }
+}
+
 /// Backward-weight pass: gw[o, k] += sum_{n,p} gy[n,o,p] col_n[k,p]; V = col_n^T packed per image
 /// (P x MR), S = gy rows in place, partial sums for all out channels kept in scratch across the batch.
 /// `x` plays the role of the input, `gy` of the output gradient (swapped for the transposed conv).
 template <class T>
 inline void backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
 {
+    if (use_stride1_backward_weight<T>(g)) return backward_weight_stride1(g, x, gy, gw, scratch);
     constexpr int MR = micro_mr<T>, NR = micro_nr, L = simd_lanes<T>;
     using B = simd_t<T>;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow;
