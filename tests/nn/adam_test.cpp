@@ -4,7 +4,24 @@
 #include <doctest/doctest.h>
 #include <handemo/nn/adam.hpp>
 
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
+
+// Counts heap allocations so that the test can prove adam::step allocates nothing after construction.
+// (Replacing the global operator new is allowed once per program; no other nn test does it.)
+namespace {
+std::atomic<long> allocations{0};
+}
+void* operator new(std::size_t n)
+{
+    ++allocations;
+    if (void* p = std::malloc(n ? n : 1)) return p;
+    throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 using handemo::test::fixture;
 using handemo::test::max_rel_error;
@@ -73,6 +90,18 @@ TEST_CASE("adam over a model: same result as per-tensor steps, state exposed and
     for (auto& prm : c.params)
         for (std::size_t j = 0; j < prm.value.size(); ++j)
             CHECK(prm.value[j] == doctest::Approx(j % 2 ? -0.01 : 0.01).epsilon(1e-6));
+}
+
+TEST_CASE("adam::step allocates nothing after construction")
+{
+    handemo::test::tiny_model<float> a;
+    for (auto& p : a.params) std::fill(p.grad.begin(), p.grad.end(), 0.1f);
+    handemo::adam<float> opt(a);
+    const handemo::lr_schedule sched{1e-3, 100, 0.5};
+    const long before = allocations.load();
+    for (std::int64_t k = 0; k < 100; ++k) opt.step(a, sched(k));
+    CHECK(allocations.load() == before);
+    CHECK(opt.steps()[0] == 100);
 }
 
 TEST_CASE("adam rejects a model whose parameter list changed, and bad options")

@@ -118,10 +118,14 @@ private:
         constexpr std::size_t n = word_count, m = 156;
         constexpr std::uint64_t upper = 0xFFFFFFFF80000000ULL, lower = 0x7FFFFFFFULL;
         constexpr std::uint64_t matrix = 0xB5026F5AA96619E9ULL;
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::uint64_t y = (s_[i] & upper) | (s_[(i + 1) % n] & lower);
-            s_[i] = s_[(i + m) % n] ^ (y >> 1) ^ ((y & 1u) ? matrix : 0u);
-        }
+        auto mix = [&](std::size_t i, std::size_t next, std::size_t far) {
+            const std::uint64_t y = (s_[i] & upper) | (s_[next] & lower);
+            s_[i] = s_[far] ^ (y >> 1) ^ ((y & 1u) ? matrix : 0u);
+        };
+        // the three index ranges of (i + 1) % n and (i + m) % n, without a modulo per word
+        for (std::size_t i = 0; i < n - m; ++i) mix(i, i + 1, i + m);
+        for (std::size_t i = n - m; i < n - 1; ++i) mix(i, i + 1, i + m - n);
+        mix(n - 1, 0, m - 1);
         s_[word_count] = 0;
     }
 
