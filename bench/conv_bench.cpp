@@ -6,6 +6,8 @@
 
 #include <handemo/kernels/conv.hpp>
 
+#include <immintrin.h>
+
 #include <random>
 #include <string>
 #include <vector>
@@ -108,10 +110,28 @@ void run_generator(benchmark::State& state, int cd, int rep)
     state.counters["MMAC"] = macs * 1e-6;
 }
 
+/// The AVX2 FMA peak measured inside this program (same loop as bench/peak_fma_avx2.cpp: 12 independent
+/// 8-wide FMA chains), so fraction-of-peak compares numbers taken under the same machine load.
+[[gnu::target("avx2,fma")]] void peak_fma_avx2(benchmark::State& state)
+{
+    const long n = 1000000;
+    for (auto _ : state) {
+        __m256 d[12];
+        for (int i = 0; i < 12; i++) d[i] = _mm256_set1_ps(1.0f + float(i) * 1e-3f);
+        const __m256 b = _mm256_set1_ps(0.9999f), c = _mm256_set1_ps(1e-6f);
+        for (long k = 0; k < n; k++)
+            for (int i = 0; i < 12; i++) d[i] = _mm256_fmadd_ps(d[i], b, c);
+        for (int i = 0; i < 12; i++) benchmark::DoNotOptimize(d[i]);
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(double(n) * 12 * 16 * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
 {
+    benchmark::RegisterBenchmark("peak_fma_avx2", peak_fma_avx2)->Unit(benchmark::kMillisecond)->Repetitions(3)
+        ->ReportAggregatesOnly(false);
     benchmark::RegisterBenchmark("generator_convs/paper(64,6)/b1", run_generator, 64, 6)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark("generator_convs/embedded(32,3)/b1", run_generator, 32, 3)->Unit(benchmark::kMicrosecond);
     for (int cd : {64, 32})

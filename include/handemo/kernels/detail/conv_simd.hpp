@@ -151,11 +151,29 @@ inline std::size_t padded_image_elements(const conv_geometry& g, int mr) noexcep
     return std::size_t(g.in_channels) * Hp * Wp + std::size_t(mr) + Wp;
 }
 
-/// The stride-1 path avoids packing, which matters when few output channels reuse each packed element;
-/// with many output channels the packed, batch-folded path keeps all lanes busy and wins (measured).
+/// Lanes of the stride-1 path that carry a real output pixel (the rest are the dropped wide columns and
+/// the last partial panel of each image).
+template <class T>
+inline double stride1_lane_efficiency(const conv_geometry& g) noexcept
+{
+    constexpr long MR = micro_mr<T>;
+    const long wide = long(g.out_h() - 1) * (g.in_w + 2 * g.pad) + g.out_w();
+    return double(long(g.out_h()) * g.out_w()) / double((wide + MR - 1) / MR * MR);
+}
+
+/// Stride 1: the unpacked path (no im2col packing, some idle lanes) or the packed, batch-folded path?
+/// Cost per im2col element in lane-multiply-adds: packed = Co / packed_efficiency + ~24 (the gather),
+/// unpacked = Co / stride1_efficiency. Calibrated on this machine: conv7 3+5 -> 32 at 12x24 runs at 59 vs
+/// 41 GFLOP/s unpacked, the 3x3 residual conv at batch 16 at 74 packed vs 56 unpacked.
+template <class T>
 inline bool use_stride1_forward(const conv_geometry& g) noexcept
 {
-    return g.stride == 1 && g.out_channels < 16;
+    if (g.stride != 1) return false;
+    constexpr long MR = micro_mr<T>;
+    const long ptot = long(g.batch) * g.out_h() * g.out_w();
+    const double packed_eff = double(ptot) / double((ptot + MR - 1) / MR * MR);
+    const double co = g.out_channels;
+    return co / stride1_lane_efficiency<T>(g) < co / packed_eff + 24.0;
 }
 
 /// Backward-weight on the wide grid (backward_weight_stride1) pays for stride 1, few output channels and
@@ -164,7 +182,7 @@ template <class T>
 inline bool use_stride1_backward_weight(const conv_geometry& g) noexcept
 {
     const long wide = long(g.out_h() - 1) * (g.in_w + 2 * g.pad) + g.out_w();
-    return use_stride1_forward(g) && wide >= 8 * simd_lanes<T>;
+    return g.stride == 1 && g.out_channels < 16 && wide >= 8 * simd_lanes<T>;
 }
 
 /// Reduction block of the dot path (multiple of every SIMD width): long blocks amortise the horizontal
@@ -181,12 +199,9 @@ inline bool use_dot_forward(const conv_geometry& g) noexcept
     constexpr int MR = micro_mr<T>;
     const long K = long(g.in_channels) * g.kernel_h * g.kernel_w;
     const long ptot = long(g.batch) * g.out_h() * g.out_w();
-    long used = ptot, lanes = (ptot + MR - 1) / MR * MR;  // lanes of the path taken otherwise
-    if (use_stride1_forward(g)) {
-        const long wide = long(g.out_h() - 1) * (g.in_w + 2 * g.pad) + g.out_w();
-        lanes = long(g.batch) * ((wide + MR - 1) / MR * MR);
-    }
-    return K % simd_lanes<T> == 0 && K >= 64 && ptot <= dot_max_pixels && used * 10 < lanes * 9;
+    const double eff = use_stride1_forward<T>(g) ? stride1_lane_efficiency<T>(g)
+                                                 : double(ptot) / double((ptot + MR - 1) / MR * MR);
+    return K % simd_lanes<T> == 0 && K >= 64 && ptot <= dot_max_pixels && eff < 0.9;
 }
 
 template <class T>
@@ -203,7 +218,7 @@ inline std::size_t forward_scratch_elements(const conv_geometry& g) noexcept
     constexpr std::size_t MR = micro_mr<T>, NR = micro_nr;
     const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
     if (use_dot_forward<T>(g)) return dot_scratch_elements<T>(g);
-    if (use_stride1_forward(g)) return padded_image_elements(g, int(MR)) + NR * MR;
+    if (use_stride1_forward<T>(g)) return padded_image_elements(g, int(MR)) + NR * MR;
     return std::min<std::size_t>(K, forward_kc) * MR + NR * MR;
 }
 
@@ -226,7 +241,6 @@ template <class T>
 inline std::size_t scratch_elements(const conv_geometry& g) noexcept
 {
     constexpr std::size_t MR = micro_mr<T>, NR = micro_nr;
-    const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
     const std::size_t P = std::size_t(g.out_h()) * g.out_w();
     const std::size_t co_r = (std::size_t(g.out_channels) + NR - 1) / NR * NR;
     const std::size_t tile = NR * MR;
@@ -402,7 +416,7 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
                     bool accumulate_out) noexcept
 {
     if (use_dot_forward<T>(g)) return forward_dot(g, x, w, bias, y, scratch, accumulate_out);
-    if (use_stride1_forward(g)) return forward_stride1(g, x, w, bias, y, scratch, accumulate_out);
+    if (use_stride1_forward<T>(g)) return forward_stride1(g, x, w, bias, y, scratch, accumulate_out);
     constexpr int MR = micro_mr<T>, NR = micro_nr, L = simd_lanes<T>;
     using B = simd_t<T>;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow, Ptot = P * g.batch;
