@@ -7,4 +7,5 @@
 #include <handemo/nn/rng.hpp>
 #include <handemo/nn/init.hpp>
 #include <handemo/nn/adam.hpp>
+#include <handemo/nn/tensor_file.hpp>
 #include <handemo/nn/safetensors.hpp>

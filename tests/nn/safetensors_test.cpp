@@ -10,6 +10,8 @@
 #include <limits>
 #include <numbers>
 
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 using handemo::format_error;
 using handemo::parse_safetensors;
