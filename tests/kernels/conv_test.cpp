@@ -73,6 +73,13 @@ void check_geometry(const hk::conv_geometry& g, double tol, unsigned seed)
                gb0 = random_vector(std::size_t(g.out_channels), rng);
     const auto xt = cast<T>(x), wt = cast<T>(w), bt = cast<T>(b), gyt = cast<T>(gy);
     std::vector<T> scratch(hk::conv2d_scratch_size<T>(g) + guard, std::numeric_limits<T>::quiet_NaN());
+    {  // independent of the batch size: a batch's scratch serves its chunks
+        hk::conv_geometry g1 = g, g16 = g;
+        g1.batch = 1;
+        g16.batch = 16;
+        CHECK(hk::conv2d_scratch_size<T>(g1) == hk::conv2d_scratch_size<T>(g));
+        CHECK(hk::conv2d_scratch_size<T>(g16) == hk::conv2d_scratch_size<T>(g));
+    }
 
     // forward with and without bias (y is pre-filled with garbage: forward must overwrite)
     for (int with_bias = 0; with_bias < 2; ++with_bias) {

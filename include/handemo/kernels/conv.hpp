@@ -22,7 +22,8 @@ inline constexpr bool fast_type = std::is_same_v<T, float> || std::is_same_v<T, 
 }  // namespace detail
 
 /// @brief Elements of T the kernels of this file need as `scratch` for geometry g (the maximum over all
-/// of conv2d_forward / backward_data / backward_weight and the conv_transpose2d functions).
+/// of conv2d_forward / backward_data / backward_weight and the conv_transpose2d functions). It does not
+/// depend on g.batch, so one scratch sized for a batch serves every chunk of that batch.
 template <class T>
 std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
 {

@@ -211,15 +211,19 @@ inline std::size_t dot_scratch_elements(const conv_geometry& g) noexcept
     return std::size_t(dot_max_pixels) * K + 16;
 }
 
-/// Scratch elements of the forward pass alone.
+/// Scratch elements of the forward pass alone (any batch size).
 template <class T>
 inline std::size_t forward_scratch_elements(const conv_geometry& g) noexcept
 {
     constexpr std::size_t MR = micro_mr<T>, NR = micro_nr;
+    // The maximum over every path some batch size could take, so that the size does not depend on
+    // g.batch: callers size scratch for a whole batch and run the kernels on chunks of it.
     const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
-    if (use_dot_forward<T>(g)) return dot_scratch_elements<T>(g);
-    if (use_stride1_forward<T>(g)) return padded_image_elements(g, int(MR)) + NR * MR;
-    return std::min<std::size_t>(K, forward_kc) * MR + NR * MR;
+    std::size_t n = std::min<std::size_t>(K, forward_kc) * MR + NR * MR;
+    if (g.stride == 1) n = std::max(n, padded_image_elements(g, int(MR)) + NR * MR);
+    if (K % simd_lanes<T> == 0 && K >= 64 && long(g.out_h()) * g.out_w() <= dot_max_pixels)
+        n = std::max(n, dot_scratch_elements<T>(g));
+    return n;
 }
 
 /// The geometry whose stride-1 forward pass is g's backward-data (gy padded by k-1-p, flipped weights).
@@ -236,7 +240,8 @@ inline bool backward_data_by_forward(const conv_geometry& g) noexcept
     return g.stride == 1 && g.kernel_h == g.kernel_w && g.pad <= g.kernel_h - 1 && g.in_channels >= 16;
 }
 
-/// Scratch elements of the fast path for geometry g (max over all passes), see each pass for its parts.
+/// Scratch elements of the fast path for geometry g (max over all passes and over every batch size <= and >=
+/// g.batch: the result does not depend on g.batch), see each pass for its parts.
 template <class T>
 inline std::size_t scratch_elements(const conv_geometry& g) noexcept
 {
