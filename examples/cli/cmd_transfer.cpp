@@ -1,0 +1,83 @@
+// `handemo transfer --model MODEL --in IN.bvh|IN.bmp --emotion E --out OUT.bvh|OUT.bmp`: turns a motion into
+// the target emotion with a trained model (Section 3.4 of the hand paper: keyframes -> Eq. 3 image -> G ->
+// Eq. 6 -> interpolation, with the learned tempo factor).
+#include "registry.hpp"
+
+#include <handemo/image.hpp>
+#include <handemo/motion/codec_image.hpp>
+#include <handemo/stargan.hpp>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace {
+
+struct transfer_cli {
+    std::string model, in, emotion, out, from, like;
+    std::size_t frames = 0;
+};
+
+bool has_ext(const std::string& p, const char* a, const char* b = nullptr)
+{
+    const auto e = std::filesystem::path(p).extension().string();
+    return e == a || (b && e == b);
+}
+
+void run_transfer(const transfer_cli& o)
+{
+    using namespace handemo;
+    using namespace handemo::stargan;
+    namespace fs = std::filesystem;
+    const auto model = load_model(o.model);
+    const auto& info = model->info();
+    const bool in_image = has_ext(o.in, ".bmp", ".png"), out_image = has_ext(o.out, ".bmp", ".png");
+    if (!in_image && !has_ext(o.in, ".bvh"))
+        throw value_error("transfer: --in " + o.in + ": expected a .bvh, .bmp or .png file");
+    if (!out_image && !has_ext(o.out, ".bvh")) throw value_error("transfer: --out " + o.out + ": expected a .bvh, .bmp or .png file");
+    const std::size_t target = model->domain(o.emotion);
+    if (in_image) {
+        const auto px = from_image<dynamic_keyframes>(read_image(o.in), model->joints(), model->keyframes());
+        const auto gen = model->translate(px, target);
+        if (out_image) {
+            (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(gen));
+        } else {
+            if (o.like.empty()) throw value_error("transfer: a BVH output from an image input needs --like REF.bvh (skeleton, fps, frames)");
+            const clip ref = read_bvh(o.like);
+            model->check_skeleton(ref.skel);
+            auto kf = decode(gen, info.range);
+            const double tempo = info.tempo[target] / info.tempo[model->domain(o.from.empty() ? info.neutral : o.from)];
+            const std::size_t n = o.frames ? o.frames : static_cast<std::size_t>(std::max(2.0, std::round(double(ref.frames) * tempo)));
+            write_bvh(o.out, reconstruct(kf, ref.skel, n, ref.fps));
+        }
+        std::cout << "transfer: " << o.in << " -> " << o.emotion << " -> " << o.out << "\n";
+        return;
+    }
+    const clip in = read_bvh(o.in);
+    const auto r = o.from.empty() ? model->transfer(in, o.emotion) : model->transfer(in, o.emotion, o.from);
+    if (out_image)
+        (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(r.image));
+    else
+        write_bvh(o.out, r.motion);
+    if (r.clamped_values)
+        std::cerr << "transfer: warning: " << r.clamped_values << " keyframe angles of " << o.in << " lie outside the model's range ["
+                  << info.range.p_min << ", " << info.range.p_max << "] and were clamped by Eq. 3\n";
+    std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << o.emotion << " (tempo x" << r.tempo << ", "
+              << r.motion.frames << " frames) -> " << o.out << "\n";
+}
+
+}  // namespace
+
+static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
+    auto* sub = app.add_subcommand("transfer", "Turn a motion (BVH, or a motion image BMP/PNG) into another emotion with a trained model");
+    auto o = std::make_shared<transfer_cli>();
+    sub->add_option("--model", o->model, "Model folder or checkpoint.safetensors written by 'handemo train'")->required();
+    sub->add_option("--in", o->in, "Input motion: .bvh, or a K x J motion image .bmp/.png")->required();
+    sub->add_option("--emotion", o->emotion, "Target emotion (a domain of the model, e.g. angry)")->required();
+    sub->add_option("--out", o->out, "Output: .bvh (full-rate motion) or .bmp/.png (motion image)")->required();
+    sub->add_option("--from", o->from, "Emotion of the input (default: the model's neutral domain); sets the tempo ratio");
+    sub->add_option("--like", o->like, "Reference BVH for an image input and BVH output (skeleton, fps, frames)");
+    sub->add_option("--frames", o->frames, "Output frame count for an image input (default: the reference's times the tempo)");
+    sub->callback([o] { run_transfer(*o); });
+}};
