@@ -27,7 +27,7 @@ done
 echo "== FMA peak"
 peak=""
 if g++ -O2 -march=native -mavx512f "$shared_bench/peak_fma.cpp" -o "$out/peak_fma" 2>/dev/null \
-   && ( "$out/peak_fma" >"$out/peak.txt" ) 2>/dev/null; then
+   && { "$out/peak_fma" >"$out/peak.txt"; } 2>/dev/null; then
   cat "$out/peak.txt"
   peak=$(sed -n 's/^AVX2 FMA: \([0-9.]*\).*/\1/p' "$out/peak.txt")
   avx512=$(sed -n 's/^AVX512 FMA: \([0-9.]*\).*/\1/p' "$out/peak.txt")
