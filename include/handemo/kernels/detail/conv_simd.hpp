@@ -1,12 +1,18 @@
-// The fast convolution path behind kernels/conv.hpp: every convolution pass of the StarGAN (Chan et al.
-// 2020, Sec. 3.3) is written as a small GEMM C[j][i] (+)= sum_k V[k][i] S[j][k] computed by one
-// register-blocked xsimd micro-kernel: NV SIMD vectors along i (MR = NV * lanes, the vectorised dimension)
-// times NR broadcast rows along j, 12 FMA accumulators. V is either packed (implicit im2col, zero-padded)
-// or read in place; S is always read in place with arbitrary strides, so the weights are never repacked.
-//   forward          i = output pixel (batch folded in), j = out channel, k = (c,u,v)
-//   backward-data    i = (c,u,v),  j = output pixel, k = out channel, then a col2im scatter-add
-//   backward-weight  i = (c,u,v),  j = out channel, k = output pixel (summed over the batch)
-// The architecture is whatever xsimd's default_arch is for the target's -march (AVX2 + FMA on x86-64-v3).
+// The fast convolution path behind kernels/conv.hpp (the StarGAN convs of Chan et al. 2020, Sec. 3.3).
+// Every pass is a small GEMM computed by register-blocked xsimd micro-kernels with 12 FMA accumulators;
+// which formulation runs is chosen per geometry by measured rules (see each use_* function):
+//   packed GEMM     C[j][i] += sum_k V[k][i] S[j][k], 3 vectors along i x 4 broadcast rows along j; V is
+//                   packed (implicit im2col, zero-padded), S read in place with arbitrary strides.
+//                   forward: i = output pixel (batch folded in), j = out channel, k = (c,u,v);
+//                   backward-data: i = (c,u,v), j = pixel, k = out channel, then a col2im scatter-add;
+//                   backward-weight: i = (c,u,v), j = out channel, k = pixel (summed over the batch).
+//   stride 1        the same micro-kernel reading shifted windows of one zero-padded image (no packing),
+//                   outputs on a "wide" grid whose extra columns are dropped; backward-data of a stride-1
+//                   conv = this forward with the flipped kernel; backward-weight for few out channels =
+//                   dot products of contiguous rows on the same wide grid.
+//   dot             for <= 64 output pixels: vectorised along (c,u,v), 4 out channels x 3 pixels.
+// The architecture is whatever xsimd's default_arch is for the target's -march (AVX2 + FMA here; SSE2
+// without flags). Tuned for AVX2 on Zen 3 (32 KiB L1d, 512 KiB L2).
 #pragma once
 
 #include <algorithm>
