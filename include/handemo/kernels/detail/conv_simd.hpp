@@ -247,6 +247,15 @@ inline bool backward_data_by_forward(const conv_geometry& g) noexcept
     return g.stride == 1 && g.kernel_h == g.kernel_w && g.pad <= g.kernel_h - 1;
 }
 
+/// Elements of the packed weight panels of backward_data (all of w, in panels of MR rows, zero-padded).
+template <class T>
+inline std::size_t packed_panels_elements(const conv_geometry& g) noexcept
+{
+    constexpr std::size_t MR = micro_mr<T>;
+    const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
+    return (K + MR - 1) / MR * MR * std::size_t(g.out_channels);
+}
+
 /// Scratch elements of the fast path for geometry g (max over all passes and over every batch size <= and >=
 /// g.batch: the result does not depend on g.batch), see each pass for its parts.
 template <class T>
@@ -257,7 +266,8 @@ inline std::size_t scratch_elements(const conv_geometry& g) noexcept
     const std::size_t co_r = (std::size_t(g.out_channels) + NR - 1) / NR * NR;
     const std::size_t tile = NR * MR;
     const std::size_t fwd = forward_scratch_elements<T>(g);
-    const std::size_t bwd_data = std::size_t(g.out_channels) * MR + tile;
+    const std::size_t bwd_data = packed_panels_elements<T>(g) + tile +
+                                 std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad);
     const std::size_t Pwl = (std::size_t(g.out_h() - 1) * (g.in_w + 2 * g.pad) + g.out_w() + simd_lanes<T> - 1) /
                             simd_lanes<T> * simd_lanes<T>;
     const std::size_t bwd_weight = use_stride1_backward_weight<T>(g) ? padded_image_elements(g, int(MR)) + std::size_t(g.out_channels) * Pwl
@@ -516,8 +526,11 @@ inline void backward_data_stride1(const conv_geometry& g, const T* gy, const T* 
     forward(flipped_geometry(g), gy, wf, static_cast<const T*>(nullptr), gx, scratch + g.w_size(), true);
 }
 
-/// Backward-data pass: gx += col2im(W^T gy), the GEMM done per image with V = W read in place
-/// (k-rows of W are contiguous along (c,u,v)) and S = gy read in place, then scattered into gx.
+/// Backward-data pass: gx += col2im(W^T gy). The GEMM runs per image with V = packed panels of W (rows
+/// of W are contiguous along (c,u,v); read in place, their out_channels rows sit K apart and thrash L1:
+/// 36 -> 46 GFLOP/s on the convT 4x4 s2 layers at batch 1) and S = gy read in place. The col2im
+/// scatter-add goes into a zero-padded image so that it needs no bounds checks, and runs of kw
+/// consecutive (u, v) lanes are added as short vectors; the padded image's interior is then added to gx.
 template <class T>
 inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
 {
@@ -525,44 +538,54 @@ inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
     constexpr int MR = micro_mr<T>, NR = micro_nr;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow;
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
-    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w;
+    const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, s = g.stride;
+    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w, HWp = std::ptrdiff_t(Hp) * Wp;
     T* vpack = scratch;
-    T* tile = scratch + std::size_t(Co) * MR;
-    std::ptrdiff_t koff[MR];
-    int ku[MR], kv[MR];
+    T* tile = vpack + packed_panels_elements<T>(g);
+    T* gpad = tile + NR * MR;
     for (int k0 = 0; k0 < K; k0 += MR) {
         const int nk = std::min(MR, K - k0);
-        for (int i = 0; i < MR; ++i) {
-            const int k = k0 + std::min(i, nk - 1), c = k / (kh * kw), u = (k / kw) % kh, v = k % kw;
-            ku[i] = u;
-            kv[i] = v;
-            koff[i] = c * HW + std::ptrdiff_t(u) * g.in_w + v;
-        }
-        // Pack the panel (contiguous Co x MR, zero lanes past K): read in place, its Co rows sit K apart
-        // and thrash L1 across the pixel tiles (measured on the convT 4x4 s2 layers: 36 -> 46 GFLOP/s at
-        // batch 1, 45 -> 61 at batch 16).
-        {
-            for (int o = 0; o < Co; ++o)
-                for (int i = 0; i < MR; ++i) vpack[std::ptrdiff_t(o) * MR + i] = i < nk ? w[std::ptrdiff_t(o) * K + k0 + i] : T(0);
-        }
-        const T* vsrc = vpack;
-        const std::ptrdiff_t vk = MR;
-        for (int n = 0; n < g.batch; ++n) {
-            const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
-            T* gxn = gx + std::ptrdiff_t(n) * g.in_channels * HW;
+        T* dst = vpack + std::ptrdiff_t(k0) * Co;
+        for (int o = 0; o < Co; ++o)
+            for (int i = 0; i < MR; ++i) dst[std::ptrdiff_t(o) * MR + i] = i < nk ? w[std::ptrdiff_t(o) * K + k0 + i] : T(0);
+    }
+    const bool runs4 = kw % 4 == 0;  // every aligned group of 4 lanes is 4 consecutive v of one (c, u)
+    std::ptrdiff_t koff[MR];
+    for (int n = 0; n < g.batch; ++n) {
+        for (std::ptrdiff_t i = 0; i < std::ptrdiff_t(g.in_channels) * HWp; ++i) gpad[i] = T(0);
+        const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
+        for (int k0 = 0; k0 < K; k0 += MR) {
+            const int nk = std::min(MR, K - k0);
+            for (int i = 0; i < nk; ++i) {
+                const int k = k0 + i, c = k / (kh * kw), u = (k / kw) % kh, v = k % kw;
+                koff[i] = c * HWp + std::ptrdiff_t(u) * Wp + v;
+            }
+            const T* vsrc = vpack + std::ptrdiff_t(k0) * Co;
             for (int p0 = 0; p0 < P; p0 += NR) {
                 const int nr = std::min(NR, P - p0);
-                micro_dispatch<T>(nr, Co, vsrc, vk, gyn + p0, 1, P, tile, false);
+                micro_dispatch<T>(nr, Co, vsrc, MR, gyn + p0, 1, P, tile, false);
                 for (int j = 0; j < nr; ++j) {
-                    const int p = p0 + j, ih0 = (p / ow) * g.stride - g.pad, iw0 = (p % ow) * g.stride - g.pad;
-                    T* base = gxn + std::ptrdiff_t(ih0) * g.in_w + iw0;
+                    const int p = p0 + j;
+                    T* base = gpad + std::ptrdiff_t((p / ow) * s) * Wp + (p % ow) * s;  // padded coordinates
                     const T* t = tile + j * MR;
-                    for (int i = 0; i < nk; ++i)
-                        if (unsigned(ih0 + ku[i]) < unsigned(g.in_h) && unsigned(iw0 + kv[i]) < unsigned(g.in_w))
-                            base[koff[i]] += t[i];
+                    if (runs4 && nk == MR) {
+                        for (int i = 0; i < MR; i += 4) {
+                            T* d = base + koff[i];
+                            for (int q = 0; q < 4; ++q) d[q] += t[i + q];
+                        }
+                    } else {
+                        for (int i = 0; i < nk; ++i) base[koff[i]] += t[i];
+                    }
                 }
             }
         }
+        T* gxn = gx + std::ptrdiff_t(n) * g.in_channels * HW;
+        for (int c = 0; c < g.in_channels; ++c)
+            for (int h = 0; h < g.in_h; ++h) {
+                const T* src = gpad + c * HWp + std::ptrdiff_t(h + g.pad) * Wp + g.pad;
+                T* d = gxn + c * HW + std::ptrdiff_t(h) * g.in_w;
+                for (int q = 0; q < g.in_w; ++q) d[q] += src[q];
+            }
     }
 }
 
