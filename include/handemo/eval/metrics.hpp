@@ -1,7 +1,12 @@
 // Numeric comparison of motions, the evaluation the hand paper names as future work (Section 5): keyframe
-// joint-angle RMSE between a transferred clip and the captured clip of the target emotion, and Table 1's
+// joint-angle RMSE between a transferred clip and the captured clip of the target emotion (on the K uniform
+// keyframes of Eq. 2, so clips of different durations compare keyframe by keyframe; each difference is
+// wrapped into (-180, 180] so a 359-degree step of an unwrapped yaw counts as 1 degree), and Table 1's
 // characteristics as measurable quantities: range of motion (mean over channels of max - min of the
-// unwrapped angle) and speed (mean absolute angular velocity, degrees per second).
+// unwrapped angle) and speed (mean absolute angular velocity, degrees per second). The ratios of the
+// evaluation are taken on each clip's keyframe view (K keyframes reconstructed at the clip's own frame
+// count, Section 3.4), so a transferred clip, which only ever has K keyframes of detail, is not compared
+// with the tremor and noise of a raw capture.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -10,10 +15,37 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
 namespace handemo::eval {
+
+/// @brief An angle difference wrapped into (-180, 180] degrees.
+inline double wrap_degrees(double d) noexcept
+{
+    d = std::fmod(d, 360.0);
+    if (d > 180.0) d -= 360.0;
+    if (d <= -180.0) d += 360.0;
+    return d;
+}
+
+/// @brief RMSE in degrees between two keyframe sets of equal shape (differences wrapped, see wrap_degrees).
+/// @throws shape_error naming both shapes when K or J differ.
+template <std::size_t K>
+double keyframe_rmse(const keyframes<K>& a, const keyframes<K>& b)
+{
+    if (a.count() != b.count() || a.joints != b.joints || a.angles.size() != b.angles.size())
+        throw shape_error("keyframe_rmse: keyframes are " + std::to_string(a.count()) + "x" + std::to_string(a.joints) + " and " +
+                          std::to_string(b.count()) + "x" + std::to_string(b.joints) + " (keyframes x joints)");
+    if (a.angles.empty()) throw value_error("keyframe_rmse: empty keyframes");
+    double s = 0;
+    for (std::size_t i = 0; i < a.angles.size(); ++i) {
+        const double d = wrap_degrees(a.angles[i] - b.angles[i]);
+        s += d * d;
+    }
+    return std::sqrt(s / static_cast<double>(a.angles.size()));
+}
 
 /// @brief RMSE in degrees between the K uniform keyframes of two clips of the same skeleton.
 /// @throws shape_error when the joint counts differ.
@@ -23,13 +55,7 @@ double keyframe_rmse(const clip& a, const clip& b)
     if (a.skel.size() != b.skel.size())
         throw shape_error("keyframe_rmse: clips have " + std::to_string(a.skel.size()) + " and " +
                           std::to_string(b.skel.size()) + " joints");
-    const auto ka = extract_keyframes<K>(a), kb = extract_keyframes<K>(b);
-    double s = 0;
-    for (std::size_t i = 0; i < ka.angles.size(); ++i) {
-        const double d = ka.angles[i] - kb.angles[i];
-        s += d * d;
-    }
-    return std::sqrt(s / static_cast<double>(ka.angles.size()));
+    return keyframe_rmse(extract_keyframes<K>(a), extract_keyframes<K>(b));
 }
 
 /// @brief Mean over joints and axes of the range (max - min, degrees) of the unwrapped angle tracks.
@@ -62,6 +88,50 @@ inline double mean_speed(const clip& c)
     for (std::size_t f = 1; f < c.frames; ++f)
         for (std::size_t k = 0; k < J3; ++k) total += std::abs(u.angles[f * J3 + k] - u.angles[(f - 1) * J3 + k]);
     return total * c.fps / static_cast<double>((c.frames - 1) * J3);
+}
+
+/// @brief The clip as the network sees it: K uniform keyframes (Eq. 2) reconstructed by Catmull-Rom at the
+/// clip's own frame count and rate (Section 3.4). Position channels are kept.
+/// @throws value_error for fewer than 2 frames.
+template <std::size_t K = 9>
+clip keyframe_view(const clip& c)
+{
+    clip v = reconstruct(extract_keyframes<K>(c), c.skel, c.frames, c.fps);
+    v.positions = c.positions;
+    return v;
+}
+
+/// @brief Table 1's characteristics of one clip, measured on its keyframe view.
+struct characteristics {
+    double range_of_motion = 0;  ///< degrees, see range_of_motion()
+    double speed = 0;            ///< degrees per second, see mean_speed()
+    double duration = 0;         ///< seconds
+};
+
+/// @brief Range of motion, speed and duration of the keyframe view of `c`.
+template <std::size_t K = 9>
+characteristics measure(const clip& c)
+{
+    const clip v = keyframe_view<K>(c);
+    return {range_of_motion(v), mean_speed(v), c.duration()};
+}
+
+/// @brief `num / den` of a characteristic; a ratio to a motionless input is undefined.
+/// @throws value_error naming `what` when den is not positive.
+inline double ratio(double num, double den, const char* what)
+{
+    if (!(den > 0) || !std::isfinite(num))
+        throw value_error(std::string("ratio: ") + what + ": " + std::to_string(num) + " / " + std::to_string(den) +
+                          " is undefined (the input does not move)");
+    return num / den;
+}
+
+/// @brief |log(a / b)|: how far a ratio is from a reference ratio, symmetric in over- and undershoot
+/// (0 when equal; log 2 = 0.69 when one is twice the other).
+inline double log_ratio_error(double a, double b)
+{
+    if (!(a > 0) || !(b > 0)) return std::numeric_limits<double>::infinity();
+    return std::abs(std::log(a / b));
 }
 
 }  // namespace handemo::eval

@@ -1,0 +1,263 @@
+// The leave-one-content-out protocol of the evaluation (the hand paper leaves one motion type out of
+// training, Section 4; numeric comparison with captured motion is its Section 5 future work). For each fold:
+// train StarGAN (Eq. 4-5, train.hpp) on every other content, transfer each held-out neutral take to every
+// other emotion (Section 3.4, transfer.hpp), run the baselines (baselines.hpp) and score everything against
+// the held-out take of the target emotion (metrics.hpp, classifier.hpp). Templated on the configuration so a
+// program instantiates only the networks it uses; run_eval_named() dispatches by name (all configurations).
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/core/progress.hpp>
+#include <handemo/eval/baselines.hpp>
+#include <handemo/eval/classifier.hpp>
+#include <handemo/eval/metrics.hpp>
+#include <handemo/eval/report.hpp>
+#include <handemo/render/svg.hpp>
+#include <handemo/stargan/configs.hpp>
+#include <handemo/stargan/dataset.hpp>
+#include <handemo/stargan/train.hpp>
+#include <handemo/stargan/transfer.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace handemo::eval {
+
+/// @brief Options of an evaluation run.
+struct eval_options {
+    stargan::train_options train;   ///< per-fold training (seed of fold i is train.seed + i)
+    std::vector<std::string> folds; ///< contents to hold out, in this order (default: every content, sorted)
+    double shrinkage = 0.5;         ///< of the emotion classifier, see nearest_centroid_classifier
+    std::FILE* progress_out = stderr;
+    std::string command;            ///< recorded in the report
+    std::string data;               ///< data set name recorded in the report
+};
+
+/// @brief Training defaults of the evaluation: StarGAN's (lr 1e-4, lambda_rec 10, lambda_gp 10, n_critic 5)
+/// except lambda_cls 5 (with 1 the discriminator's domain classifier stays at chance on the training set of
+/// the synthetic hand data for thousands of steps: the gradient penalty dominates) and 2000 iterations (the
+/// 7 hand folds in about 15 min of training on 2 free cores; use --iters for longer runs). Chosen from
+/// training-set losses only, never from held-out results.
+inline stargan::train_options default_train_options()
+{
+    stargan::train_options o;
+    o.iters = 2000;
+    o.lambda_cls = 5.0;
+    o.checkpoint_every = 1000000;  // the end of each fold only
+    return o;
+}
+
+namespace detail {
+
+template <std::size_t K>
+struct prepared_clip {
+    const stargan::labelled_clip* src;
+    keyframes<K> kf;
+    characteristics ch;
+};
+
+/// Mean of a loss column over the last 10% of logged rows.
+inline double tail_mean(const std::vector<stargan::loss_row>& log, std::size_t col)
+{
+    if (log.empty()) return std::nan("");
+    const std::size_t n = std::max<std::size_t>(1, log.size() / 10);
+    double s = 0;
+    for (std::size_t i = log.size() - n; i < log.size(); ++i) s += log[i].values[col];
+    return s / static_cast<double>(n);
+}
+
+inline std::string options_text(const eval_options& o)
+{
+    std::string s;
+    const auto j = o.train.to_json();
+    for (auto it = j.begin(); it != j.end(); ++it) s += it.key() + " " + it.value().dump() + "\n";
+    s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nfold seed train.seed + fold index\n";
+    s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
+    return s;
+}
+
+}  // namespace detail
+
+/// @brief Runs the leave-one-content-out evaluation for one configuration.
+/// @param clips the whole labelled data set (load_folder())
+/// @param out_dir the report folder: per-fold models and loss curves go to out_dir/folds/<content>/
+/// @return every record; the caller writes the report with write_report() (run_eval_named() does).
+/// @throws value_error for an unknown held-out content, a data set with a single content, or no neutral takes
+///         in a fold; the errors of training and transfer otherwise.
+template <stargan::stargan_config Config>
+eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const stargan::config_info& info, const eval_options& opt,
+                     const std::filesystem::path& out_dir)
+{
+    namespace fs = std::filesystem;
+    using clock = std::chrono::steady_clock;
+    constexpr std::size_t K = Config::keyframes;
+    const auto t_start = clock::now();
+    opt.train.validate();
+    const auto contents = stargan::contents_of(clips);
+    if (contents.size() < 2)
+        throw value_error("eval: the data set has " + std::to_string(contents.size()) + " content(s); leave-one-content-out needs at least 2");
+    std::vector<std::string> folds = opt.folds.empty() ? contents : opt.folds;
+    for (const auto& f : folds)
+        if (std::find(contents.begin(), contents.end(), f) == contents.end()) {
+            std::string known;
+            for (const auto& c : contents) known += (known.empty() ? "" : ", ") + c;
+            throw value_error("eval: --folds: content '" + f + "' is not in the data set (contents: " + known + ")");
+        }
+    for (const auto& c : clips) (void)stargan::domain_index(info, c.emotion);  // unknown emotion: error naming it
+
+    eval_result res;
+    res.config = info.name;
+    res.data = opt.data;
+    res.command = opt.command;
+    res.domains = info.domain_names;
+    res.neutral = info.neutral;
+    res.options_text = detail::options_text(opt);
+
+    // every clip's keyframes and characteristics, once
+    std::vector<detail::prepared_clip<K>> all;
+    all.reserve(clips.size());
+    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), measure<K>(c.motion)});
+    // content references: every neutral clip of every content
+    std::vector<const detail::prepared_clip<K>*> neutral_refs;
+    for (const auto& p : all)
+        if (p.src->emotion == info.neutral) neutral_refs.push_back(&p);
+    auto content_of = [&](const keyframes<K>& kf) -> std::string {
+        double best = std::numeric_limits<double>::infinity();
+        std::string c;
+        for (const auto* r : neutral_refs) {
+            const double d = keyframe_rmse(kf, r->kf);
+            if (d < best) best = d, c = r->src->content;
+        }
+        return c;
+    };
+
+    progress overall("eval " + info.name, static_cast<long>(folds.size()), opt.progress_out, 0.0);
+    for (std::size_t fi = 0; fi < folds.size(); ++fi) {
+        const std::string& held = folds[fi];
+        fold_summary fsum;
+        fsum.held_out = held;
+        std::vector<stargan::labelled_clip> train;
+        std::vector<const detail::prepared_clip<K>*> train_p, test_p;
+        for (const auto& p : all) {
+            if (p.src->content == held) {
+                test_p.push_back(&p);
+            } else {
+                train.push_back(*p.src);
+                train_p.push_back(&p);
+            }
+        }
+        fsum.train_clips = train.size();
+        if (opt.progress_out)
+            std::fprintf(opt.progress_out, "eval: fold %zu/%zu: holding out '%s' (%zu training clips, %zu held-out clips)\n", fi + 1,
+                         folds.size(), held.c_str(), train.size(), test_p.size()),
+                std::fflush(opt.progress_out);
+
+        // ---- train StarGAN on the other contents
+        const fs::path fold_dir = out_dir / "folds" / held;
+        auto t0 = clock::now();
+        {
+            auto to = opt.train;
+            to.seed = opt.train.seed + fi;
+            to.progress_out = opt.progress_out;
+            stargan::trainer<Config> tr(info, stargan::prepare_data<Config>(train, info), to);
+            tr.run(fold_dir);
+            fsum.train_d_acc = detail::tail_mean(tr.log(), 5);
+            fsum.train_g_cls = detail::tail_mean(tr.log(), 7);
+            write_file_atomic(fold_dir / "losses.svg",
+                              plot_losses_svg(stargan::loss_log_csv(tr.log()), {.title = "eval " + info.name + ": fold without " + held}));
+        }
+        fsum.train_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+        t0 = clock::now();
+        auto [ckf, ckinfo] = stargan::read_checkpoint(fold_dir / "checkpoint.safetensors");
+        const stargan::detail::emotion_model_impl<Config> model(ckf, ckinfo);
+
+        // ---- baselines and the independent emotion classifier, from the training clips only
+        const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
+        nearest_centroid_classifier clf;
+        {
+            std::vector<std::vector<double>> x;
+            std::vector<std::string> y;
+            for (const auto* p : train_p) x.push_back(motion_features(p->kf, p->ch.duration)), y.push_back(p->src->emotion);
+            clf.fit(x, y, opt.shrinkage);
+            std::size_t ok = 0;
+            for (std::size_t i = 0; i < x.size(); ++i) ok += clf.predict(x[i]) == y[i];
+            fsum.classifier_train_acc = static_cast<double>(ok) / static_cast<double>(x.size());
+        }
+
+        // ---- transfer every held-out neutral take to every other emotion
+        for (const auto* in : test_p) {
+            if (in->src->emotion != info.neutral) continue;
+            ++fsum.test_inputs;
+            for (const auto& target : info.domain_names) {
+                if (target == info.neutral) continue;
+                const detail::prepared_clip<K>* real = nullptr;
+                for (const auto* p : test_p)
+                    if (p->src->emotion == target && p->src->take == in->src->take) real = p;
+                if (!real) {
+                    ++fsum.missing_targets;
+                    continue;
+                }
+                const auto tr_res = model.transfer(in->src->motion, target);
+                const std::size_t nn = nearest_neighbour<K>(in->src->motion, train, target);
+                const clip mo = offset.transfer(in->src->motion, target, tr_res.tempo);
+                const std::pair<const char*, const clip*> outs[] = {{"stargan", &tr_res.motion},
+                                                                    {"identity", &in->src->motion},
+                                                                    {"mean-offset", &mo},
+                                                                    {"nearest-neighbour", &train[nn].motion},
+                                                                    {"real", &real->src->motion}};
+                const double real_rom = ratio(real->ch.range_of_motion, in->ch.range_of_motion, "range of motion");
+                const double real_speed = ratio(real->ch.speed, in->ch.speed, "speed");
+                for (const auto& [method, out] : outs) {
+                    const auto kf = extract_keyframes<K>(*out);
+                    const auto ch = measure<K>(*out);
+                    sample_record s;
+                    s.fold = held, s.target = target, s.take = in->src->take, s.method = method;
+                    s.rmse_real = keyframe_rmse(kf, real->kf);
+                    s.rmse_input = keyframe_rmse(kf, in->kf);
+                    s.predicted_emotion = clf.predict(motion_features(kf, ch.duration));
+                    s.emotion_ok = s.predicted_emotion == target;
+                    s.predicted_content = content_of(kf);
+                    s.content_ok = s.predicted_content == held;
+                    s.rom_ratio = ratio(ch.range_of_motion, in->ch.range_of_motion, "range of motion");
+                    s.speed_ratio = ratio(ch.speed, in->ch.speed, "speed");
+                    s.real_rom_ratio = real_rom, s.real_speed_ratio = real_speed;
+                    s.rom_error = log_ratio_error(s.rom_ratio, real_rom);
+                    s.speed_error = log_ratio_error(s.speed_ratio, real_speed);
+                    res.samples.push_back(std::move(s));
+                }
+            }
+        }
+        if (fsum.test_inputs == 0)
+            throw value_error("eval: fold '" + held + "' has no '" + info.neutral + "' clip to transfer");
+        fsum.eval_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+        res.folds.push_back(fsum);
+        char status[160];
+        std::snprintf(status, sizeof status, "fold '%s' done (train %.1f min, D/acc %.0f%%)", held.c_str(), fsum.train_seconds / 60,
+                      100 * fsum.train_d_acc);
+        overall.update(static_cast<long>(fi + 1), status);
+    }
+    res.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
+    return res;
+}
+
+/// @brief Loads a data folder, runs the evaluation for the configuration called `config` and writes the
+/// report into `out_dir` (report.md, results.csv, summary.csv, summary.svg, folds/<content>/...).
+/// Instantiates every configuration: call it from one translation unit.
+/// @throws value_error for an unknown configuration, plus the errors of load_folder() and run_eval().
+inline eval_result run_eval_named(const std::filesystem::path& data, const std::string& config, eval_options opt,
+                                  const std::filesystem::path& out_dir)
+{
+    const auto clips = stargan::load_folder(data);
+    if (opt.data.empty()) opt.data = data.string();
+    auto res = stargan::with_config(config, [&]<stargan::stargan_config C>(const stargan::config_info& info) {
+        return run_eval<C>(clips, info, opt, out_dir);
+    });
+    write_report(res, out_dir);
+    return res;
+}
+
+}  // namespace handemo::eval

@@ -1,0 +1,364 @@
+// Results of the leave-one-content-out evaluation (the hand paper's Section 5 future work: numeric
+// comparison of transferred motion with captured motion of the target emotion) and their report: one record
+// per (fold, target emotion, take, method), per-fold means, a summary (mean and std over folds), the
+// plain statements of where StarGAN beats each baseline and where it does not, a CSV of every number, a
+// Markdown report and an SVG bar chart. Metrics: keyframe RMSE (Eq. 2 keyframes, degrees), independent
+// emotion recognition, content preservation and Table 1's range-of-motion and speed ratios.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/core/io.hpp>
+#include <handemo/render/svg.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace handemo::eval {
+
+/// @brief Method names in report order; "real" is the captured target clip (the reference row).
+inline const std::vector<std::string>& method_names()
+{
+    static const std::vector<std::string> m{"stargan", "identity", "mean-offset", "nearest-neighbour", "real"};
+    return m;
+}
+
+/// @brief The numbers of one transferred clip.
+struct sample_record {
+    std::string fold, target, take, method;
+    double rmse_real = 0;         ///< keyframe RMSE to the real target clip (degrees)
+    double rmse_input = 0;        ///< keyframe RMSE to the input (degrees)
+    bool emotion_ok = false;      ///< the independent classifier says `target`
+    bool content_ok = false;      ///< the nearest neutral motion (any content) is of the input's content
+    std::string predicted_emotion, predicted_content;
+    double rom_ratio = 0, speed_ratio = 0;            ///< output / input
+    double real_rom_ratio = 0, real_speed_ratio = 0;  ///< real target / input
+    double rom_error = 0, speed_error = 0;            ///< |log(ratio / real ratio)|
+};
+
+/// @brief What happened in one fold besides the samples.
+struct fold_summary {
+    std::string held_out;
+    std::size_t train_clips = 0, test_inputs = 0, missing_targets = 0;
+    double train_seconds = 0, eval_seconds = 0;
+    double train_d_acc = 0;  ///< mean D/acc (domain classifier on real training batches) over the last 10% of logged steps
+    double train_g_cls = 0;  ///< mean G/cls over the same steps
+    double classifier_train_acc = 0;  ///< the emotion classifier's accuracy on its own training clips
+};
+
+/// @brief Everything one evaluation run produced.
+struct eval_result {
+    std::string config, data, command;
+    std::vector<std::string> domains;
+    std::string neutral;
+    std::string options_text;  ///< training and evaluation options, one `key value` per line
+    std::vector<fold_summary> folds;
+    std::vector<sample_record> samples;
+    double seconds = 0;
+};
+
+/// @brief One metric of the report.
+struct metric_def {
+    std::string key, title;
+    int better;  ///< -1 lower is better, +1 higher is better, 0 descriptive
+    std::function<double(const sample_record&)> get;
+};
+
+/// @brief The metrics in report order.
+inline const std::vector<metric_def>& metric_defs()
+{
+    static const std::vector<metric_def> m{
+        {"rmse_real", "RMSE to real target (deg)", -1, [](const sample_record& r) { return r.rmse_real; }},
+        {"emotion_acc", "emotion recognised (%)", +1, [](const sample_record& r) { return r.emotion_ok ? 100.0 : 0.0; }},
+        {"content_acc", "content kept (%)", +1, [](const sample_record& r) { return r.content_ok ? 100.0 : 0.0; }},
+        {"rmse_input", "RMSE to input (deg)", 0, [](const sample_record& r) { return r.rmse_input; }},
+        {"rom_ratio", "ROM ratio out/in", 0, [](const sample_record& r) { return r.rom_ratio; }},
+        {"speed_ratio", "speed ratio out/in", 0, [](const sample_record& r) { return r.speed_ratio; }},
+        {"rom_error", "ROM ratio error |log(out/real)|", -1, [](const sample_record& r) { return r.rom_error; }},
+        {"speed_error", "speed ratio error |log(out/real)|", -1, [](const sample_record& r) { return r.speed_error; }},
+    };
+    return m;
+}
+
+/// @brief Mean and sample standard deviation (n - 1; 0 for one value).
+struct mean_std {
+    double mean = 0, std = 0;
+    std::size_t n = 0;
+};
+inline mean_std mean_and_std(const std::vector<double>& v)
+{
+    mean_std r;
+    r.n = v.size();
+    if (v.empty()) return r;
+    for (double x : v) r.mean += x / static_cast<double>(v.size());
+    if (v.size() > 1) {
+        double s = 0;
+        for (double x : v) s += (x - r.mean) * (x - r.mean);
+        r.std = std::sqrt(s / static_cast<double>(v.size() - 1));
+    }
+    return r;
+}
+
+/// @brief Per-fold mean of a metric for (fold, target, method); target "all" pools every target. NaN when
+/// there is no sample.
+inline double fold_mean(const eval_result& r, const metric_def& m, const std::string& fold, const std::string& target,
+                        const std::string& method)
+{
+    double s = 0;
+    std::size_t n = 0;
+    for (const auto& x : r.samples)
+        if (x.fold == fold && x.method == method && (target == "all" || x.target == target)) s += m.get(x), ++n;
+    return n ? s / static_cast<double>(n) : std::nan("");
+}
+
+/// @brief Mean and std over folds of the per-fold means (folds without samples are skipped).
+inline mean_std over_folds(const eval_result& r, const metric_def& m, const std::string& target, const std::string& method)
+{
+    std::vector<double> v;
+    for (const auto& f : r.folds) {
+        const double x = fold_mean(r, m, f.held_out, target, method);
+        if (std::isfinite(x)) v.push_back(x);
+    }
+    return mean_and_std(v);
+}
+
+/// @brief The target emotions that occur in the samples, in domain order.
+inline std::vector<std::string> targets_of(const eval_result& r)
+{
+    std::vector<std::string> t;
+    for (const auto& d : r.domains)
+        for (const auto& s : r.samples)
+            if (s.target == d) {
+                t.push_back(d);
+                break;
+            }
+    return t;
+}
+
+namespace detail {
+
+inline std::string fmt(double v, int prec = 2)
+{
+    if (!std::isfinite(v)) return "n/a";
+    char b[48];
+    std::snprintf(b, sizeof b, "%.*f", prec, v);
+    return b;
+}
+
+inline std::string csv_num(double v)
+{
+    char b[48];
+    std::snprintf(b, sizeof b, "%.9g", v);
+    return b;
+}
+
+}  // namespace detail
+
+/// @brief Every number: one CSV row per (fold, target, take, method).
+inline std::string samples_csv(const eval_result& r)
+{
+    std::string s = "fold,target,take,method,rmse_real,rmse_input,emotion_ok,predicted_emotion,content_ok,predicted_content,"
+                    "rom_ratio,speed_ratio,real_rom_ratio,real_speed_ratio,rom_error,speed_error\n";
+    for (const auto& x : r.samples) {
+        s += x.fold + "," + x.target + "," + x.take + "," + x.method + "," + detail::csv_num(x.rmse_real) + "," +
+             detail::csv_num(x.rmse_input) + "," + (x.emotion_ok ? "1" : "0") + "," + x.predicted_emotion + "," +
+             (x.content_ok ? "1" : "0") + "," + x.predicted_content + "," + detail::csv_num(x.rom_ratio) + "," +
+             detail::csv_num(x.speed_ratio) + "," + detail::csv_num(x.real_rom_ratio) + "," + detail::csv_num(x.real_speed_ratio) +
+             "," + detail::csv_num(x.rom_error) + "," + detail::csv_num(x.speed_error) + "\n";
+    }
+    return s;
+}
+
+/// @brief Summary CSV: `target,method,metric,mean,std,folds` (target "all" pools the targets).
+inline std::string summary_csv(const eval_result& r)
+{
+    std::string s = "target,method,metric,mean,std,folds\n";
+    auto targets = targets_of(r);
+    targets.insert(targets.begin(), "all");
+    for (const auto& t : targets)
+        for (const auto& me : method_names())
+            for (const auto& m : metric_defs()) {
+                const auto ms = over_folds(r, m, t, me);
+                if (ms.n == 0) continue;
+                s += t + "," + me + "," + m.key + "," + detail::csv_num(ms.mean) + "," + detail::csv_num(ms.std) + "," +
+                     std::to_string(ms.n) + "\n";
+            }
+    return s;
+}
+
+/// @brief One comparison of StarGAN with a baseline on one metric and target.
+struct comparison {
+    std::string baseline, metric, target;
+    double stargan = 0, other = 0;
+    std::size_t folds_better = 0, folds = 0;
+    bool better = false;  ///< StarGAN's mean over folds is strictly better
+};
+
+/// @brief StarGAN vs every baseline on every metric with a direction, per target emotion and pooled ("all").
+inline std::vector<comparison> compare_with_baselines(const eval_result& r)
+{
+    std::vector<comparison> out;
+    auto targets = targets_of(r);
+    targets.insert(targets.begin(), "all");
+    for (const std::string b : {"identity", "mean-offset", "nearest-neighbour"})
+        for (const auto& m : metric_defs()) {
+            if (m.better == 0) continue;
+            for (const auto& t : targets) {
+                comparison c{b, m.key, t};
+                c.stargan = over_folds(r, m, t, "stargan").mean;
+                c.other = over_folds(r, m, t, b).mean;
+                for (const auto& f : r.folds) {
+                    const double s = fold_mean(r, m, f.held_out, t, "stargan"), o = fold_mean(r, m, f.held_out, t, b);
+                    if (!std::isfinite(s) || !std::isfinite(o)) continue;
+                    ++c.folds;
+                    if (m.better < 0 ? s < o : s > o) ++c.folds_better;
+                }
+                c.better = m.better < 0 ? c.stargan < c.other : c.stargan > c.other;
+                if (c.folds) out.push_back(c);
+            }
+        }
+    return out;
+}
+
+/// @brief The summary bar chart: pooled mean +- std over folds per metric with a direction and per method.
+inline std::string summary_svg(const eval_result& r)
+{
+    std::vector<bar_entry> bars;
+    for (const auto& m : metric_defs()) {
+        if (m.better == 0) continue;
+        for (const auto& me : method_names()) {
+            const auto ms = over_folds(r, m, "all", me);
+            if (ms.n == 0 || !std::isfinite(ms.mean)) continue;
+            bars.push_back({m.title, me, ms.mean, ms.std});
+        }
+    }
+    bar_plot_options o;
+    o.title = "handemo eval " + r.config + ": mean +- std over " + std::to_string(r.folds.size()) + " folds";
+    o.panels_per_row = 3;
+    o.panel_width = 300;
+    return plot_bars_svg(bars, o);
+}
+
+/// @brief The Markdown report (see write_report()).
+inline std::string markdown_report(const eval_result& r)
+{
+    const auto& ms = metric_defs();
+    const auto targets = targets_of(r);
+    std::string s;
+    s += "# handemo eval: " + r.config + " on " + r.data + "\n\n";
+    s += "Command: `" + r.command + "`\n\n";
+    s += "Leave-one-content-out: " + std::to_string(r.folds.size()) +
+         " folds; in each, StarGAN is trained on every other content (motion type), then every held-out `" + r.neutral +
+         "` take is transferred to each other emotion and compared with the held-out take of that emotion (same take "
+         "index). Total time " + detail::fmt(r.seconds / 60.0, 1) + " min.\n\n";
+    s += "Methods: **stargan** (the trained G, tempo from the training set's duration ratios); **identity** (output = input); "
+         "**mean-offset** (input keyframes + the training-set mean keyframe difference emotion - neutral over same content "
+         "and take pairs, same tempo as stargan); **nearest-neighbour** (the training clip of the target emotion with the "
+         "closest keyframes); **real** (the captured target clip itself: the reference).\n\n";
+    s += "Metrics: RMSE over the 9 uniform keyframes (differences wrapped to (-180, 180]); emotion recognised: a "
+         "nearest-centroid classifier (shrunk pooled within-class covariance) on keyframe features, trained only on the "
+         "real training clips of the fold, never on the discriminator; content kept: the nearest `" + r.neutral +
+         "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "
+         "output / input measured on 9-keyframe reconstructions; ratio errors |log(ratio / real ratio)|.\n\n";
+    s += "Options:\n\n```\n" + r.options_text + "```\n\n";
+
+    // summary
+    s += "## Summary (mean +- std over folds)\n\n| target | method |";
+    for (const auto& m : ms) s += " " + m.title + " |";
+    s += "\n|---|---|";
+    for (std::size_t i = 0; i < ms.size(); ++i) s += "---|";
+    s += "\n";
+    auto all_targets = targets;
+    all_targets.insert(all_targets.begin(), "all");
+    for (const auto& t : all_targets)
+        for (const auto& me : method_names()) {
+            s += "| " + t + " | " + me + " |";
+            for (const auto& m : ms) {
+                const auto v = over_folds(r, m, t, me);
+                s += " " + (v.n ? detail::fmt(v.mean) + " +- " + detail::fmt(v.std) : std::string("n/a")) + " |";
+            }
+            s += "\n";
+        }
+    s += "\n![summary](summary.svg)\n\n";
+
+    // plain statements
+    s += "## Where StarGAN beats each baseline and where it does not\n\n";
+    const auto cmp = compare_with_baselines(r);
+    std::vector<std::string> losses;
+    for (const std::string b : {"identity", "mean-offset", "nearest-neighbour"}) {
+        s += "**vs " + b + "**\n\n";
+        for (const auto& m : ms) {
+            if (m.better == 0) continue;
+            std::string win, lose;
+            for (const auto& c : cmp) {
+                if (c.baseline != b || c.metric != m.key) continue;
+                const std::string item = c.target + " (" + detail::fmt(c.stargan) + " vs " + detail::fmt(c.other) + ", " +
+                                         std::to_string(c.folds_better) + "/" + std::to_string(c.folds) + " folds)";
+                (c.better ? win : lose) += (c.better ? (win.empty() ? "" : ", ") : (lose.empty() ? "" : ", ")) + item;
+                if (!c.better && c.target == "all") losses.push_back(b + " on " + m.title);
+            }
+            s += "- " + m.title + (m.better < 0 ? " (lower is better)" : " (higher is better)") + ": StarGAN better for " +
+                 (win.empty() ? "none" : win) + "; not better for " + (lose.empty() ? "none" : lose) + ".\n";
+        }
+        s += "\n";
+    }
+
+    // per-fold tables
+    s += "## Per fold\n\n";
+    for (const auto& f : r.folds) {
+        s += "### held out: " + f.held_out + "\n\n";
+        s += std::to_string(f.train_clips) + " training clips, " + std::to_string(f.test_inputs) + " neutral inputs" +
+             (f.missing_targets ? ", " + std::to_string(f.missing_targets) + " (input, target) pairs without a real target clip skipped" : "") +
+             "; training " + detail::fmt(f.train_seconds / 60.0, 1) + " min, evaluation " + detail::fmt(f.eval_seconds, 1) +
+             " s; training-set diagnostics: D/acc " + detail::fmt(100 * f.train_d_acc, 0) + "%, G/cls " + detail::fmt(f.train_g_cls, 3) +
+             ", emotion classifier on its training clips " + detail::fmt(100 * f.classifier_train_acc, 0) + "%. Loss curves: `folds/" +
+             f.held_out + "/losses.svg`.\n\n| target | method |";
+        for (const auto& m : ms) s += " " + m.title + " |";
+        s += "\n|---|---|";
+        for (std::size_t i = 0; i < ms.size(); ++i) s += "---|";
+        s += "\n";
+        for (const auto& t : targets)
+            for (const auto& me : method_names()) {
+                if (!std::isfinite(fold_mean(r, ms.front(), f.held_out, t, me))) continue;
+                s += "| " + t + " | " + me + " |";
+                for (const auto& m : ms) s += " " + detail::fmt(fold_mean(r, m, f.held_out, t, me)) + " |";
+                s += "\n";
+            }
+        s += "\n";
+    }
+
+    // closing note
+    s += "## Closing note\n\n";
+    if (losses.empty()) {
+        s += "Pooled over targets, StarGAN is better than every baseline on every metric with a direction.\n";
+    } else {
+        s += "Pooled over targets, StarGAN is not better than: ";
+        for (std::size_t i = 0; i < losses.size(); ++i) s += (i ? "; " : "") + losses[i];
+        s += ".\n\nWhat would likely fix it: where identity or mean-offset win on RMSE, G changes the held-out motion "
+             "in ways that do not generalise to an unseen motion type (too few contents to learn a content-independent "
+             "style: more motion types, or a content-preserving term such as a keyframe-space L1 to the input); where "
+             "nearest-neighbour wins on emotion recognition it copies a real emotional clip of another content (see its "
+             "content-kept column), which no transfer method can match without giving up content; where the ROM or speed "
+             "ratio errors lose, G's amplitude change is too small (raise lambda_cls or train longer, judged on the training "
+             "set) and the tempo is the training-set median, not the take's.\n";
+    }
+    return s;
+}
+
+/// @brief Writes report.md, results.csv (every sample), summary.csv and summary.svg into `dir` (atomically).
+/// @throws io_error when a file cannot be written.
+inline void write_report(const eval_result& r, const std::filesystem::path& dir)
+{
+    std::filesystem::create_directories(dir);
+    write_file_atomic(dir / "results.csv", samples_csv(r));
+    write_file_atomic(dir / "summary.csv", summary_csv(r));
+    if (!r.samples.empty()) write_file_atomic(dir / "summary.svg", summary_svg(r));
+    write_file_atomic(dir / "report.md", markdown_report(r));
+}
+
+}  // namespace handemo::eval

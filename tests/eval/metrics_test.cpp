@@ -1,0 +1,75 @@
+#include "helpers.hpp"
+
+#include <doctest/doctest.h>
+#include <handemo/eval/metrics.hpp>
+
+#include <cmath>
+
+using namespace handemo;
+using namespace handemo::eval;
+using handemo::eval::test::sine_clip;
+
+TEST_CASE("keyframe_rmse of a constant offset is the offset; differences are wrapped")
+{
+    const clip a = sine_clip(61, 30, 20);
+    CHECK(keyframe_rmse(a, a) == doctest::Approx(0.0));
+    for (double off : {5.0, -12.5}) {
+        const clip b = sine_clip(61, 30, 20, off);
+        CHECK(keyframe_rmse(a, b) == doctest::Approx(std::abs(off)).epsilon(1e-9));
+    }
+    // a full turn is no difference, 350 degrees is 10
+    CHECK(keyframe_rmse(a, sine_clip(61, 30, 20, 360.0)) == doctest::Approx(0.0).epsilon(1e-9));
+    CHECK(keyframe_rmse(a, sine_clip(61, 30, 20, 350.0)) == doctest::Approx(10.0).epsilon(1e-9));
+    // keyframes are uniform in time: the same motion at another frame count compares equal
+    CHECK(keyframe_rmse(sine_clip(61, 30, 20), sine_clip(121, 60, 20)) == doctest::Approx(0.0).epsilon(1e-9));
+    CHECK(wrap_degrees(190) == doctest::Approx(-170));
+    CHECK(wrap_degrees(-180) == doctest::Approx(180));
+}
+
+TEST_CASE("keyframe_rmse refuses clips of different skeletons")
+{
+    clip a = sine_clip(31, 30, 10);
+    clip b = a;
+    b.skel.joints.pop_back();
+    b.angles.resize(b.frames * b.skel.size() * 3);
+    b.positions.resize(b.angles.size());
+    CHECK_THROWS_AS(keyframe_rmse(a, b), shape_error);
+}
+
+TEST_CASE("range of motion and speed of a scaled and a time-stretched clip")
+{
+    // one sine cycle sampled so that its extremes are frames: ROM = 2 amp exactly
+    const clip a = sine_clip(81, 40, 10);
+    const clip s = sine_clip(81, 40, 25);
+    CHECK(range_of_motion(s) / range_of_motion(a) == doctest::Approx(2.5).epsilon(1e-9));
+    CHECK(mean_speed(s) / mean_speed(a) == doctest::Approx(2.5).epsilon(1e-9));
+    // the same motion over twice the duration (same fps): same ROM, half the speed
+    const clip slow = sine_clip(161, 40, 10);
+    CHECK(range_of_motion(slow) == doctest::Approx(range_of_motion(a)).epsilon(1e-3));
+    CHECK(mean_speed(slow) / mean_speed(a) == doctest::Approx(0.5).epsilon(1e-3));
+    // measured on the keyframe view the ratios are the same
+    const auto ca = measure(a), cs = measure(s), cslow = measure(slow);
+    CHECK(ratio(cs.range_of_motion, ca.range_of_motion, "rom") == doctest::Approx(2.5).epsilon(1e-9));
+    CHECK(ratio(cslow.speed, ca.speed, "speed") == doctest::Approx(0.5).epsilon(1e-3));
+    CHECK(cslow.duration == doctest::Approx(4.0));
+    // a ramp of 2 degrees per frame at 30 fps moves at 60 deg/s
+    clip r = clip::make(hand_skeleton(), 10, 30);
+    for (std::size_t i = 0; i < r.angles.size(); ++i) r.angles[i] = 2.0 * static_cast<double>(i / (r.skel.size() * 3));
+    CHECK(mean_speed(r) == doctest::Approx(60.0));
+    CHECK(range_of_motion(r) == doctest::Approx(18.0));
+    CHECK(log_ratio_error(2.0, 1.0) == doctest::Approx(std::log(2.0)));
+    CHECK(log_ratio_error(0.5, 1.0) == doctest::Approx(std::log(2.0)));
+}
+
+TEST_CASE("keyframe view keeps the keyframes; ratios to a still input are refused")
+{
+    const clip a = sine_clip(81, 40, 10, 3.0, 2.0);
+    const clip v = keyframe_view(a);
+    CHECK(v.frames == a.frames);
+    CHECK(keyframe_rmse(a, v) == doctest::Approx(0.0).epsilon(1e-9));
+    const clip still = clip::make(hand_skeleton(), 20, 30);
+    CHECK(range_of_motion(still) == 0.0);
+    CHECK_THROWS_AS(ratio(1.0, range_of_motion(still), "range of motion"), value_error);
+    clip one = clip::make(hand_skeleton(), 1, 30);
+    CHECK_THROWS_AS(mean_speed(one), value_error);
+}

@@ -1,0 +1,104 @@
+#include <doctest/doctest.h>
+#include <handemo/eval/protocol.hpp>
+#include <handemo/motion/synth.hpp>
+
+#include <filesystem>
+#include <set>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using namespace handemo;
+using namespace handemo::eval;
+using namespace handemo::stargan;
+
+namespace {
+
+/// 3 motion types x 5 emotions x 1 take of the synthetic hand set.
+std::vector<labelled_clip> toy_set()
+{
+    std::vector<labelled_clip> out;
+    for (auto& it : synthesize_dataset(1, 3)) {
+        if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing) continue;
+        labelled_clip c;
+        c.path = it.file_stem + ".bvh";
+        const auto n = parse_clip_name(it.file_stem);
+        c.content = n.content, c.emotion = n.emotion, c.take = n.take, c.motion = it.c;
+        out.push_back(std::move(c));
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("end to end: hand-tiny, two folds, report written")
+{
+    const auto clips = toy_set();
+    const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
+    eval_options o = {};
+    o.train = default_train_options();
+    o.train.iters = 12;
+    o.train.threads = 2;
+    o.folds = {"patting", "gripping"};
+    o.progress_out = nullptr;
+    o.command = "test";
+    o.data = "toy";
+    const fs::path dir = fs::temp_directory_path() / ("handemo_eval_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    const auto r = run_eval<hand_tiny>(clips, info, o, dir);
+    write_report(r, dir);
+
+    REQUIRE(r.folds.size() == 2);
+    CHECK(r.folds[0].held_out == "patting");
+    CHECK(r.folds[0].train_clips == 10);
+    CHECK(r.folds[0].test_inputs == 1);
+    // 2 folds x 4 targets x 1 take x 5 methods
+    CHECK(r.samples.size() == 40);
+    std::set<std::string> methods;
+    for (const auto& s : r.samples) {
+        methods.insert(s.method);
+        CHECK(std::isfinite(s.rmse_real));
+        CHECK(s.target != "neutral");
+        if (s.method == "identity") {
+            CHECK(s.rmse_input == doctest::Approx(0.0));
+            CHECK(s.content_ok);
+            CHECK(s.rom_ratio == doctest::Approx(1.0));
+            CHECK(s.speed_ratio == doctest::Approx(1.0));
+        }
+        if (s.method == "real") {
+            CHECK(s.rmse_real == doctest::Approx(0.0));
+            CHECK(s.rom_ratio == doctest::Approx(s.real_rom_ratio));
+            CHECK(s.rom_error == doctest::Approx(0.0));
+        }
+        if (s.method == "nearest-neighbour") CHECK(s.predicted_content != s.fold);  // a clip of another content
+    }
+    CHECK(methods.size() == 5);
+    for (const char* f : {"report.md", "results.csv", "summary.csv", "summary.svg", "folds/patting/checkpoint.safetensors",
+                          "folds/patting/losses.svg", "folds/gripping/log.csv"})
+        CHECK_MESSAGE(fs::exists(dir / f), f);
+    const std::string md = read_file(dir / "report.md");
+    CHECK(md.find("## Where StarGAN beats each baseline") != std::string::npos);
+    CHECK(md.find("### held out: gripping") != std::string::npos);
+    CHECK(md.find("## Closing note") != std::string::npos);
+    const std::string csv = read_file(dir / "results.csv");
+    CHECK(std::count(csv.begin(), csv.end(), '\n') == 41);
+    // comparisons exist for each baseline and metric with a direction, pooled and per target
+    const auto cmp = compare_with_baselines(r);
+    CHECK(cmp.size() == 3 * 5 * 5);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("eval refuses an unknown held-out content and a one-content data set")
+{
+    auto clips = toy_set();
+    const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
+    eval_options o;
+    o.train.iters = 1;
+    o.progress_out = nullptr;
+    o.folds = {"swimming"};
+    const fs::path dir = fs::temp_directory_path() / "handemo_eval_never_written";
+    CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("swimming"), value_error);
+    std::erase_if(clips, [](const labelled_clip& c) { return c.content != "patting"; });
+    o.folds.clear();
+    CHECK_THROWS_AS(run_eval<hand_tiny>(clips, info, o, dir), value_error);
+    CHECK(!fs::exists(dir));
+}
