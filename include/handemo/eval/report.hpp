@@ -79,8 +79,8 @@ inline const std::vector<metric_def>& metric_defs()
         {"rmse_input", "RMSE to input (deg)", 0, [](const sample_record& r) { return r.rmse_input; }},
         {"rom_ratio", "ROM ratio out/in", 0, [](const sample_record& r) { return r.rom_ratio; }},
         {"speed_ratio", "speed ratio out/in", 0, [](const sample_record& r) { return r.speed_ratio; }},
-        {"rom_error", "ROM ratio error |log(out/real)|", -1, [](const sample_record& r) { return r.rom_error; }},
-        {"speed_error", "speed ratio error |log(out/real)|", -1, [](const sample_record& r) { return r.speed_error; }},
+        {"rom_error", "ROM ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.rom_error; }},
+        {"speed_error", "speed ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.speed_error; }},
     };
     return m;
 }
@@ -253,7 +253,7 @@ inline std::string markdown_report(const eval_result& r)
     s += "# handemo eval: " + r.config + " on " + r.data + "\n\n";
     s += "Command: `" + r.command + "`\n\n";
     s += "Leave-one-content-out: " + std::to_string(r.folds.size()) +
-         " folds; in each, StarGAN is trained on every other content (motion type), then every held-out `" + r.neutral +
+         " fold(s); in each, StarGAN is trained on every other content (motion type), then every held-out `" + r.neutral +
          "` take is transferred to each other emotion and compared with the held-out take of that emotion (same take "
          "index). Total time " + detail::fmt(r.seconds / 60.0, 1) + " min.\n\n";
     s += "Methods: **stargan** (the trained G, tempo from the training set's duration ratios); **identity** (output = input); "
@@ -264,7 +264,7 @@ inline std::string markdown_report(const eval_result& r)
          "nearest-centroid classifier (shrunk pooled within-class covariance) on keyframe features, trained only on the "
          "real training clips of the fold, never on the discriminator; content kept: the nearest `" + r.neutral +
          "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "
-         "output / input measured on 9-keyframe reconstructions; ratio errors |log(ratio / real ratio)|.\n\n";
+         "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio).\n\n";
     s += "Options:\n\n```\n" + r.options_text + "```\n\n";
 
     // summary
