@@ -58,6 +58,7 @@ struct eval_result {
     std::string neutral;
     std::string options_text;  ///< training and evaluation options, one `key value` per line
     std::vector<fold_summary> folds;
+    std::size_t planned_folds = 0;  ///< folds the run was asked for (more than folds.size() in a partial report)
     std::vector<sample_record> samples;
     double seconds = 0;
 };
@@ -252,6 +253,9 @@ inline std::string markdown_report(const eval_result& r)
     std::string s;
     s += "# handemo eval: " + r.config + " on " + r.data + "\n\n";
     s += "Command: `" + r.command + "`\n\n";
+    if (r.planned_folds > r.folds.size())
+        s += "**Partial report: " + std::to_string(r.folds.size()) + " of " + std::to_string(r.planned_folds) +
+             " folds done.**\n\n";
     s += "Leave-one-content-out: " + std::to_string(r.folds.size()) +
          " fold(s); in each, StarGAN is trained on every other content (motion type), then every held-out `" + r.neutral +
          "` take is transferred to each other emotion and compared with the held-out take of that emotion (same take "
