@@ -301,7 +301,7 @@ inline std::string markdown_report(const eval_result& r)
             std::string win, lose;
             for (const auto& c : cmp) {
                 if (c.baseline != b || c.metric != m.key) continue;
-                const std::string item = c.target + " (" + detail::fmt(c.stargan) + " vs " + detail::fmt(c.other) + ", " +
+                const std::string item = (c.target == "all" ? std::string("pooled") : c.target) + " (" + detail::fmt(c.stargan) + " vs " + detail::fmt(c.other) + ", " +
                                          std::to_string(c.folds_better) + "/" + std::to_string(c.folds) + " folds)";
                 (c.better ? win : lose) += (c.better ? (win.empty() ? "" : ", ") : (lose.empty() ? "" : ", ")) + item;
                 if (!c.better && c.target == "all") losses.push_back(b + " on " + m.title);

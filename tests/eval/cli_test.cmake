@@ -1,0 +1,40 @@
+# Runs the built `handemo eval` on a tiny synthetic set: hand-tiny, two folds, a few iterations; the report
+# files must exist with one CSV row per (fold, target, take, method); bad input must fail with one line.
+# Variables: HANDEMO_CLI, WORK_DIR.
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+include(${CMAKE_CURRENT_LIST_DIR}/../cli_expect.cmake)
+
+run_ok(synth synth --out ${WORK_DIR}/data --takes 1 --seed 2)
+run_ok(eval eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/report --iters 8 --threads 1
+       --folds patting,gripping --seed 3)
+foreach(f report.md results.csv summary.csv summary.svg folds/patting/checkpoint.safetensors folds/gripping/losses.svg)
+  if(NOT EXISTS ${WORK_DIR}/report/${f})
+    message(FATAL_ERROR "eval did not write ${f}")
+  endif()
+endforeach()
+file(STRINGS ${WORK_DIR}/report/results.csv rows)
+list(LENGTH rows n)
+# header + 2 folds x 4 targets x 1 take x 5 methods
+if(NOT n EQUAL 41)
+  message(FATAL_ERROR "results.csv has ${n} lines, expected 41")
+endif()
+file(READ ${WORK_DIR}/report/report.md md)
+foreach(s "### held out: patting" "### held out: gripping" "Where StarGAN beats each baseline" "--folds" "Partial report")
+  string(FIND "${md}" "${s}" at)
+  if(s STREQUAL "Partial report")
+    if(NOT at EQUAL -1)
+      message(FATAL_ERROR "a finished run's report.md says it is partial")
+    endif()
+  elseif(at EQUAL -1)
+    message(FATAL_ERROR "report.md lacks '${s}'")
+  endif()
+endforeach()
+
+run_fail(eval_config eval --data ${WORK_DIR}/data --config hand-huge --report ${WORK_DIR}/bad)
+expect_error_matches("unknown configuration 'hand-huge'")
+run_fail(eval_fold eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --folds swimming)
+expect_error_matches("content 'swimming' is not in the data set")
+run_fail(eval_data eval --data ${WORK_DIR}/missing --config hand-tiny --report ${WORK_DIR}/bad)
+expect_error_matches("is not a folder")
+run_fail(eval_body_on_hand eval --data ${WORK_DIR}/data --config body-embedded --report ${WORK_DIR}/bad --iters 1)
