@@ -116,6 +116,8 @@ static handemo::cli::add_command reg_demo{1, [](CLI::App& app) {
     sub->add_option("--lr", o->lr, "Learning rate of G and D")->capture_default_str();
     sub->add_option("--lambda-cls", o->opt.lambda_cls, "Weight of the domain classification loss")->capture_default_str();
     sub->add_option("--lambda-gp", o->opt.lambda_gp, "Weight of the gradient penalty")->capture_default_str();
+    sub->add_option("--lambda-rec", o->opt.lambda_rec, "Weight of the reconstruction loss")->capture_default_str();
+    sub->add_option("--n-critic", o->opt.n_critic, "D iterations per G iteration")->capture_default_str();
     sub->add_option("--threads", o->opt.threads, "Worker threads (0: all cores)")->capture_default_str();
     sub->add_option("--seed", o->opt.seed, "Seed of the data and the training")->capture_default_str();
     sub->callback([o] { run_demo(*o); });

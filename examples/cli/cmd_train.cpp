@@ -40,7 +40,11 @@ void run_train(train_cli& o)
     std::cout << ", configuration " << o.config << ", " << o.opt.iters << " iterations\n";
     with_config(o.config, [&]<stargan_config Config>(const config_info& info) {
         std::optional<angle_range> range;
-        if (o.resume) range = read_checkpoint(fs::path(o.out) / "checkpoint.safetensors").second.range;
+        if (o.resume) {
+            const fs::path ck = fs::path(o.out) / "checkpoint.safetensors";
+            if (!fs::exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
+            range = read_checkpoint(ck).second.range;  // a resumed run keeps its Eq. 3 range
+        }
         trainer<Config> tr(info, prepare_data<Config>(clips, info, range), o.opt);
         tr.run(o.out, o.resume);
         const std::string svg = plot_losses_svg(loss_log_csv(tr.log()), {.title = "handemo train " + info.name + " (" + o.data + ")"});
