@@ -24,7 +24,7 @@ struct demo_cli {
     std::string config = "hand-embedded";
     std::string held_out = "pushing";
     int takes = 3;
-    double lr = 5e-4;
+    double lr = 1e-4;
     handemo::stargan::train_options opt;
 };
 
@@ -106,7 +106,8 @@ void run_demo(demo_cli& o)
 static handemo::cli::add_command reg_demo{1, [](CLI::App& app) {
     auto* sub = app.add_subcommand("demo", "Main job: synthesise data, train leaving one motion type out, transfer it to every emotion");
     auto o = std::make_shared<demo_cli>();
-    o->opt.iters = 1500;
+    o->opt.iters = 3000;
+    o->opt.lambda_cls = 5;  // D learns the emotion classes on the synthetic set (lambda_cls 1 leaves it at chance: the penalty dominates)
     o->opt.checkpoint_every = 500;
     sub->add_option("--out", o->out, "Output folder")->capture_default_str();
     sub->add_option("--config", o->config, "StarGAN configuration")->capture_default_str();
