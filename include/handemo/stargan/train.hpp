@@ -303,8 +303,8 @@ public:
     const std::vector<loss_row>& log() const noexcept { return log_; }
     const prepared_data& data() const noexcept { return data_; }
 
-    /// @brief One D iteration (and a G iteration every n_critic). Returns false (and throws nothing)
-    /// never: a non-finite loss throws value_error naming the step and the term.
+    /// @brief One D iteration (and a G iteration every n_critic).
+    /// @throws value_error naming the step and the term when a loss is not finite (before any update).
     void train_step()
     {
         next_batch();
