@@ -60,12 +60,19 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--lambda-gp", t.lambda_gp, "Weight of the gradient penalty")->capture_default_str();
     sub->add_option("--n-critic", t.n_critic, "D iterations per G iteration")->capture_default_str();
     sub->add_option("--decay-start", t.decay_start, "Fraction of training after which the learning rate decays linearly to 0")->capture_default_str();
+    sub->add_flag("--reuse-models", o->opt.reuse_models,
+                  "Load each fold's model from REPORT/folds/<content>/ when it was trained with the same options (re-score without retraining)");
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
     sub->callback([o, sub] {
         o->command = "handemo eval";
         for (const auto* opt : sub->get_options())
-            if (opt->count() > 0 && opt->get_name() != "--help")
+            if (opt->count() > 0 && opt->get_name() != "--help") {
+                if (opt->get_expected_min() == 0) {
+                    o->command += " " + opt->get_name();
+                    continue;
+                }
                 for (const auto& v : opt->as<std::vector<std::string>>()) o->command += " " + opt->get_name() + " " + v;
+            }
         run_eval_cli(*o);
     });
 }};

@@ -61,6 +61,21 @@ TEST_CASE("range of motion and speed of a scaled and a time-stretched clip")
     CHECK(log_ratio_error(0.5, 1.0) == doctest::Approx(std::log(2.0)));
 }
 
+TEST_CASE("range of motion counts a channel that unwraps over several turns as at most 360 degrees")
+{
+    // a channel spinning 5 full turns in 18-degree steps: unwrapped it spans 1800 degrees; within 180 of the
+    // first frame the samples cover -162 .. 180, a range of 342
+    clip c = clip::make(hand_skeleton(), 101, 30);
+    const std::size_t J3 = c.skel.size() * 3;
+    for (std::size_t f = 0; f < c.frames; ++f) c.angles[f * J3] = 18.0 * static_cast<double>(f);
+    CHECK(range_of_motion(c) * static_cast<double>(J3) == doctest::Approx(342.0));
+    // a swing of +-30 about 170 degrees (crossing +-180 in the file) is 60 degrees
+    clip s = clip::make(hand_skeleton(), 61, 30);
+    for (std::size_t f = 0; f < s.frames; ++f)
+        s.angles[f * J3] = wrap_degrees(170.0 + 30.0 * std::sin(2 * 3.141592653589793 * static_cast<double>(f) / 60.0));
+    CHECK(range_of_motion(s) * static_cast<double>(J3) == doctest::Approx(60.0).epsilon(1e-3));
+}
+
 TEST_CASE("keyframe view keeps the keyframes; ratios to a still input are refused")
 {
     const clip a = sine_clip(81, 40, 10, 3.0, 2.0);

@@ -84,6 +84,22 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     // comparisons exist for each baseline and metric with a direction, pooled and per target
     const auto cmp = compare_with_baselines(r);
     CHECK(cmp.size() == 3 * 5 * 5);
+    for (const auto& f : r.folds) {
+        CHECK(std::isfinite(f.seen_rmse_stargan));
+        CHECK(f.seen_rmse_identity > 0);
+        CHECK(!f.reused_model);
+    }
+
+    // re-scoring with the saved models gives the same numbers without training
+    o.reuse_models = true;
+    const auto again = run_eval<hand_tiny>(clips, info, o, dir);
+    REQUIRE(again.samples.size() == r.samples.size());
+    for (std::size_t i = 0; i < r.samples.size(); ++i) CHECK(again.samples[i].rmse_real == r.samples[i].rmse_real);
+    CHECK(again.folds[0].reused_model);
+    CHECK(again.folds[1].seen_rmse_stargan == r.folds[1].seen_rmse_stargan);
+    // ... but not when the options differ
+    o.train.iters = 13;
+    CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("--reuse-models"), value_error);
     fs::remove_all(dir);
 }
 

@@ -3,7 +3,7 @@
 // keyframes of Eq. 2, so clips of different durations compare keyframe by keyframe; each difference is
 // wrapped into (-180, 180] so a 359-degree step of an unwrapped yaw counts as 1 degree), and Table 1's
 // characteristics as measurable quantities: range of motion (mean over channels of max - min of the
-// unwrapped angle) and speed (mean absolute angular velocity, degrees per second). The ratios of the
+// angle, taken within 180 degrees of the first frame) and speed (mean absolute angular velocity, degrees per second). The ratios of the
 // evaluation are taken on each clip's keyframe view (K keyframes reconstructed at the clip's own frame
 // count, Section 3.4), so a transferred clip, which only ever has K keyframes of detail, is not compared
 // with the tremor and noise of a raw capture.
@@ -58,19 +58,25 @@ double keyframe_rmse(const clip& a, const clip& b)
     return keyframe_rmse(extract_keyframes<K>(a), extract_keyframes<K>(b));
 }
 
-/// @brief Mean over joints and axes of the range (max - min, degrees) of the unwrapped angle tracks.
+/// @brief Mean over joints and axes of the range (max - min, degrees) of each angle track, every frame's
+/// angle taken within 180 degrees of the track's first frame (first + wrap(angle - first)). A channel's range
+/// is so at most 360 degrees: an Euler track that unwraps by several turns (a gimbal flip repeated, as in
+/// some Bandai spine tracks, which unwrap to +-1980 degrees) cannot dominate the mean.
 inline double range_of_motion(const clip& c)
 {
     if (c.frames == 0 || c.skel.size() == 0) throw value_error("range_of_motion: empty clip");
-    clip u = c;
-    unwrap_angles(u);
     const std::size_t J3 = c.skel.size() * 3;
+    if (c.angles.size() != c.frames * J3)
+        throw shape_error("range_of_motion: clip holds " + std::to_string(c.angles.size()) + " angles, expected frames*joints*3 = " +
+                          std::to_string(c.frames * J3));
     double total = 0;
     for (std::size_t k = 0; k < J3; ++k) {
-        double lo = u.angles[k], hi = lo;
+        const double first = c.angles[k];
+        double lo = 0, hi = 0;
         for (std::size_t f = 1; f < c.frames; ++f) {
-            lo = std::min(lo, u.angles[f * J3 + k]);
-            hi = std::max(hi, u.angles[f * J3 + k]);
+            const double d = wrap_degrees(c.angles[f * J3 + k] - first);
+            lo = std::min(lo, d);
+            hi = std::max(hi, d);
         }
         total += hi - lo;
     }

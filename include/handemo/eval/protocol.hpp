@@ -36,6 +36,9 @@ struct eval_options {
     std::string command;            ///< recorded in the report
     std::string data;               ///< data set name recorded in the report
     bool write_partial = true;      ///< rewrite the report in out_dir after every fold (an interrupted run leaves one)
+    /// Load a fold's model from out_dir/folds/<content>/checkpoint.safetensors instead of training it when that
+    /// checkpoint was trained with exactly these options to the end (re-scoring after a metric change).
+    bool reuse_models = false;
 };
 
 /// @brief Training defaults of the evaluation: StarGAN's (lr 1e-4, lambda_rec 10, lambda_gp 10, n_critic 5)
@@ -70,6 +73,26 @@ inline double tail_mean(const std::vector<stargan::loss_row>& log, std::size_t c
     const std::size_t n = std::max<std::size_t>(1, log.size() / 10);
     double s = 0;
     for (std::size_t i = log.size() - n; i < log.size(); ++i) s += log[i].values[col];
+    return s / static_cast<double>(n);
+}
+
+/// Mean of the column `name` over the last 10% of the rows of a log.csv text (NaN when absent).
+inline double csv_tail_mean(const std::string& text, const std::string& name)
+{
+    std::vector<std::vector<std::string>> rows;
+    std::size_t pos = 0;
+    while (pos < text.size()) {
+        const std::size_t nl = std::min(text.find('\n', pos), text.size());
+        rows.push_back(stargan::detail::split_csv_line(std::string_view(text).substr(pos, nl - pos)));
+        pos = nl + 1;
+    }
+    if (rows.size() < 2) return std::nan("");
+    const auto it = std::find(rows[0].begin(), rows[0].end(), name);
+    if (it == rows[0].end()) return std::nan("");
+    const auto col = static_cast<std::size_t>(it - rows[0].begin());
+    const std::size_t n = std::max<std::size_t>(1, (rows.size() - 1) / 10);
+    double s = 0;
+    for (std::size_t i = rows.size() - n; i < rows.size(); ++i) s += col < rows[i].size() ? std::atof(rows[i][col].c_str()) : std::nan("");
     return s / static_cast<double>(n);
 }
 
@@ -163,10 +186,22 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         // ---- train StarGAN on the other contents
         const fs::path fold_dir = out_dir / "folds" / held;
         auto t0 = clock::now();
-        {
-            auto to = opt.train;
-            to.seed = opt.train.seed + fi;
-            to.progress_out = opt.progress_out;
+        auto to = opt.train;
+        to.seed = opt.train.seed + fi;
+        to.progress_out = opt.progress_out;
+        const fs::path ck_path = fold_dir / "checkpoint.safetensors";
+        if (opt.reuse_models && fs::exists(ck_path)) {
+            const auto ck = stargan::read_checkpoint(ck_path).second;
+            if (ck.config != info.name || ck.step != to.iters || ck.options != to.to_json())
+                throw value_error("eval: --reuse-models: " + ck_path.string() + " is a " + ck.config + " model of " +
+                                  std::to_string(ck.step) + " steps with options " + ck.options.dump() + ", this run wants " +
+                                  info.name + ", " + std::to_string(to.iters) + " steps, " + to.to_json().dump() +
+                                  " (remove the folder or drop --reuse-models)");
+            const std::string log = fs::exists(fold_dir / "log.csv") ? read_file(fold_dir / "log.csv") : std::string();
+            fsum.train_d_acc = detail::csv_tail_mean(log, "D/acc");
+            fsum.train_g_cls = detail::csv_tail_mean(log, "G/cls");
+            fsum.reused_model = true;
+        } else {
             stargan::trainer<Config> tr(info, stargan::prepare_data<Config>(train, info), to);
             tr.run(fold_dir);
             fsum.train_d_acc = detail::tail_mean(tr.log(), 5);
@@ -190,6 +225,23 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
             std::size_t ok = 0;
             for (std::size_t i = 0; i < x.size(); ++i) ok += clf.predict(x[i]) == y[i];
             fsum.classifier_train_acc = static_cast<double>(ok) / static_cast<double>(x.size());
+        }
+
+        // ---- seen-content diagnostic: the training contents' neutral takes to their real targets
+        {
+            double ss = 0, si = 0;
+            std::size_t n = 0;
+            for (const auto* in : train_p) {
+                if (in->src->emotion != info.neutral) continue;
+                for (const auto* t : train_p) {
+                    if (t->src->content != in->src->content || t->src->take != in->src->take || t->src->emotion == info.neutral) continue;
+                    ss += keyframe_rmse(extract_keyframes<K>(model.transfer(in->src->motion, t->src->emotion).motion), t->kf);
+                    si += keyframe_rmse(in->kf, t->kf);
+                    ++n;
+                }
+            }
+            fsum.seen_rmse_stargan = n ? ss / static_cast<double>(n) : std::nan("");
+            fsum.seen_rmse_identity = n ? si / static_cast<double>(n) : std::nan("");
         }
 
         // ---- transfer every held-out neutral take to every other emotion

@@ -49,6 +49,11 @@ struct fold_summary {
     double train_d_acc = 0;  ///< mean D/acc (domain classifier on real training batches) over the last 10% of logged steps
     double train_g_cls = 0;  ///< mean G/cls over the same steps
     double classifier_train_acc = 0;  ///< the emotion classifier's accuracy on its own training clips
+    /// Seen-content diagnostic: mean keyframe RMSE to the real target when the neutral takes of the
+    /// training contents are transferred (StarGAN, and identity for scale): tells a model that does not fit
+    /// its training data from one that does not generalise to the held-out content.
+    double seen_rmse_stargan = 0, seen_rmse_identity = 0;
+    bool reused_model = false;  ///< the fold's model was loaded (--reuse-models), not trained in this run
 };
 
 /// @brief Everything one evaluation run produced.
@@ -320,7 +325,10 @@ inline std::string markdown_report(const eval_result& r)
              (f.missing_targets ? ", " + std::to_string(f.missing_targets) + " (input, target) pairs without a real target clip skipped" : "") +
              "; training " + detail::fmt(f.train_seconds / 60.0, 1) + " min, evaluation " + detail::fmt(f.eval_seconds, 1) +
              " s; training-set diagnostics: D/acc " + detail::fmt(100 * f.train_d_acc, 0) + "%, G/cls " + detail::fmt(f.train_g_cls, 3) +
-             ", emotion classifier on its training clips " + detail::fmt(100 * f.classifier_train_acc, 0) + "%. Loss curves: `folds/" +
+             ", emotion classifier on its training clips " + detail::fmt(100 * f.classifier_train_acc, 0) +
+             "%; seen-content transfer (training contents' neutral takes to their real targets) RMSE " +
+             detail::fmt(f.seen_rmse_stargan) + " deg for StarGAN vs " + detail::fmt(f.seen_rmse_identity) + " for identity" +
+             (f.reused_model ? "; model reused from an earlier run" : "") + ". Loss curves: `folds/" +
              f.held_out + "/losses.svg`.\n\n| target | method |";
         for (const auto& m : ms) s += " " + m.title + " |";
         s += "\n|---|---|";
