@@ -218,3 +218,18 @@ TEST_CASE("transfer: shapes, durations from the tempo factors, skeleton and emot
     const clip body = read_bvh(fs::path(HANDEMO_SHARED_DIR) / "data" / "xia" / "neutral_16_000.bvh");
     CHECK_THROWS_WITH_AS(model->transfer(body, "sad"), doctest::Contains("wrong skeleton"), shape_error);
 }
+
+TEST_CASE("transfer keeps a body's root translation and stretches it in time")
+{
+    const clip walk = read_bvh(fs::path(HANDEMO_SHARED_DIR) / "data" / "bandai" / "dataset-1_walk_normal_001.bvh");
+    const std::size_t n = 2 * walk.frames - 1, J3 = walk.skel.size() * 3;  // twice as slow
+    const auto pos = stretch_positions(walk, n);
+    REQUIRE(pos.size() == n * J3);
+    // frame 2k of the output is frame k of the input; odd frames lie halfway between their neighbours
+    for (std::size_t k = 0; k < walk.frames; ++k)
+        for (std::size_t i = 0; i < J3; ++i) REQUIRE(pos[2 * k * J3 + i] == doctest::Approx(walk.positions[k * J3 + i]));
+    const std::size_t hips = walk.skel.index_of("Hips");
+    for (std::size_t k = 0; k + 1 < walk.frames; ++k)
+        REQUIRE(pos[(2 * k + 1) * J3 + hips * 3 + 2] ==
+                doctest::Approx(0.5 * (walk.position(k, hips, 2) + walk.position(k + 1, hips, 2))));
+}
