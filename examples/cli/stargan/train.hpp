@@ -1,6 +1,9 @@
 // `handemo train --data DIR --out MODEL [...]`: trains a StarGAN emotion-transfer model (Section 3.3 of
 // the hand paper) on a folder of labelled BVH/CSV clips and writes checkpoints, the loss log and a loss plot.
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
+#include "options.hpp"
 
 #include <handemo/render/svg.hpp>
 #include <handemo/stargan.hpp>
@@ -11,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace handemo::cli::train_cmd {
 
 struct train_cli {
     std::string data, out, config = "hand-embedded";
@@ -21,13 +24,12 @@ struct train_cli {
     handemo::stargan::train_options opt;
 };
 
-void run_train(train_cli& o)
+inline void run_train(train_cli& o)
 {
     using namespace handemo;
     using namespace handemo::stargan;
     namespace fs = std::filesystem;
-    if (o.lr >= 0) o.opt.g_lr = o.opt.d_lr = o.lr;
-    o.opt.validate();
+    finish_train_options(o.opt, o.lr);
     load_options lo;
     lo.exclude_contents = o.exclude;
     const auto clips = load_folder(o.data, lo);
@@ -57,31 +59,21 @@ void run_train(train_cli& o)
     });
 }
 
-}  // namespace
+}  // namespace handemo::cli::train_cmd
 
 static handemo::cli::add_command reg_train{40, [](CLI::App& app) {
     auto* sub = app.add_subcommand("train", "Train a StarGAN emotion-transfer model on a folder of labelled clips");
-    auto o = std::make_shared<train_cli>();
+    auto o = std::make_shared<handemo::cli::train_cmd::train_cli>();
     auto& t = o->opt;
     sub->add_option("--data", o->data, "Folder of <prefix>_<content>_<emotion>_<take>.bvh|csv clips or with a manifest.csv")->required();
     sub->add_option("--out", o->out, "Model folder (checkpoint.safetensors, log.csv, losses.svg, ...)")->required();
     sub->add_option("--config", o->config, "hand-embedded | hand-paper | body-embedded | hand-tiny")->capture_default_str();
     sub->add_option("--iters", t.iters, "D iterations (G every --n-critic)")->capture_default_str();
     sub->add_option("--exclude-content", o->exclude, "Leave this content (motion type) out of training; repeatable");
-    sub->add_option("--threads", t.threads, "Worker threads (0: all cores)")->capture_default_str();
     sub->add_option("--seed", t.seed, "Random seed; same seed and threads give bitwise the same weights")->capture_default_str();
     sub->add_flag("--resume", o->resume, "Continue from MODEL/checkpoint.safetensors");
-    sub->add_option("--lr", o->lr, "Learning rate of both G and D (default 1e-4)");
-    sub->add_option("--g-lr", t.g_lr, "Learning rate of G")->capture_default_str();
-    sub->add_option("--d-lr", t.d_lr, "Learning rate of D")->capture_default_str();
-    sub->add_option("--lambda-cls", t.lambda_cls, "Weight of the domain classification loss")->capture_default_str();
-    sub->add_option("--lambda-rec", t.lambda_rec, "Weight of the reconstruction loss")->capture_default_str();
-    sub->add_option("--lambda-gp", t.lambda_gp, "Weight of the gradient penalty")->capture_default_str();
-    sub->add_option("--n-critic", t.n_critic, "D iterations per G iteration")->capture_default_str();
-    sub->add_option("--beta1", t.beta1, "Adam beta1")->capture_default_str();
-    sub->add_option("--beta2", t.beta2, "Adam beta2")->capture_default_str();
-    sub->add_option("--decay-start", t.decay_start, "Fraction of training after which the learning rate decays linearly to 0")->capture_default_str();
+    handemo::cli::add_train_options(sub, t, o->lr);
     sub->add_option("--checkpoint-every", t.checkpoint_every, "Iterations between checkpoints")->capture_default_str();
     sub->add_option("--log-every", t.log_every, "Iterations between rows of log.csv")->capture_default_str();
-    sub->callback([o] { run_train(*o); });
+    sub->callback([o] { handemo::cli::train_cmd::run_train(*o); });
 }};

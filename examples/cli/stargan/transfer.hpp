@@ -1,7 +1,9 @@
 // `handemo transfer --model MODEL --in IN.bvh|IN.bmp --emotion E --out OUT.bvh|OUT.bmp`: turns a motion into
 // the target emotion with a trained model (Section 3.4 of the hand paper: keyframes -> Eq. 3 image -> G ->
 // Eq. 6 -> interpolation, with the learned tempo factor).
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
 
 #include <handemo/image.hpp>
 #include <handemo/motion/codec_image.hpp>
@@ -12,20 +14,20 @@
 #include <memory>
 #include <string>
 
-namespace {
+namespace handemo::cli::transfer_cmd {
 
 struct transfer_cli {
     std::string model, in, emotion, out, from, like;
     std::size_t frames = 0;
 };
 
-bool has_ext(const std::string& p, const char* a, const char* b = nullptr)
+inline bool has_ext(const std::string& p, const char* a, const char* b = nullptr)
 {
     const auto e = std::filesystem::path(p).extension().string();
     return e == a || (b && e == b);
 }
 
-void run_transfer(const transfer_cli& o)
+inline void run_transfer(const transfer_cli& o)
 {
     using namespace handemo;
     using namespace handemo::stargan;
@@ -67,11 +69,11 @@ void run_transfer(const transfer_cli& o)
               << r.motion.frames << " frames) -> " << o.out << "\n";
 }
 
-}  // namespace
+}  // namespace handemo::cli::transfer_cmd
 
 static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     auto* sub = app.add_subcommand("transfer", "Turn a motion (BVH, or a motion image BMP/PNG) into another emotion with a trained model");
-    auto o = std::make_shared<transfer_cli>();
+    auto o = std::make_shared<handemo::cli::transfer_cmd::transfer_cli>();
     sub->add_option("--model", o->model, "Model folder or checkpoint.safetensors written by 'handemo train'")->required();
     sub->add_option("--in", o->in, "Input motion: .bvh, or a K x J motion image .bmp/.png")->required();
     sub->add_option("--emotion", o->emotion, "Target emotion (a domain of the model, e.g. angry)")->required();
@@ -79,5 +81,5 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     sub->add_option("--from", o->from, "Emotion of the input (default: the model's neutral domain); sets the tempo ratio");
     sub->add_option("--like", o->like, "Reference BVH for an image input and BVH output (skeleton, fps, frames)");
     sub->add_option("--frames", o->frames, "Output frame count for an image input (default: the reference's times the tempo)");
-    sub->callback([o] { run_transfer(*o); });
+    sub->callback([o] { handemo::cli::transfer_cmd::run_transfer(*o); });
 }};

@@ -1,7 +1,10 @@
 // `handemo demo --out DIR`: the main job end to end. Generates the synthetic hand dataset, trains the
 // hand-embedded StarGAN leaving one motion type out, transfers that unseen type's neutral take to every
 // other emotion, and writes BVH, BMP and filmstrip outputs with a comparison against the real clips.
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
+#include "options.hpp"
 
 #include <handemo/eval/metrics.hpp>
 #include <handemo/image.hpp>
@@ -17,26 +20,25 @@
 #include <memory>
 #include <string>
 
-namespace {
+namespace handemo::cli::demo_cmd {
 
 struct demo_cli {
     std::string out = "demo";
     std::string config = "hand-embedded";
     std::string held_out = "pushing";
     int takes = 3;
-    double lr = 1e-4;
+    double lr = -1;
     handemo::stargan::train_options opt;
 };
 
-void run_demo(demo_cli& o)
+inline void run_demo(demo_cli& o)
 {
     using namespace handemo;
     using namespace handemo::stargan;
     namespace fs = std::filesystem;
     const fs::path root(o.out), data = root / "data", model = root / "model", outdir = root / "transfer";
     const hand_motion held = hand_motion_from_string(o.held_out);
-    o.opt.g_lr = o.opt.d_lr = o.lr;
-    o.opt.validate();
+    finish_train_options(o.opt, o.lr);
 
     // 1. synthetic dataset
     std::cout << "demo 1/4: synthesising " << o.takes << " takes x 7 motions x 5 emotions into " << data.string() << "\n";
@@ -48,7 +50,7 @@ void run_demo(demo_cli& o)
     lo.exclude_contents = {std::string(to_string(held))};
     const auto clips = load_folder(data, lo);
     std::cout << "demo 2/4: training " << o.config << " on " << clips.size() << " clips (" << to_string(held)
-              << " left out), " << o.opt.iters << " iterations, lr " << o.lr << "\n";
+              << " left out), " << o.opt.iters << " iterations, lr " << o.opt.g_lr << ", lambda_cls " << o.opt.lambda_cls << "\n";
     with_config(o.config, [&]<stargan_config Config>(const config_info& info) {
         trainer<Config> tr(info, prepare_data<Config>(clips, info), o.opt);
         tr.run(model);
@@ -101,11 +103,11 @@ void run_demo(demo_cli& o)
               << "  " << (model / "losses.svg").string() << ", log.csv, checkpoint.safetensors   the trained model\n";
 }
 
-}  // namespace
+}  // namespace handemo::cli::demo_cmd
 
 static handemo::cli::add_command reg_demo{1, [](CLI::App& app) {
     auto* sub = app.add_subcommand("demo", "Main job: synthesise data, train leaving one motion type out, transfer it to every emotion");
-    auto o = std::make_shared<demo_cli>();
+    auto o = std::make_shared<handemo::cli::demo_cmd::demo_cli>();
     o->opt.iters = 3000;
     o->opt.lambda_cls = 5;  // D learns the emotion classes on the synthetic set (lambda_cls 1 leaves it at chance: the penalty dominates)
     o->opt.checkpoint_every = 500;
@@ -114,12 +116,7 @@ static handemo::cli::add_command reg_demo{1, [](CLI::App& app) {
     sub->add_option("--held-out", o->held_out, "Motion type left out of training and transferred")->capture_default_str();
     sub->add_option("--takes", o->takes, "Takes per motion/emotion pair")->capture_default_str();
     sub->add_option("--iters", o->opt.iters, "Training iterations")->capture_default_str();
-    sub->add_option("--lr", o->lr, "Learning rate of G and D")->capture_default_str();
-    sub->add_option("--lambda-cls", o->opt.lambda_cls, "Weight of the domain classification loss")->capture_default_str();
-    sub->add_option("--lambda-gp", o->opt.lambda_gp, "Weight of the gradient penalty")->capture_default_str();
-    sub->add_option("--lambda-rec", o->opt.lambda_rec, "Weight of the reconstruction loss")->capture_default_str();
-    sub->add_option("--n-critic", o->opt.n_critic, "D iterations per G iteration")->capture_default_str();
-    sub->add_option("--threads", o->opt.threads, "Worker threads (0: all cores)")->capture_default_str();
+    handemo::cli::add_train_options(sub, o->opt, o->lr);
     sub->add_option("--seed", o->opt.seed, "Seed of the data and the training")->capture_default_str();
-    sub->callback([o] { run_demo(*o); });
+    sub->callback([o] { handemo::cli::demo_cmd::run_demo(*o); });
 }};
