@@ -2,7 +2,9 @@
 // channel layout, frames, fps, duration, per-axis angle ranges: the P_j of Eq. 1), BMP/PNG motion images
 // (size, channel count, per-channel pixel min/max: the v of Eq. 3), and JSON (keys with a summary of each
 // value, e.g. the codec's range file with p_min/p_max of Eq. 3 and Eq. 6).
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
 
 #include <handemo.hpp>
 #include <handemo/image.hpp>
@@ -23,7 +25,7 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace handemo::cli::info_cmd {
 
 namespace fs = std::filesystem;
 
@@ -192,9 +194,10 @@ void describe(const std::string& file, const std::string& skeleton_bvh, std::ost
     out << s.str();
 }
 
-}  // namespace
+}  // namespace handemo::cli::info_cmd
 
 static handemo::cli::add_command reg_info{90, [](CLI::App& app) {
+    using namespace handemo::cli::info_cmd;
     auto* sub = app.add_subcommand("info", "Describe a BVH, CSV, BMP/PNG or JSON file");
     auto file = std::make_shared<std::string>();
     auto skel = std::make_shared<std::string>();

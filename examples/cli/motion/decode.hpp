@@ -4,7 +4,9 @@
 // at REF's frame rate, with REF's frame count unless --frames is given. Root translation is not encoded
 // in the image (the paper removes it) so the output keeps rest offsets. Prints the keyframe difference
 // to REF (at most (p_max - p_min) / 510 when IN is REF's own image).
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
 
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
@@ -17,7 +19,7 @@
 #include <memory>
 #include <string>
 
-namespace {
+namespace handemo::cli::decode_cmd {
 
 struct decode_options {
     std::string in, like, range, out, interp = "catmull-rom";
@@ -58,9 +60,10 @@ void run_decode(const decode_options& o)
     }
 }
 
-}  // namespace
+}  // namespace handemo::cli::decode_cmd
 
 static handemo::cli::add_command reg_decode{30, [](CLI::App& app) {
+    using namespace handemo::cli::decode_cmd;
     auto* sub = app.add_subcommand("decode", "Decode a motion image (Eq. 6) into a BVH clip on a reference skeleton");
     auto o = std::make_shared<decode_options>();
     sub->add_option("input", o->in, "Motion image (.bmp or .png)")->required();

@@ -1,7 +1,9 @@
 // `handemo plot LOG.csv --out losses.svg`: an SVG of StarGAN training losses (Eq. 4 / Eq. 5 terms, one
 // curve per CSV column after `step`, log y axis when the values span more than a decade), or, when the
 // CSV header is `metric,method,mean,std`, grouped bars with error bars of an evaluation summary.
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
 
 #include <handemo/core/io.hpp>
 #include <handemo/render/svg.hpp>

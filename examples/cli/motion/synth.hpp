@@ -1,7 +1,9 @@
 // `handemo synth --out DIR [--takes N] [--seed S] [--fps F]`: writes the synthetic hand-motion emotion
 // dataset (handemo/motion/synth.hpp: 7 motion types x 5 emotions x N takes, each exactly 2 cycles on the
 // 23-joint hand of Eq. 1) as hand_<motion>_<emotion>_<take>.bvh plus a matching .csv per take.
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
 
 #include <handemo/motion.hpp>
 
@@ -11,7 +13,7 @@
 #include <memory>
 #include <string>
 
-namespace {
+namespace handemo::cli::synth_cmd {
 
 struct synth_options {
     std::string out;
@@ -47,9 +49,10 @@ void run_synth(const synth_options& o)
               << " fps, seed " << o.seed << ") in " << dir.string() << "\n";
 }
 
-}  // namespace
+}  // namespace handemo::cli::synth_cmd
 
 static handemo::cli::add_command reg_synth{10, [](CLI::App& app) {
+    using namespace handemo::cli::synth_cmd;
     auto* sub = app.add_subcommand("synth", "Write the synthetic hand-motion emotion dataset (7 motions x 5 emotions) as BVH + CSV");
     auto o = std::make_shared<synth_options>();
     sub->add_option("--out", o->out, "Output directory (created if missing)")->required();

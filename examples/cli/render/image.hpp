@@ -1,7 +1,9 @@
 // `handemo image IN.bmp --out view.png [--joints hand|none] [--scale N]`: the hand paper's Figure 3 view of
 // a motion image (Eq. 3: K keyframes x J joints, RGB = x/y/z angles), enlarged with nearest-neighbour
 // sampling, keyframe indices along the rows and joint names along the columns.
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
 
 #include <handemo/image.hpp>
 #include <handemo/motion/hand.hpp>

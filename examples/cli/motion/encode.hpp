@@ -5,7 +5,9 @@
 // OUT/<stem>.bmp (lossless, as the paper), optionally .png, and OUT/index.json with the labels parsed from
 // hand_<motion>_<emotion>_<take> names. Prints the codec's round-trip error (Eq. 3 then Eq. 6) against
 // its bound (p_max - p_min) / 510.
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
 
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
@@ -21,7 +23,7 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace handemo::cli::encode_cmd {
 
 namespace fs = std::filesystem;
 using dyn_keyframes = handemo::keyframes<handemo::dynamic_keyframes>;
@@ -117,9 +119,10 @@ void run_encode(const encode_options& o)
     std::cout << "\n";
 }
 
-}  // namespace
+}  // namespace handemo::cli::encode_cmd
 
 static handemo::cli::add_command reg_encode{20, [](CLI::App& app) {
+    using namespace handemo::cli::encode_cmd;
     auto* sub = app.add_subcommand("encode", "Encode BVH clips as motion images (keyframes, Eq. 3) plus range.json");
     auto o = std::make_shared<encode_options>();
     sub->add_option("input", o->in, "A .bvh file or a directory of .bvh files")->required();
