@@ -273,7 +273,9 @@ inline std::string markdown_report(const eval_result& r)
          "nearest-centroid classifier (shrunk pooled within-class covariance) on keyframe features, trained only on the "
          "real training clips of the fold, never on the discriminator; content kept: the nearest `" + r.neutral +
          "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "
-         "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio).\n\n";
+         "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio). "
+         "Caveat: nearest-neighbour outputs are clips the emotion classifier was trained on, so its emotion score is "
+         "in-sample (an upper bound), and it keeps no content by construction.\n\n";
     s += "Options:\n\n```\n" + r.options_text + "```\n\n";
 
     // summary
