@@ -353,7 +353,19 @@ inline std::string markdown_report(const eval_result& r)
     } else {
         s += "Pooled over targets, StarGAN is not better than: ";
         for (std::size_t i = 0; i < losses.size(); ++i) s += (i ? "; " : "") + losses[i];
-        s += ".\n\nWhat would likely fix it: where identity or mean-offset win on RMSE, G changes the held-out motion "
+        s += ".\n\n";
+        double seen_s = 0, seen_i = 0;
+        for (const auto& f : r.folds) seen_s += f.seen_rmse_stargan, seen_i += f.seen_rmse_identity;
+        if (!r.folds.empty() && seen_s > seen_i)
+            s += "StarGAN does not fit even the contents it was trained on: transferring their neutral takes gives a mean "
+                 "keyframe RMSE of " + detail::fmt(seen_s / double(r.folds.size())) + " deg to the real targets, against " +
+                 detail::fmt(seen_i / double(r.folds.size())) + " for doing nothing. The failure is one of fitting before "
+                 "it is one of generalisation: G cannot yet re-synthesise a motion image to the precision of the emotional "
+                 "differences (one Eq. 3 level is (p_max - p_min) / 255 degrees, and G's cycle L1 stays at several levels). "
+                 "What would likely fix it: far longer training (StarGAN's reference trains 200k iterations) judged by G/rec "
+                 "on the training set, a residual generator (output = input + a learned change, so that identity is free), "
+                 "and for bodies an angle range not set by unwrapping outliers.\n\n";
+        s += "Further: where identity or mean-offset win on RMSE, G changes the held-out motion "
              "in ways that do not generalise to an unseen motion type (too few contents to learn a content-independent "
              "style: more motion types, or a content-preserving term such as a keyframe-space L1 to the input); where "
              "nearest-neighbour wins on emotion recognition it copies a real emotional clip of another content (see its "
