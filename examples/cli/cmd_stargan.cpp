@@ -1,4 +1,4 @@
-// The StarGAN subcommands (train, transfer, demo) in one translation unit: each instantiates the trainer
+// The StarGAN subcommands (train, transfer, demo, eval) in one translation unit: each instantiates the trainer
 // and the generator for every named configuration, and compiling those once instead of once per
 // subcommand halves the CLI's build time.
 #include "registry.hpp"
@@ -7,3 +7,4 @@
 #include "stargan/train.hpp"
 #include "stargan/transfer.hpp"
 #include "stargan/demo.hpp"
+#include "stargan/eval.hpp"

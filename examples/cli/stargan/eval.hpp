@@ -1,7 +1,10 @@
 // `handemo eval --data DIR --config NAME --report OUT_DIR [...]`: the leave-one-content-out evaluation of
 // emotion transfer against captured motion and baselines (the hand paper's Section 5 future work); writes
 // report.md, results.csv, summary.csv, summary.svg and per-fold models and loss curves into OUT_DIR.
-#include "registry.hpp"
+#pragma once
+
+#include "../registry.hpp"
+#include "options.hpp"
 
 #include <handemo/eval/protocol.hpp>
 
@@ -10,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace handemo::cli::eval_cmd {
 
 struct eval_cli {
     std::string data, config = "hand-embedded", report;
@@ -22,8 +25,7 @@ struct eval_cli {
 void run_eval_cli(eval_cli& o)
 {
     using namespace handemo;
-    if (o.lr >= 0) o.opt.train.g_lr = o.opt.train.d_lr = o.lr;
-    o.opt.train.validate();
+    finish_train_options(o.opt.train, o.lr);
     o.opt.command = o.command;
     const auto r = eval::run_eval_named(o.data, o.config, o.opt, o.report);
     std::cout << "eval: " << r.folds.size() << " folds, " << r.samples.size() << " scored clips in " << r.seconds / 60.0
@@ -39,9 +41,10 @@ void run_eval_cli(eval_cli& o)
     }
 }
 
-}  // namespace
+}  // namespace handemo::cli::eval_cmd
 
 static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
+    using namespace handemo::cli::eval_cmd;
     auto* sub = app.add_subcommand("eval", "Leave-one-content-out evaluation of emotion transfer against real motion and baselines");
     auto o = std::make_shared<eval_cli>();
     auto& t = o->opt.train;
@@ -51,17 +54,7 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--iters", t.iters, "D iterations per fold (G every --n-critic)")->capture_default_str();
     sub->add_option("--seed", t.seed, "Random seed (fold i trains with seed + i)")->capture_default_str();
     sub->add_option("--folds", o->opt.folds, "Held-out contents to run, comma separated (default: all)")->delimiter(',');
-    sub->add_option("--threads", t.threads, "Worker threads (0: all cores)")->capture_default_str();
-    sub->add_option("--lr", o->lr, "Learning rate of both G and D (default 1e-4)");
-    sub->add_option("--g-lr", t.g_lr, "Learning rate of G")->capture_default_str();
-    sub->add_option("--d-lr", t.d_lr, "Learning rate of D")->capture_default_str();
-    sub->add_option("--lambda-cls", t.lambda_cls, "Weight of the domain classification loss")->capture_default_str();
-    sub->add_option("--lambda-rec", t.lambda_rec, "Weight of the reconstruction loss")->capture_default_str();
-    sub->add_option("--lambda-gp", t.lambda_gp, "Weight of the gradient penalty")->capture_default_str();
-    sub->add_option("--n-critic", t.n_critic, "D iterations per G iteration")->capture_default_str();
-    sub->add_option("--decay-start", t.decay_start, "Fraction of training after which the learning rate decays linearly to 0")->capture_default_str();
-    sub->add_flag("--reuse-models", o->opt.reuse_models,
-                  "Load each fold's model from REPORT/folds/<content>/ when it was trained with the same options (re-score without retraining)");
+    handemo::cli::add_train_options(sub, t, o->lr);
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
     sub->callback([o, sub] {
         o->command = "handemo eval";
