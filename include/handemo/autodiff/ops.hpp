@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 namespace handemo::autodiff {
 namespace detail {
@@ -411,6 +412,17 @@ int row_norm_raw(tape<T>& t, int a, int rows)
 }
 
 // ---------------------------------------------------------------- losses (first order)
+/// Max of z[0..C) and sum of exp(z - max): the stable log-sum-exp is max + log(sum).
+template <class T>
+std::pair<T, T> max_and_sum_exp(const T* z, int C) noexcept
+{
+    T mx = z[0];
+    for (int c = 1; c < C; ++c) mx = std::max(mx, z[c]);
+    T se = 0;
+    for (int c = 0; c < C; ++c) se += std::exp(z[c] - mx);
+    return {mx, se};
+}
+
 // Softmax cross-entropy, mean over the batch (PyTorch F.cross_entropy): logits z [N, C], labels y_n
 // (stored in aux as T). L = 1/N sum_n (logsumexp(z_n) - z_n[y_n]);  dL/dz[n, c] = g/N (softmax(z_n)[c] - [c = y_n]).
 template <class T>
@@ -424,10 +436,7 @@ void cross_entropy_backward(tape<T>& t, int self)
     const T f = n.adjoint[0] / T(N);
     for (int b = 0; b < N; ++b) {
         const T* zb = z + std::size_t(b) * C;
-        T mx = zb[0];
-        for (int c = 1; c < C; ++c) mx = std::max(mx, zb[c]);
-        T se = 0;
-        for (int c = 0; c < C; ++c) se += std::exp(zb[c] - mx);
+        const auto [mx, se] = max_and_sum_exp(zb, C);
         const int y = static_cast<int>(n.aux[b]);
         for (int c = 0; c < C; ++c)
             gz[std::size_t(b) * C + c] += f * (std::exp(zb[c] - mx) / se - (c == y ? T(1) : T(0)));
@@ -450,10 +459,7 @@ int cross_entropy_raw(tape<T>& t, int logits, int N, int C, const int* labels)
     T loss = 0;
     for (int b = 0; b < N; ++b) {
         const T* zb = z + std::size_t(b) * C;
-        T mx = zb[0];
-        for (int c = 1; c < C; ++c) mx = std::max(mx, zb[c]);
-        T se = 0;
-        for (int c = 0; c < C; ++c) se += std::exp(zb[c] - mx);
+        const auto [mx, se] = max_and_sum_exp(zb, C);
         loss += mx + std::log(se) - zb[labels[b]];
         n.aux[b] = T(labels[b]);
     }

@@ -137,6 +137,30 @@ private:
     aligned_buffer<T> values_, grads_;
 };
 
+
+/// Parameter storage and the parameter API shared by the generator and the discriminator.
+template <class T>
+class parameter_owner {
+public:
+    /// @brief Calls f(name, value, grad, shape) for every parameter, in PyTorch state_dict order.
+    template <class F>
+    void for_each_parameter(F&& f)
+    {
+        p_.for_each(f);
+    }
+    /// @brief Sets every parameter gradient to zero.
+    void zero_grad() noexcept { p_.zero_grad(); }
+    /// @brief Whether forward() makes parameters trainable leaves (false: constants, no weight grads).
+    void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
+    /// @brief Number of scalar parameters.
+    std::size_t parameter_count() const noexcept { return p_.numel(); }
+
+protected:
+    T* grad_or_null(std::size_t i) noexcept { return requires_grad_ ? p_.grad(i) : nullptr; }
+    param_store<T> p_;
+    bool requires_grad_ = true;
+};
+
 /// In-place InstanceNorm (affine, biased variance) and optional ReLU over [N, C, M]. Used by infer().
 template <class T>
 void instance_norm_relu_inplace(T* x, const T* gamma, const T* beta, int N, int C, int M, bool relu,
@@ -166,7 +190,10 @@ void instance_norm_relu_inplace(T* x, const T* gamma, const T* beta, int N, int 
 /// @tparam T float or double
 /// @tparam Config a stargan_config (hand_embedded, hand_paper, body_embedded, with_batch<...>)
 template <class T, stargan_config Config>
-class generator {
+class generator : public detail::parameter_owner<T> {
+    using detail::parameter_owner<T>::p_;
+    using detail::parameter_owner<T>::grad_or_null;
+
 public:
     using dims_type = dims<Config>;
     static constexpr std::size_t N = dims_type::N, C = dims_type::C, H = dims_type::H, W = dims_type::W,
@@ -205,18 +232,6 @@ public:
         p_.finish();
     }
 
-    /// @brief Calls f(name, value, grad, shape) for every parameter, in PyTorch state_dict order.
-    template <class F>
-    void for_each_parameter(F&& f)
-    {
-        p_.for_each(f);
-    }
-    /// @brief Sets every parameter gradient to zero.
-    void zero_grad() noexcept { p_.zero_grad(); }
-    /// @brief Whether forward() makes parameters trainable leaves (false: constants, no weight grads).
-    void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
-    /// @brief Number of scalar parameters.
-    std::size_t parameter_count() const noexcept { return p_.numel(); }
 
     /// @brief Records G(x, label) on the tape.
     /// @param x [N, 3, H, W] padded motion images  @param label [N, C] one-hot target domains
@@ -335,17 +350,15 @@ public:
                  {n, c, h, w, 2 * c, 4, 4, 2, 1},
                  {n, c, h, w, 3, 7, 7, 1, 3}}};
     }
-
-private:
-    T* grad_or_null(std::size_t i) noexcept { return requires_grad_ ? p_.grad(i) : nullptr; }
-    detail::param_store<T> p_;
-    bool requires_grad_ = true;
 };
 
 // ------------------------------------------------------------------------------------------ discriminator
 /// @brief StarGAN discriminator D(x) = (src [N, 1, Hd, Wd] real/fake scores, cls [N, C] domain logits).
 template <class T, stargan_config Config>
-class discriminator {
+class discriminator : public detail::parameter_owner<T> {
+    using detail::parameter_owner<T>::p_;
+    using detail::parameter_owner<T>::grad_or_null;
+
 public:
     using dims_type = dims<Config>;
     static constexpr std::size_t N = dims_type::N, C = dims_type::C, H = dims_type::H, W = dims_type::W,
@@ -374,14 +387,6 @@ public:
         p_.finish();
     }
 
-    template <class F>
-    void for_each_parameter(F&& f)
-    {
-        p_.for_each(f);
-    }
-    void zero_grad() noexcept { p_.zero_grad(); }
-    void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
-    std::size_t parameter_count() const noexcept { return p_.numel(); }
 
     /// @brief Records D(x) on the tape.
     outputs forward(tape<T>& t, const var<T, image_shape>& x)
@@ -416,9 +421,6 @@ private:
             return layers<I + 1>(t, autodiff::leaky_relu(autodiff::conv2d<2, 1>(x, w, b), T(0.01)));
         }
     }
-    T* grad_or_null(std::size_t i) noexcept { return requires_grad_ ? p_.grad(i) : nullptr; }
-    detail::param_store<T> p_;
-    bool requires_grad_ = true;
 };
 
 }  // namespace handemo::stargan
