@@ -6,12 +6,17 @@
 #include <algorithm>
 #include <exception>
 #include <iostream>
+#include <string>
 
 int main(int argc, char** argv)
 {
     CLI::App app{"handemo: change the emotion of captured 3D hand and body motion (StarGAN)", "handemo"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "handemo 0.1.0");
+    // usage errors in the same one-line form as every other error
+    app.failure_message([](const CLI::App*, const CLI::Error& e) {
+        return "handemo: error: " + std::string(e.what()) + " (see --help)\n";
+    });
     auto& reg = handemo::cli::registry();
     std::stable_sort(reg.begin(), reg.end(), [](auto& a, auto& b) { return a.first < b.first; });
     for (auto& [order, add] : reg) add(app);

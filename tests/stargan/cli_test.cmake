@@ -60,4 +60,6 @@ run_fail(all_excluded train --data ${D} --out ${WORK_DIR}/m2 --config hand-tiny 
          --exclude-content gripping --exclude-content patting --exclude-content impatient --exclude-content hand-on-mouse
          --exclude-content pointing --exclude-content pushing)
 expect_error_matches("no motion clips")
+run_fail(usage train --out ${WORK_DIR}/m2)
+expect_error_matches("--data is required")
 message(STATUS "stargan CLI: all checks passed")
