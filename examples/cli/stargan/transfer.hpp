@@ -49,8 +49,8 @@ inline void run_transfer(const transfer_cli& o)
             const clip ref = read_bvh(o.like);
             model->check_skeleton(ref.skel);
             auto kf = decode(gen, info.range);
-            const double tempo = info.tempo[target] / info.tempo[model->domain(o.from.empty() ? info.neutral : o.from)];
-            const std::size_t n = o.frames ? o.frames : static_cast<std::size_t>(std::max(2.0, std::round(double(ref.frames) * tempo)));
+            const double tempo = o.from.empty() ? model->tempo(o.emotion) : model->tempo(o.emotion, o.from);
+            const std::size_t n = o.frames ? o.frames : model->output_frames(ref.frames, tempo);
             write_bvh(o.out, reconstruct(kf, ref.skel, n, ref.fps));
         }
         std::cout << "transfer: " << o.in << " -> " << o.emotion << " -> " << o.out << "\n";

@@ -65,15 +65,23 @@ decltype(auto) with_config(std::string_view name, F&& f)
     throw value_error("config: unknown configuration '" + std::string(name) + "', expected one of " + known);
 }
 
-/// @brief Index of a domain name.
+/// @brief Index of `emotion` in a list of domain names.
+/// @param what prefix of the error message (who asks: a configuration, a model)
+/// @throws value_error naming the unknown emotion and the known ones.
+inline std::size_t domain_index(const std::vector<std::string>& names, std::string_view emotion, const std::string& what)
+{
+    for (std::size_t i = 0; i < names.size(); ++i)
+        if (names[i] == emotion) return i;
+    std::string known;
+    for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+    throw value_error(what + ": unknown emotion '" + std::string(emotion) + "', expected one of " + known);
+}
+
+/// @brief Index of a domain name of a configuration.
 /// @throws value_error naming the unknown emotion and the known ones.
 inline std::size_t domain_index(const config_info& c, std::string_view emotion)
 {
-    for (std::size_t i = 0; i < c.domain_names.size(); ++i)
-        if (c.domain_names[i] == emotion) return i;
-    std::string known;
-    for (const auto& n : c.domain_names) known += (known.empty() ? "" : ", ") + n;
-    throw value_error("config " + c.name + ": unknown emotion '" + std::string(emotion) + "', expected one of " + known);
+    return domain_index(c.domain_names, emotion, "config " + c.name);
 }
 
 }  // namespace handemo::stargan

@@ -74,10 +74,15 @@ struct load_options {
 
 namespace detail {
 
-inline bool is_motion_file(const std::filesystem::path& p)
+inline bool is_bvh(const std::filesystem::path& p)
 {
     const auto e = p.extension().string();
-    return e == ".bvh" || e == ".BVH" || e == ".csv" || e == ".CSV";
+    return e == ".bvh" || e == ".BVH";
+}
+inline bool is_csv(const std::filesystem::path& p)
+{
+    const auto e = p.extension().string();
+    return e == ".csv" || e == ".CSV";
 }
 
 inline std::vector<std::string> split_csv_line(std::string_view line)
@@ -153,14 +158,13 @@ inline std::vector<labelled_clip> load_folder(const std::filesystem::path& dir, 
     } else {
         std::vector<fs::path> files;
         for (const auto& e : fs::directory_iterator(dir))
-            if (e.is_regular_file() && detail::is_motion_file(e.path())) files.push_back(e.path());
+            if (e.is_regular_file() && (detail::is_bvh(e.path()) || detail::is_csv(e.path()))) files.push_back(e.path());
         std::sort(files.begin(), files.end());
         std::set<std::string> bvh_stems;
         for (const auto& f : files)
-            if (f.extension() == ".bvh" || f.extension() == ".BVH") bvh_stems.insert(f.stem().string());
+            if (detail::is_bvh(f)) bvh_stems.insert(f.stem().string());
         for (const auto& f : files) {
-            const bool is_csv = f.extension() == ".csv" || f.extension() == ".CSV";
-            if (is_csv && bvh_stems.count(f.stem().string())) continue;
+            if (detail::is_csv(f) && bvh_stems.count(f.stem().string())) continue;
             const clip_name n = parse_clip_name(f.stem().string());
             labelled_clip c;
             c.path = f;
@@ -179,16 +183,13 @@ inline std::vector<labelled_clip> load_folder(const std::filesystem::path& dir, 
 
     std::optional<skeleton> csv_skel = opt.csv_skeleton;
     for (auto& c : kept) {
-        const auto ext = c.path.extension().string();
-        if (ext == ".bvh" || ext == ".BVH") {
+        if (detail::is_bvh(c.path)) {
             c.motion = read_bvh(c.path);
             if (!csv_skel) csv_skel = c.motion.skel;
         }
     }
-    for (auto& c : kept) {
-        const auto ext = c.path.extension().string();
-        if (ext == ".csv" || ext == ".CSV") c.motion = read_csv(c.path, csv_skel ? *csv_skel : hand_skeleton());
-    }
+    for (auto& c : kept)
+        if (detail::is_csv(c.path)) c.motion = read_csv(c.path, csv_skel ? *csv_skel : hand_skeleton());
     for (const auto& c : kept)
         if (!c.motion.skel.same_topology(kept.front().motion.skel))
             throw shape_error("dataset: " + c.path.string() + " has a skeleton of " + std::to_string(c.motion.skel.size()) +

@@ -56,11 +56,20 @@ public:
     /// @brief Index of an emotion. @throws value_error naming it and the known ones.
     std::size_t domain(std::string_view emotion) const
     {
-        for (std::size_t i = 0; i < info_.domains.size(); ++i)
-            if (info_.domains[i] == emotion) return i;
-        std::string known;
-        for (const auto& n : info_.domains) known += (known.empty() ? "" : ", ") + n;
-        throw value_error("transfer: unknown emotion '" + std::string(emotion) + "', the model knows " + known);
+        return domain_index(info_.domains, emotion, "transfer: model " + info_.config);
+    }
+
+    /// @brief Duration factor of a transfer from `source` (default: the neutral domain) to `target`:
+    /// tempo[target] / tempo[source], the learned median duration ratios to neutral.
+    double tempo(std::string_view target, std::optional<std::string_view> source = {}) const
+    {
+        return info_.tempo[domain(target)] / info_.tempo[domain(source ? *source : std::string_view(info_.neutral))];
+    }
+
+    /// @brief Frame count of an output lasting `tempo` times an input of `frames` frames (at least 2).
+    static std::size_t output_frames(std::size_t frames, double tempo) noexcept
+    {
+        return static_cast<std::size_t>(std::max(2.0, std::round(static_cast<double>(frames) * tempo)));
     }
 
     /// @brief Translates one K x J motion image to the target domain (G of the paper, batch 1).
@@ -86,14 +95,13 @@ public:
     {
         check_skeleton(in.skel);
         in.validate("transfer: input");
-        const std::size_t t = domain(target), s = domain(source ? *source : std::string_view(info_.neutral));
         const auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
         transfer_result r;
         for (double a : kf.angles) r.clamped_values += (a < info_.range.p_min || a > info_.range.p_max) ? 1 : 0;
-        r.image = translate(encode(kf, info_.range), t);
+        r.image = translate(encode(kf, info_.range), domain(target));
         auto out_kf = decode(r.image, info_.range);
-        r.tempo = info_.tempo[t] / info_.tempo[s];
-        const auto frames = static_cast<std::size_t>(std::max(2.0, std::round(static_cast<double>(in.frames) * r.tempo)));
+        r.tempo = tempo(target, source);
+        const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(out_kf, in.skel, frames, in.fps);
         r.motion.positions = stretch_positions(in, frames);
         return r;
