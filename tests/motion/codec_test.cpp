@@ -128,3 +128,73 @@ TEST_CASE("codec: range JSON save/load and its errors")
     CHECK_THROWS_AS(save_range(dir / "x.json", angle_range{1, 0, 9, 23}), value_error);
     fs::remove_all(dir);
 }
+
+TEST_CASE("codec: per-channel ranges (handemo-range/2) round trip within each channel's own bound")
+{
+    std::mt19937_64 g(5);
+    const std::size_t J = 4, K = 9;
+    std::vector<keyframes<9>> set;
+    // channel widths differ by 100x; channel 5 winds (its values are one track shifted by whole turns)
+    for (int s = 0; s < 20; ++s) {
+        auto kf = keyframes<9>::make(J, K);
+        for (std::size_t i = 0; i < K; ++i)
+            for (std::size_t c = 0; c < J * 3; ++c) {
+                const double u = static_cast<double>(g() >> 11) * 0x1.0p-53 - 0.5;
+                double v = 10.0 * static_cast<double>(c) + u * (c == 0 ? 1.0 : 100.0);
+                if (c == 5) v = 170.0 + 15.0 * u + 360.0 * (s % 5 - 2);  // wound by up to +-720
+                kf.angles[i * J * 3 + c] = v;
+            }
+        set.push_back(kf);
+    }
+    const angle_range r = compute_channel_range(set);
+    REQUIRE(r.per_channel());
+    CHECK(r.lo.size() == J * 3);
+    CHECK_NOTHROW(r.validate());
+    // a narrow channel gets a fine resolution; the wound channel comes back next to its reference
+    CHECK(r.hi[0] - r.lo[0] == doctest::Approx(20.0));  // min_span
+    CHECK(r.hi[5] - r.lo[5] < 40.0);
+    CHECK(std::abs(wrap_angle_deg(r.center[5] - 170.0)) < 3.0);
+    for (std::size_t ch = 0; ch < J * 3; ++ch) {
+        double worst = 0;
+        for (const auto& kf : set) {
+            const auto back = decode(encode(kf, r), r);
+            for (std::size_t i = 0; i < K; ++i) {
+                const double a = kf.angles[i * J * 3 + ch];
+                if (!r.contains(a, ch)) continue;
+                worst = std::max(worst, std::abs(wrap_angle_deg(back.angles[i * J * 3 + ch] - a)));
+            }
+        }
+        CHECK(worst <= r.channel_roundtrip_error(ch) * (1 + 1e-12));
+    }
+    CHECK(r.channel_roundtrip_error(0) < 0.05);  // 20 deg / 510, against the global range's (p_max - p_min) / 510
+    CHECK(compute_range(set).max_roundtrip_error() > 2.0);
+}
+
+TEST_CASE("codec: handemo-range/2 files save and load; handemo-range/1 files still load as one range")
+{
+    const auto dir = std::filesystem::temp_directory_path() / "handemo_range_v2";
+    std::filesystem::create_directories(dir);
+    std::mt19937_64 g(9);
+    std::vector<keyframes<9>> set;
+    for (int s = 0; s < 4; ++s) set.push_back(random_keyframes<9>(3, 9, g, -50, 60));
+    const auto r = compute_channel_range(set);
+    save_range(dir / "r2.json", r);
+    const auto back = load_range(dir / "r2.json");
+    CHECK(back.per_channel());
+    CHECK(back.center == r.center);
+    CHECK(back.lo == r.lo);
+    CHECK(back.hi == r.hi);
+    CHECK(encode(set[0], back).values == encode(set[0], r).values);
+    const auto v1 = parse_range(R"({"format":"handemo-range/1","p_min":-10,"p_max":30,"keyframes":9,"joints":3})", "old.json");
+    CHECK_FALSE(v1.per_channel());
+    CHECK(v1.lo_of(4) == -10.0);
+    CHECK(v1.half_span(4) == 20.0);
+    CHECK(v1.to_frame(725.0, 2) == 725.0);  // a global range does not wrap
+    // malformed per-channel fields are refused naming the field
+    CHECK_THROWS_WITH_AS(parse_range(R"({"format":"handemo-range/2","p_min":-10,"p_max":30,"keyframes":9,"joints":1,"center":[0,0,0],"lo":[0,0],"hi":[1,1,1]})", "bad.json"),
+                         doctest::Contains("field 'lo'"), format_error);
+    CHECK_THROWS_WITH_AS(parse_range(R"({"format":"handemo-range/2","p_min":-10,"p_max":30,"keyframes":9,"joints":1,"center":[0,0,0],"lo":[0,5,0],"hi":[1,1,1]})", "bad.json"),
+                         doctest::Contains("channel 1"), format_error);
+    CHECK_THROWS_WITH_AS(parse_range(R"({"format":"handemo-range/3","p_min":-10,"p_max":30,"keyframes":9,"joints":1})", "bad.json"),
+                         doctest::Contains("handemo-range/2"), format_error);
+}

@@ -1,4 +1,5 @@
 #include <doctest/doctest.h>
+#include <handemo/eval/metrics.hpp>
 #include <handemo/motion/synth.hpp>
 #include <handemo/stargan.hpp>
 
@@ -232,4 +233,151 @@ TEST_CASE("transfer keeps a body's root translation and stretches it in time")
     for (std::size_t k = 0; k + 1 < walk.frames; ++k)
         REQUIRE(pos[(2 * k + 1) * J3 + hips * 3 + 2] ==
                 doctest::Approx(0.5 * (walk.position(k, hips, 2) + walk.position(k + 1, hips, 2))));
+}
+
+TEST_CASE("residual G (handemo preset) is exactly the identity at initialisation, through the whole transfer")
+{
+    auto clips = toy_set();
+    const fs::path d = fresh_dir("handemo_train_residual_init");
+    auto o = handemo_options();
+    o.iters = 10;
+    o.threads = 1;
+    o.progress_out = nullptr;
+    const auto data = prepare_data<hand_tiny>(clips, tiny_info(), {}, o.range);
+    CHECK(data.range.per_channel());
+    trainer<hand_tiny> tr(tiny_info(), data, o);
+    // G(x, c) == x for every training image and target before any step
+    auto& g = tr.inference_gen();
+    CHECK(g.residual());
+    typename generator<float, with_batch<hand_tiny, 1>>::workspace ws;
+    generator<float, with_batch<hand_tiny, 1>> g1;
+    g1.set_residual(true);
+    {
+        std::vector<std::span<float>> src;
+        g.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) { src.push_back(v); });
+        std::size_t i = 0;
+        g1.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
+            std::copy(src[i].begin(), src[i].end(), v.begin());
+            ++i;
+        });
+    }
+    const std::size_t per = 3 * data.H * data.W;
+    std::vector<float> label(5, 0.f), out(per);
+    label[0] = 1.f;
+    for (std::size_t m = 0; m < data.size(); ++m) {
+        g1.infer(data.images.data() + m * per, label.data(), out.data(), ws);
+        REQUIRE(std::memcmp(out.data(), data.images.data() + m * per, per * sizeof(float)) == 0);
+    }
+    tr.save(d);
+    const auto model = load_model(d);
+    CHECK(model->residual());
+    const clip& in = clips[2].motion;
+    const auto kin = extract_keyframes<9>(in);
+    const auto r = model->transfer(in, "neutral");
+    const auto kout = extract_keyframes<9>(r.motion);
+    double worst = 0;
+    for (std::size_t i = 0; i < kin.angles.size(); ++i) worst = std::max(worst, std::abs(kout.angles[i] - kin.angles[i]));
+    CHECK(worst < 1e-9);  // no Eq. 3 quantisation reaches a residual model's output
+}
+
+TEST_CASE("prepare_data: the paired-target table pairs every image with its content and take in each emotion")
+{
+    const auto clips = toy_set();
+    const auto p = prepare_data<hand_tiny>(clips, tiny_info());
+    REQUIRE(p.partner.size() == clips.size() * 5);
+    for (std::size_t m = 0; m < clips.size(); ++m) {
+        CHECK(p.partner[m * 5 + static_cast<std::size_t>(p.labels[m])] == static_cast<int>(m));
+        for (std::size_t d = 0; d < 5; ++d) {
+            const int q = p.partner[m * 5 + d];
+            REQUIRE(q >= 0);
+            CHECK(clips[static_cast<std::size_t>(q)].content == clips[m].content);
+            CHECK(clips[static_cast<std::size_t>(q)].take == clips[m].take);
+            CHECK(p.labels[static_cast<std::size_t>(q)] == static_cast<int>(d));
+        }
+    }
+}
+
+TEST_CASE("EMA weights: saved beside G, used by transfer, resumed bitwise")
+{
+    const auto clips = toy_set();
+    auto o = handemo_options();
+    o.iters = 20;
+    o.threads = 1;
+    o.progress_out = nullptr;
+    o.log_every = 1;
+    o.checkpoint_every = 10;
+    const fs::path a = fresh_dir("handemo_ema_a"), b = fresh_dir("handemo_ema_b");
+    const auto data = prepare_data<hand_tiny>(clips, tiny_info(), {}, o.range);
+    trainer<hand_tiny> full(tiny_info(), data, o);
+    full.run(a);
+    CHECK(params_of(full.inference_gen()) != params_of(full.gen()));  // the average lags G
+    auto o2 = o;
+    o2.stop_at = 10;
+    {
+        trainer<hand_tiny> half(tiny_info(), data, o2);
+        half.run(b);
+    }
+    trainer<hand_tiny> resumed(tiny_info(), data, o);
+    resumed.run(b, true);
+    CHECK(params_of(resumed.inference_gen()) == params_of(full.inference_gen()));
+    CHECK(params_of(resumed.gen()) == params_of(full.gen()));
+    const auto f = read_safetensors(a / "checkpoint.safetensors");
+    CHECK(f.find("G_ema.main.0.weight") != nullptr);
+    // the generator file (PyTorch names) holds the EMA weights
+    const auto gen = read_safetensors(a / "generator.safetensors");
+    const auto w = gen.get<float>("main.0.weight");
+    std::vector<float> ema0;
+    full.inference_gen().for_each_parameter([&](std::string_view n, std::span<float> v, std::span<float>, auto) {
+        if (n == "main.0.weight") ema0.assign(v.begin(), v.end());
+    });
+    CHECK(w == ema0);
+}
+
+TEST_CASE("end to end: where emotions are large offsets, transfer of an unseen content beats identity")
+{
+    // a toy set whose emotions add large per-emotion offsets to the neutral take: 4 contents, one held out
+    std::vector<labelled_clip> all;
+    const auto emos = hand_domains();
+    for (auto& it : synthesize_dataset(1, 3)) {
+        if (it.emotion != emotion::neutral) continue;
+        if (it.motion == hand_motion::pushing || it.motion == hand_motion::hand_on_mouse || it.motion == hand_motion::impatient)
+            continue;
+        for (std::size_t e = 0; e < emos.size(); ++e) {
+            labelled_clip c;
+            c.content = std::string(to_string(it.motion));
+            c.emotion = emos[e];
+            c.take = "0";
+            c.path = "toy_" + c.content + "_" + c.emotion + "_0.bvh";
+            c.motion = it.c;
+            if (emos[e] != "neutral")
+                for (std::size_t f = 0; f < c.motion.frames; ++f)
+                    for (std::size_t j = 1; j < 23; ++j) c.motion.angle(f, j, 0) += 12.0 * std::sin(double(e * 7 + j));
+            all.push_back(std::move(c));
+        }
+    }
+    std::vector<labelled_clip> train, held;
+    for (auto& c : all) (c.content == "gripping" ? held : train).push_back(c);
+    auto o = handemo_options();
+    o.iters = 600;
+    o.threads = 2;
+    o.progress_out = nullptr;
+    o.checkpoint_every = 10000;
+    const fs::path d = fresh_dir("handemo_e2e_offsets");
+    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(train, tiny_info(), {}, o.range), o);
+    tr.run(d);
+    const auto model = load_model(d);
+    const labelled_clip* in = nullptr;
+    for (const auto& c : held)
+        if (c.emotion == "neutral") in = &c;
+    REQUIRE(in);
+    double s_model = 0, s_identity = 0;
+    for (const auto& c : held) {
+        if (c.emotion == "neutral") continue;
+        const auto out = model->transfer(in->motion, c.emotion);
+        const auto real = extract_keyframes<9>(c.motion);
+        s_model += eval::keyframe_rmse(extract_keyframes<9>(out.motion), real);
+        s_identity += eval::keyframe_rmse(extract_keyframes<9>(in->motion), real);
+    }
+    MESSAGE("held-out content: transfer RMSE " << s_model / 4 << " deg, identity " << s_identity / 4 << " deg");
+    CHECK(s_model < 0.5 * s_identity);
 }

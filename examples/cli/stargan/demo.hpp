@@ -27,7 +27,7 @@ struct demo_cli {
     std::string config = "hand-embedded";
     std::string held_out = "pushing";
     int takes = 3;
-    double lr = -1;
+    handemo::cli::train_overrides ov;
     handemo::stargan::train_options opt;
 };
 
@@ -38,7 +38,7 @@ inline void run_demo(demo_cli& o)
     namespace fs = std::filesystem;
     const fs::path root(o.out), data = root / "data", model = root / "model", outdir = root / "transfer";
     const hand_motion held = hand_motion_from_string(o.held_out);
-    finish_train_options(o.opt, o.lr);
+    finish_train_options(o.opt, o.ov);
 
     // 1. synthetic dataset
     std::cout << "demo 1/4: synthesising " << o.takes << " takes x 7 motions x 5 emotions into " << data.string() << "\n";
@@ -52,7 +52,7 @@ inline void run_demo(demo_cli& o)
     std::cout << "demo 2/4: training " << o.config << " on " << clips.size() << " clips (" << to_string(held)
               << " left out), " << o.opt.iters << " iterations, lr " << o.opt.g_lr << ", lambda_cls " << o.opt.lambda_cls << "\n";
     with_config(o.config, [&]<stargan_config Config>(const config_info& info) {
-        trainer<Config> tr(info, prepare_data<Config>(clips, info), o.opt);
+        trainer<Config> tr(info, prepare_data<Config>(clips, info, {}, o.opt.range), o.opt);
         tr.run(model);
         write_file_atomic(model / "losses.svg", plot_losses_svg(loss_log_csv(tr.log()), {.title = "demo: training losses"}));
     });
@@ -109,14 +109,13 @@ static handemo::cli::add_command reg_demo{1, [](CLI::App& app) {
     auto* sub = app.add_subcommand("demo", "Main job: synthesise data, train leaving one motion type out, transfer it to every emotion");
     auto o = std::make_shared<handemo::cli::demo_cmd::demo_cli>();
     o->opt.iters = 3000;
-    o->opt.lambda_cls = 5;  // D learns the emotion classes on the synthetic set (lambda_cls 1 leaves it at chance: the penalty dominates)
     o->opt.checkpoint_every = 500;
     sub->add_option("--out", o->out, "Output folder")->capture_default_str();
     sub->add_option("--config", o->config, "StarGAN configuration")->capture_default_str();
     sub->add_option("--held-out", o->held_out, "Motion type left out of training and transferred")->capture_default_str();
     sub->add_option("--takes", o->takes, "Takes per motion/emotion pair")->capture_default_str();
     sub->add_option("--iters", o->opt.iters, "Training iterations")->capture_default_str();
-    handemo::cli::add_train_options(sub, o->opt, o->lr);
+    handemo::cli::add_train_options(sub, o->opt, o->ov);
     sub->add_option("--seed", o->opt.seed, "Seed of the data and the training")->capture_default_str();
     sub->callback([o] { handemo::cli::demo_cmd::run_demo(*o); });
 }};

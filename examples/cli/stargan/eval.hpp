@@ -17,7 +17,7 @@ namespace handemo::cli::eval_cmd {
 
 struct eval_cli {
     std::string data, config = "hand-embedded", report;
-    double lr = -1;
+    handemo::cli::train_overrides ov;
     handemo::eval::eval_options opt{.train = handemo::eval::default_train_options()};
     std::string command;
 };
@@ -25,7 +25,7 @@ struct eval_cli {
 void run_eval_cli(eval_cli& o)
 {
     using namespace handemo;
-    finish_train_options(o.opt.train, o.lr);
+    finish_train_options(o.opt.train, o.ov);
     o.opt.command = o.command;
     const auto r = eval::run_eval_named(o.data, o.config, o.opt, o.report);
     std::cout << "eval: " << r.folds.size() << " folds, " << r.samples.size() << " scored clips in " << r.seconds / 60.0
@@ -54,7 +54,7 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--iters", t.iters, "D iterations per fold (G every --n-critic)")->capture_default_str();
     sub->add_option("--seed", t.seed, "Random seed (fold i trains with seed + i)")->capture_default_str();
     sub->add_option("--folds", o->opt.folds, "Held-out contents to run, comma separated (default: all)")->delimiter(',');
-    handemo::cli::add_train_options(sub, t, o->lr);
+    handemo::cli::add_train_options(sub, t, o->ov);
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
     sub->callback([o, sub] {
         o->command = "handemo eval";

@@ -1,33 +1,76 @@
-// The training hyper-parameters as command-line options, shared by `train`, `demo` and `eval`.
+// The training hyper-parameters as command-line options, shared by `train`, `demo` and `eval`: a preset
+// (`--preset handemo`, the default, or `--preset paper`, StarGAN exactly as the paper trains it) and any
+// single hyper-parameter on top of it.
 #pragma once
 
 #include <handemo/stargan/train.hpp>
 
 #include <CLI/CLI.hpp>
 
+#include <optional>
+#include <string>
+
 namespace handemo::cli {
 
-/// @brief Adds every hyper-parameter of `t` to `sub`; `--lr` (stored in `lr`, negative when absent) sets both rates.
-inline void add_train_options(CLI::App* sub, stargan::train_options& t, double& lr)
+/// @brief The method options given on the command line; each one absent keeps the preset's value.
+struct train_overrides {
+    std::string preset = "handemo";
+    double lr = -1;
+    std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
+        lambda_delta, ema;
+    std::optional<int> n_critic;
+    std::optional<bool> residual;
+    std::optional<std::string> range;
+};
+
+/// @brief Adds the preset and every hyper-parameter to `sub`; `t` receives the run options (threads).
+inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_overrides& o)
 {
-    sub->add_option("--threads", t.threads, "Worker threads (0: all cores)")->capture_default_str();
-    sub->add_option("--lr", lr, "Learning rate of both G and D (overrides --g-lr and --d-lr)");
-    sub->add_option("--g-lr", t.g_lr, "Learning rate of G")->capture_default_str();
-    sub->add_option("--d-lr", t.d_lr, "Learning rate of D")->capture_default_str();
-    sub->add_option("--lambda-cls", t.lambda_cls, "Weight of the domain classification loss")->capture_default_str();
-    sub->add_option("--lambda-rec", t.lambda_rec, "Weight of the reconstruction loss")->capture_default_str();
-    sub->add_option("--lambda-gp", t.lambda_gp, "Weight of the gradient penalty")->capture_default_str();
-    sub->add_option("--n-critic", t.n_critic, "D iterations per G iteration")->capture_default_str();
-    sub->add_option("--beta1", t.beta1, "Adam beta1")->capture_default_str();
-    sub->add_option("--beta2", t.beta2, "Adam beta2")->capture_default_str();
-    sub->add_option("--decay-start", t.decay_start, "Fraction of training after which the learning rate decays linearly to 0")
+    sub->add_option("--preset", o.preset,
+                    "Method preset: 'handemo' (residual G, identity and paired losses, EMA, per-channel ranges) or "
+                    "'paper' (StarGAN as the paper trains it); the options below override it")
         ->capture_default_str();
+    sub->add_option("--threads", t.threads, "Worker threads (0: all cores)")->capture_default_str();
+    sub->add_option("--lr", o.lr, "Learning rate of both G and D (overrides --g-lr and --d-lr)");
+    sub->add_option("--g-lr", o.g_lr, "Learning rate of G (preset: 1e-4)");
+    sub->add_option("--d-lr", o.d_lr, "Learning rate of D (preset: 1e-4)");
+    sub->add_option("--lambda-cls", o.lambda_cls, "Weight of the domain classification loss (handemo 5, paper 1)");
+    sub->add_option("--lambda-rec", o.lambda_rec, "Weight of the cycle reconstruction loss (10)");
+    sub->add_option("--lambda-gp", o.lambda_gp, "Weight of the gradient penalty (10)");
+    sub->add_option("--n-critic", o.n_critic, "D iterations per G iteration (5)");
+    sub->add_option("--beta1", o.beta1, "Adam beta1 (0.5)");
+    sub->add_option("--beta2", o.beta2, "Adam beta2 (0.999)");
+    sub->add_option("--decay-start", o.decay_start, "Fraction of training after which the learning rate decays linearly to 0 (0.5)");
+    sub->add_option("--residual", o.residual, "G outputs input + change, identity at initialisation (handemo true, paper false)");
+    sub->add_option("--lambda-id", o.lambda_id, "Weight of the identity loss |G(x, c_org) - x| (handemo 10, paper 0)");
+    sub->add_option("--lambda-pair", o.lambda_pair,
+                    "Weight of the paired loss |G(x, c) - same take in emotion c| (handemo 10, paper 0)");
+    sub->add_option("--lambda-delta", o.lambda_delta, "Weight of the change-size penalty |G(x, c) - x| (0)");
+    sub->add_option("--ema", o.ema, "Decay of the EMA of G's weights used for transfer, 0 = off (handemo 0.999, paper 0)");
+    sub->add_option("--range", o.range, "Eq. 3 range: 'channel' (per channel, wrapped against a reference) or 'global' (the paper's)");
 }
 
-/// @brief Applies `--lr` and validates.
-inline void finish_train_options(stargan::train_options& t, double lr)
+/// @brief Applies the preset, then every option given, and validates.
+/// @throws value_error for an unknown preset or an invalid value (naming it).
+inline void finish_train_options(stargan::train_options& t, const train_overrides& o)
 {
-    if (lr >= 0) t.g_lr = t.d_lr = lr;
+    const auto p = stargan::preset_options(o.preset);
+    t.g_lr = o.g_lr.value_or(p.g_lr);
+    t.d_lr = o.d_lr.value_or(p.d_lr);
+    if (o.lr >= 0) t.g_lr = t.d_lr = o.lr;
+    t.lambda_cls = o.lambda_cls.value_or(p.lambda_cls);
+    t.lambda_rec = o.lambda_rec.value_or(p.lambda_rec);
+    t.lambda_gp = o.lambda_gp.value_or(p.lambda_gp);
+    t.n_critic = o.n_critic.value_or(p.n_critic);
+    t.beta1 = o.beta1.value_or(p.beta1);
+    t.beta2 = o.beta2.value_or(p.beta2);
+    t.decay_start = o.decay_start.value_or(p.decay_start);
+    t.residual = o.residual.value_or(p.residual);
+    t.lambda_id = o.lambda_id.value_or(p.lambda_id);
+    t.lambda_pair = o.lambda_pair.value_or(p.lambda_pair);
+    t.lambda_delta = o.lambda_delta.value_or(p.lambda_delta);
+    t.ema = o.ema.value_or(p.ema);
+    t.range = o.range.value_or(p.range);
     t.validate();
 }
 

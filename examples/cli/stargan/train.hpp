@@ -20,7 +20,7 @@ struct train_cli {
     std::string data, out, config = "hand-embedded";
     std::vector<std::string> exclude;
     bool resume = false;
-    double lr = -1;
+    handemo::cli::train_overrides ov;
     handemo::stargan::train_options opt;
 };
 
@@ -29,7 +29,7 @@ inline void run_train(train_cli& o)
     using namespace handemo;
     using namespace handemo::stargan;
     namespace fs = std::filesystem;
-    finish_train_options(o.opt, o.lr);
+    finish_train_options(o.opt, o.ov);
     load_options lo;
     lo.exclude_contents = o.exclude;
     const auto clips = load_folder(o.data, lo);
@@ -39,7 +39,7 @@ inline void run_train(train_cli& o)
         for (const auto& e : o.exclude) std::cout << " " << e;
         std::cout << ")";
     }
-    std::cout << ", configuration " << o.config << ", " << o.opt.iters << " iterations\n";
+    std::cout << ", configuration " << o.config << ", preset " << o.ov.preset << ", " << o.opt.iters << " iterations\n";
     with_config(o.config, [&]<stargan_config Config>(const config_info& info) {
         std::optional<angle_range> range;
         if (o.resume) {
@@ -47,7 +47,7 @@ inline void run_train(train_cli& o)
             if (!fs::exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
             range = read_checkpoint(ck).second.range;  // a resumed run keeps its Eq. 3 range
         }
-        trainer<Config> tr(info, prepare_data<Config>(clips, info, range), o.opt);
+        trainer<Config> tr(info, prepare_data<Config>(clips, info, range, o.opt.range), o.opt);
         tr.run(o.out, o.resume);
         const std::string svg = plot_losses_svg(loss_log_csv(tr.log()), {.title = "handemo train " + info.name + " (" + o.data + ")"});
         write_file_atomic(fs::path(o.out) / "losses.svg", svg);
@@ -72,7 +72,7 @@ static handemo::cli::add_command reg_train{40, [](CLI::App& app) {
     sub->add_option("--exclude-content", o->exclude, "Leave this content (motion type) out of training; repeatable");
     sub->add_option("--seed", t.seed, "Random seed; same seed and threads give bitwise the same weights")->capture_default_str();
     sub->add_flag("--resume", o->resume, "Continue from MODEL/checkpoint.safetensors");
-    handemo::cli::add_train_options(sub, t, o->lr);
+    handemo::cli::add_train_options(sub, t, o->ov);
     sub->add_option("--checkpoint-every", t.checkpoint_every, "Iterations between checkpoints")->capture_default_str();
     sub->add_option("--log-every", t.log_every, "Iterations between rows of log.csv")->capture_default_str();
     sub->callback([o] { handemo::cli::train_cmd::run_train(*o); });

@@ -6,6 +6,13 @@
 // The network works on tanh-range images: x = v / 127.5 - 1 (to_network / from_network), laid out [3, K, J]
 // (channel-first, as PyTorch's StarGAN). Conversions to handemo::rgb_image are in codec_image.hpp so this
 // header needs no stb.
+// Beyond the paper (range format handemo-range/2, `compute_channel_range`): one range per channel (joint x
+// axis) instead of one for the whole data set, each angle first wrapped against the channel's reference
+// angle (its circular mean over the training keyframes) into (ref - 180, ref + 180], and the range taken
+// from robust percentiles widened by a margin. The paper's single range spends its 256 levels on the
+// widest channel (on Bandai, Euler tracks near gimbal lock that wind to +-1983 deg make one level 15.5
+// deg); per channel, every joint gets its own resolution and a wound track is brought back next to its
+// reference. handemo-range/1 files still load (as one range for every channel).
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -26,21 +33,66 @@
 
 namespace handemo {
 
-/// @brief The dataset-wide angle extremes of Eq. 3 / Eq. 6, plus the image shape they were computed for.
+/// @brief An angle difference wrapped into (-180, 180] degrees.
+inline double wrap_angle_deg(double d) noexcept
+{
+    d = std::fmod(d, 360.0);
+    if (d > 180.0) d -= 360.0;
+    if (d <= -180.0) d += 360.0;
+    return d;
+}
+
+/// @brief The angle range of Eq. 3 / Eq. 6: the paper's one dataset-wide p_min/p_max (handemo-range/1) or,
+/// when `lo`/`hi` are set, one range per channel with a reference angle per channel (handemo-range/2).
+/// Channels are numbered as in keyframes::angles: ch = joint * 3 + axis.
 struct angle_range {
     double p_min = 0.0;
     double p_max = 0.0;
     std::size_t keyframes = 0;  ///< K (image rows); 0 when unknown
     std::size_t joints = 0;     ///< J (image columns); 0 when unknown
+    std::vector<double> center; ///< [J*3] reference angle per channel (per-channel ranges only)
+    std::vector<double> lo, hi; ///< [J*3] per-channel extremes, in the wrapped frame of `center`; empty: global
 
+    bool per_channel() const noexcept { return !lo.empty(); }
     double span() const noexcept { return p_max - p_min; }
-    /// Largest round-trip error of one angle through encode/decode: (p_max - p_min) / 510.
+    /// Largest round-trip error of one angle through encode/decode: (p_max - p_min) / 510 (the widest channel).
     double max_roundtrip_error() const noexcept { return span() / 510.0; }
-    /// @throws value_error naming `what` when the extremes are not finite or p_max <= p_min.
+    /// Lower / upper bound of channel `ch` (the global ones for a handemo-range/1 range).
+    double lo_of(std::size_t ch) const noexcept { return per_channel() ? lo[ch] : p_min; }
+    double hi_of(std::size_t ch) const noexcept { return per_channel() ? hi[ch] : p_max; }
+    /// Half the span of channel `ch`: degrees per unit of the network's [-1, 1] range.
+    double half_span(std::size_t ch) const noexcept { return 0.5 * (hi_of(ch) - lo_of(ch)); }
+    /// Round-trip bound of channel `ch`: (hi - lo) / 510.
+    double channel_roundtrip_error(std::size_t ch) const noexcept { return (hi_of(ch) - lo_of(ch)) / 510.0; }
+    /// `p` in the frame the range is expressed in: wrapped against the reference of `ch` (per channel), as is (global).
+    double to_frame(double p, std::size_t ch) const noexcept
+    {
+        return per_channel() ? center[ch] + wrap_angle_deg(p - center[ch]) : p;
+    }
+    /// Whether `p` lies inside channel `ch`'s range (Eq. 3 clamps it otherwise).
+    bool contains(double p, std::size_t ch) const noexcept
+    {
+        const double q = to_frame(p, ch);
+        return q >= lo_of(ch) && q <= hi_of(ch);
+    }
+    /// @throws value_error naming `what` when the extremes are not finite, p_max <= p_min, or a per-channel
+    ///         array has the wrong size, a non-finite value or hi <= lo.
     void validate(const std::string& what = "angle_range") const
     {
-        if (!std::isfinite(p_min) || !std::isfinite(p_max) || !(p_max > p_min))
+        if (!std::isfinite(p_min) || !std::isfinite(p_max) || !(p_max > p_min) || !std::isfinite(p_max - p_min))
             throw value_error(what + ": p_max " + std::to_string(p_max) + " is not above p_min " + std::to_string(p_min));
+        if (!per_channel() && center.empty() && hi.empty()) return;
+        const std::size_t n = lo.size();
+        if (hi.size() != n || center.size() != n || (joints && n != joints * 3))
+            throw value_error(what + ": per-channel arrays have " + std::to_string(center.size()) + "/" + std::to_string(lo.size()) +
+                              "/" + std::to_string(hi.size()) + " entries (center/lo/hi), expected joints*3 = " +
+                              std::to_string(joints * 3));
+        for (std::size_t c = 0; c < n; ++c)
+            if (!std::isfinite(center[c]) || !std::isfinite(lo[c]) || !std::isfinite(hi[c]) || !(hi[c] > lo[c]) ||
+                !std::isfinite(hi[c] - lo[c]))
+                throw value_error(what + ": channel " + std::to_string(c) + " (joint " + std::to_string(c / 3) + ", axis " +
+                                  "xyz"[c % 3] + "): hi " + std::to_string(hi[c]) + " is not above lo " + std::to_string(lo[c]) +
+                                  " or a value is not finite");
     }
 };
 
@@ -78,19 +130,97 @@ angle_range compute_range(const std::vector<keyframes<K>>& set)
     return compute_range(std::span<const keyframes<K>>(set));
 }
 
-/// @brief Writes the range as JSON `{"format": "handemo-range/1", "p_min", "p_max", "keyframes", "joints"}`
-/// atomically (temporary file + rename).
-/// @throws value_error for an invalid range; io_error when the file cannot be written.
-inline void save_range(const std::filesystem::path& path, const angle_range& r)
+/// @brief How compute_channel_range() sets each channel's range.
+struct channel_range_options {
+    double quantile = 0.01;   ///< the range starts at the quantile..1-quantile percentiles of the wrapped values
+    double margin = 0.25;     ///< then is widened by this fraction of its span on each side (unseen motions)
+    double min_span = 20.0;   ///< and is at least this wide, in degrees, around its middle
+};
+
+/// @brief Per-channel ranges (handemo-range/2) over a set of keyframed motions: for every channel (joint x
+/// axis) the reference angle is the circular mean of its values; values are wrapped against it into
+/// (ref - 180, ref + 180]; the range is [q, 1 - q] percentiles widened by `margin` x span per side, at least
+/// `min_span` wide and never wider than the full circle around the reference. p_min/p_max are the widest
+/// channel's bounds (so max_roundtrip_error() still bounds every channel).
+/// @throws value_error for an empty set, a non-finite angle or bad options; shape_error when the motions
+///         differ in K or J.
+template <std::size_t K>
+angle_range compute_channel_range(std::span<const keyframes<K>> set, const channel_range_options& opt = {})
 {
-    r.validate("save_range: " + path.string());
+    if (!(opt.quantile >= 0 && opt.quantile < 0.5) || !(opt.margin >= 0) || !(opt.min_span > 0) || !std::isfinite(opt.margin) ||
+        !std::isfinite(opt.min_span))
+        throw value_error("compute_channel_range: quantile must be in [0, 0.5), margin >= 0 and min_span > 0");
+    angle_range r = compute_range(set);  // shape and finiteness checks, K and J
+    const std::size_t C = r.joints * 3;
+    r.center.assign(C, 0.0);
+    r.lo.assign(C, 0.0);
+    r.hi.assign(C, 0.0);
+    std::vector<double> v;
+    v.reserve(set.size() * r.keyframes);
+    for (std::size_t ch = 0; ch < C; ++ch) {
+        double s = 0, c = 0;
+        for (const auto& k : set)
+            for (std::size_t i = 0; i < r.keyframes; ++i) {
+                const double a = k.angles[i * C + ch] * (M_PI / 180.0);
+                s += std::sin(a), c += std::cos(a);
+            }
+        // circular mean; an undefined one (values spread evenly on the circle) falls back to the plain mean
+        const double ref = std::hypot(s, c) > 1e-9 * static_cast<double>(set.size() * r.keyframes) ? std::atan2(s, c) * (180.0 / M_PI) : 0.0;
+        v.clear();
+        for (const auto& k : set)
+            for (std::size_t i = 0; i < r.keyframes; ++i) v.push_back(ref + wrap_angle_deg(k.angles[i * C + ch] - ref));
+        const auto at = [&](double q) {
+            const auto idx = static_cast<std::size_t>(std::llround(q * static_cast<double>(v.size() - 1)));
+            std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(idx), v.end());
+            return v[idx];
+        };
+        double lo = at(opt.quantile), hi = at(1.0 - opt.quantile);
+        const double w = hi - lo;
+        lo -= opt.margin * w, hi += opt.margin * w;
+        if (hi - lo < opt.min_span) {
+            const double mid = 0.5 * (lo + hi);
+            lo = mid - 0.5 * opt.min_span, hi = mid + 0.5 * opt.min_span;
+        }
+        r.center[ch] = ref;
+        r.lo[ch] = std::max(lo, ref - 180.0);
+        r.hi[ch] = std::min(hi, ref + 180.0);
+    }
+    r.p_min = *std::min_element(r.lo.begin(), r.lo.end());
+    r.p_max = *std::max_element(r.hi.begin(), r.hi.end());
+    return r;
+}
+
+template <std::size_t K>
+angle_range compute_channel_range(const std::vector<keyframes<K>>& set, const channel_range_options& opt = {})
+{
+    return compute_channel_range(std::span<const keyframes<K>>(set), opt);
+}
+
+/// @brief The JSON form of a range (see save_range()).
+inline nlohmann::json range_to_json(const angle_range& r)
+{
     nlohmann::json j;
-    j["format"] = "handemo-range/1";
+    j["format"] = r.per_channel() ? "handemo-range/2" : "handemo-range/1";
     j["p_min"] = r.p_min;
     j["p_max"] = r.p_max;
     j["keyframes"] = r.keyframes;
     j["joints"] = r.joints;
-    write_file_atomic(path, j.dump(2) + "\n");
+    if (r.per_channel()) {
+        j["center"] = r.center;
+        j["lo"] = r.lo;
+        j["hi"] = r.hi;
+    }
+    return j;
+}
+
+/// @brief Writes the range as JSON atomically (temporary file + rename): `{"format": "handemo-range/1", "p_min",
+/// "p_max", "keyframes", "joints"}`, plus `"center"`, `"lo"`, `"hi"` arrays ([J*3]) as "handemo-range/2" for a
+/// per-channel range.
+/// @throws value_error for an invalid range; io_error when the file cannot be written.
+inline void save_range(const std::filesystem::path& path, const angle_range& r)
+{
+    r.validate("save_range: " + path.string());
+    write_file_atomic(path, range_to_json(r).dump(2) + "\n");
 }
 
 /// @brief Parses a range JSON document; `source` names it in errors.
@@ -111,8 +241,10 @@ inline angle_range parse_range(std::string_view text, const std::string& source)
         return *it;
     };
     const auto& fmt = field("format");
-    if (!fmt.is_string() || fmt.get<std::string>() != "handemo-range/1")
-        throw format_error("range: " + source + ": field 'format' is " + fmt.dump() + ", expected \"handemo-range/1\"");
+    const bool v2 = fmt.is_string() && fmt.get<std::string>() == "handemo-range/2";
+    if (!v2 && !(fmt.is_string() && fmt.get<std::string>() == "handemo-range/1"))
+        throw format_error("range: " + source + ": field 'format' is " + fmt.dump() +
+                           ", expected \"handemo-range/1\" or \"handemo-range/2\"");
     auto number = [&](const char* name) {
         const auto& v = field(name);
         if (!v.is_number()) throw format_error("range: " + source + ": field '" + name + "' is " + v.dump() + ", expected a number");
@@ -129,9 +261,31 @@ inline angle_range parse_range(std::string_view text, const std::string& source)
     r.p_max = number("p_max");
     r.keyframes = count("keyframes");
     r.joints = count("joints");
-    if (!std::isfinite(r.p_min) || !std::isfinite(r.p_max) || !(r.p_max > r.p_min))
+    if (!std::isfinite(r.p_min) || !std::isfinite(r.p_max) || !(r.p_max > r.p_min) || !std::isfinite(r.p_max - r.p_min))
         throw format_error("range: " + source + ": field 'p_max' " + std::to_string(r.p_max) +
                            " is not above field 'p_min' " + std::to_string(r.p_min));
+    if (v2) {
+        auto array = [&](const char* name) {
+            const auto& v = field(name);
+            if (!v.is_array() || v.size() != r.joints * 3)
+                throw format_error("range: " + source + ": field '" + name + "' is not an array of joints*3 = " +
+                                   std::to_string(r.joints * 3) + " numbers");
+            std::vector<double> out;
+            for (const auto& x : v) {
+                if (!x.is_number()) throw format_error("range: " + source + ": field '" + name + "' holds " + x.dump() + ", expected numbers");
+                out.push_back(x.get<double>());
+            }
+            return out;
+        };
+        r.center = array("center");
+        r.lo = array("lo");
+        r.hi = array("hi");
+        try {
+            r.validate("range");
+        } catch (const value_error& e) {
+            throw format_error("range: " + source + ": " + e.what());
+        }
+    }
     return r;
 }
 
@@ -165,6 +319,22 @@ inline std::uint8_t encode_angle(double p, const angle_range& r) noexcept
 /// @brief Eq. 6 for one pixel value: v / 255 (p_max - p_min) + p_min.
 inline double decode_angle(double v, const angle_range& r) noexcept { return v / 255.0 * (r.p_max - r.p_min) + r.p_min; }
 
+/// @brief Eq. 3 for channel `ch` (ch = joint * 3 + axis): the angle wrapped against the channel's reference,
+/// then round(255 (p - lo) / (hi - lo)) clamped to [0, 255]. The global range's Eq. 3 for a handemo-range/1 range.
+inline std::uint8_t encode_angle(double p, const angle_range& r, std::size_t ch) noexcept
+{
+    if (!r.per_channel()) return encode_angle(p, r);
+    const double v = std::round(255.0 * (r.to_frame(p, ch) - r.lo[ch]) / (r.hi[ch] - r.lo[ch]));
+    if (!(v >= 0.0)) return 0;
+    return v >= 255.0 ? std::uint8_t{255} : static_cast<std::uint8_t>(v);
+}
+
+/// @brief Eq. 6 for channel `ch`: v / 255 (hi - lo) + lo (in the wrapped frame of the channel's reference).
+inline double decode_angle(double v, const angle_range& r, std::size_t ch) noexcept
+{
+    return v / 255.0 * (r.hi_of(ch) - r.lo_of(ch)) + r.lo_of(ch);
+}
+
 /// @brief Encodes keyframes as an image by Eq. 3.
 /// @throws value_error for an invalid range; shape_error when the range records a different K or J.
 template <std::size_t K>
@@ -182,7 +352,8 @@ keyframe_pixels<K> encode(const keyframes<K>& kf, const angle_range& r)
     px.count_ = kf.count();
     px.joints = kf.joints;
     px.values.resize(kf.angles.size());
-    for (std::size_t i = 0; i < kf.angles.size(); ++i) px.values[i] = encode_angle(kf.angles[i], r);
+    const std::size_t C = kf.joints * 3;
+    for (std::size_t i = 0; i < kf.angles.size(); ++i) px.values[i] = encode_angle(kf.angles[i], r, i % C);
     return px;
 }
 
@@ -196,7 +367,11 @@ keyframes<K> decode(const keyframe_pixels<K>& px, const angle_range& r)
         throw shape_error("decode: image holds " + std::to_string(px.values.size()) + " values, expected " +
                           std::to_string(px.count() * px.joints * 3));
     auto kf = keyframes<K>::make(px.joints, px.count());
-    for (std::size_t i = 0; i < px.values.size(); ++i) kf.angles[i] = decode_angle(px.values[i], r);
+    if (r.per_channel() && r.lo.size() != px.joints * 3)
+        throw shape_error("decode: image has " + std::to_string(px.joints) + " joints, the range file is for " +
+                          std::to_string(r.lo.size() / 3));
+    const std::size_t C = px.joints * 3;
+    for (std::size_t i = 0; i < px.values.size(); ++i) kf.angles[i] = decode_angle(px.values[i], r, i % C);
     return kf;
 }
 

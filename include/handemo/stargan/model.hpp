@@ -258,7 +258,20 @@ public:
         }
         auto u1 = in_relu.template operator()<2 * cd>(conv_transpose2d<2, 1>(h, w.template operator()<shape<4 * cd, 2 * cd, 4, 4>>()), true);
         auto u2 = in_relu.template operator()<cd>(conv_transpose2d<2, 1>(u1, w.template operator()<shape<2 * cd, cd, 4, 4>>()), true);
-        return tanh(conv2d<1, 3>(u2, w.template operator()<shape<3, cd, 7, 7>>()));
+        auto y = tanh(conv2d<1, 3>(u2, w.template operator()<shape<3, cd, 7, 7>>()));
+        if (residual_) return x + y;
+        return y;
+    }
+
+    /// @brief Residual output (beyond the paper): G(x, c) = x + tanh(last conv) instead of tanh(last conv).
+    /// With the last convolution at zero (zero_last_conv()) G is then exactly the identity.
+    void set_residual(bool on) noexcept { residual_ = on; }
+    bool residual() const noexcept { return residual_; }
+    /// @brief Sets the weights of the last 7x7 convolution to zero.
+    void zero_last_conv() noexcept
+    {
+        const std::size_t i = p_.count() - 1;
+        std::fill_n(p_.value(i), p_.entry(i).size, T(0));
     }
 
     /// @brief Buffers for infer(): sized at construction, reused by every call.
@@ -326,7 +339,10 @@ public:
         convt(g[5], a, c);
         norm(c, int(cd), int(HW), true);
         conv(g[6], c, out);
-        for (std::size_t i = 0; i < N * 3 * HW; ++i) out[i] = std::tanh(out[i]);
+        if (residual_)
+            for (std::size_t i = 0; i < N * 3 * HW; ++i) out[i] = x[i] + std::tanh(out[i]);
+        else
+            for (std::size_t i = 0; i < N * 3 * HW; ++i) out[i] = std::tanh(out[i]);
     }
 
     /// @brief Multiply-adds of one forward pass (for GFLOP/s counters).
@@ -350,6 +366,9 @@ public:
                  {n, c, h, w, 2 * c, 4, 4, 2, 1},
                  {n, c, h, w, 3, 7, 7, 1, 3}}};
     }
+
+private:
+    bool residual_ = false;
 };
 
 // ------------------------------------------------------------------------------------------ discriminator

@@ -54,6 +54,13 @@ struct train_options {
     long log_every = 10;
     long stop_at = -1;          ///< stop (after a checkpoint) at this step, as if interrupted; -1: never
     std::FILE* progress_out = stderr;
+    // ---- beyond the paper (all off by default, which is the paper's and StarGAN's setup; see handemo_options())
+    bool residual = false;      ///< G outputs x + tanh(last conv), the last conv zero-initialised: G is the identity at init
+    double lambda_id = 0.0;     ///< identity loss mean |G(x, c_org) - x| (CycleGAN's)
+    double lambda_pair = 0.0;   ///< paired loss mean |G(x, c) - y|, y the same content and take performed in emotion c
+    double lambda_delta = 0.0;  ///< size of the change mean |G(x, c) - x|
+    double ema = 0.0;           ///< decay of an exponential moving average of G's weights used for transfer; 0: off
+    std::string range = "global";  ///< Eq. 3 range: "global" (the paper's one p_min/p_max) or "channel" (handemo-range/2)
 
     /// @throws value_error naming the option.
     void validate() const
@@ -61,27 +68,64 @@ struct train_options {
         auto bad = [](const std::string& what) { throw value_error("train: " + what); };
         if (iters < 1) bad("iters " + std::to_string(iters) + " is below 1");
         if (n_critic < 1) bad("n_critic " + std::to_string(n_critic) + " is below 1");
-        for (double v : {lambda_cls, lambda_rec, lambda_gp, g_lr, d_lr})
+        for (double v : {lambda_cls, lambda_rec, lambda_gp, g_lr, d_lr, lambda_id, lambda_pair, lambda_delta})
             if (!(v >= 0) || !std::isfinite(v)) bad("a loss weight or learning rate is negative or not finite");
         if (!(beta1 >= 0 && beta1 < 1) || !(beta2 >= 0 && beta2 < 1)) bad("betas must be in [0, 1)");
         if (!(decay_start >= 0 && decay_start <= 1)) bad("decay_start must be in [0, 1]");
         if (checkpoint_every < 1) bad("checkpoint_every is below 1");
         if (log_every < 1) bad("log_every is below 1");
+        if (!(ema >= 0 && ema < 1)) bad("ema decay " + std::to_string(ema) + " is not in [0, 1)");
+        if (range != "global" && range != "channel") bad("range '" + range + "' is not 'global' or 'channel'");
     }
     nlohmann::json to_json() const
     {
         return {{"iters", iters},       {"n_critic", n_critic}, {"lambda_cls", lambda_cls}, {"lambda_rec", lambda_rec},
                 {"lambda_gp", lambda_gp}, {"g_lr", g_lr},        {"d_lr", d_lr},             {"beta1", beta1},
-                {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed}};
+                {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed},
+                {"residual", residual}, {"lambda_id", lambda_id}, {"lambda_pair", lambda_pair},
+                {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}};
     }
 };
+
+/// @brief StarGAN exactly as the paper and the reference train it (Eq. 3's one range, G = tanh(...), the
+/// three losses of Eq. 4-5 with StarGAN's weights).
+inline train_options paper_options() { return train_options{}; }
+
+/// @brief handemo's default training: what makes the transfer beat the baselines on unseen motions (the
+/// evaluation's ablation in the README measures each piece). A residual G that starts as the identity and
+/// adds a bounded change; an identity loss; a paired loss to the same take performed in the target emotion
+/// (the data sets are recorded in pairs: every content in every emotion); an EMA of G's weights for
+/// transfer (StarGAN v2); per-channel ranges wrapped against a reference angle; lambda_cls 5 (with 1, D's
+/// domain classifier stays at chance on the synthetic training set: the gradient penalty dominates).
+/// Chosen from training-set numbers only.
+inline train_options handemo_options()
+{
+    train_options o;
+    o.residual = true;
+    o.lambda_cls = 5.0;
+    o.lambda_id = 10.0;
+    o.lambda_pair = 10.0;
+    o.lambda_delta = 0.0;
+    o.ema = 0.999;
+    o.range = "channel";
+    return o;
+}
+
+/// @brief A named preset: "paper" (paper_options()) or "handemo" (handemo_options()).
+/// @throws value_error naming the unknown preset.
+inline train_options preset_options(std::string_view name)
+{
+    if (name == "paper") return paper_options();
+    if (name == "handemo") return handemo_options();
+    throw value_error("train: unknown preset '" + std::string(name) + "', expected 'paper' or 'handemo'");
+}
 
 /// Columns of the loss log (log.csv): D terms as in L_D, G terms as in L_G, the learning rate, and the
 /// accuracy of D's domain classifier on the real batch.
 inline const std::vector<std::string>& loss_columns()
 {
-    static const std::vector<std::string> c{"D/real", "D/fake", "D/cls", "D/gp", "D/total", "D/acc",
-                                            "G/fake", "G/cls",  "G/rec", "G/total", "lr"};
+    static const std::vector<std::string> c{"D/real", "D/fake", "D/cls", "D/gp",   "D/total", "D/acc", "G/fake",
+                                            "G/cls",  "G/rec",  "G/total", "lr",   "G/id",    "G/pair", "G/delta"};
     return c;
 }
 
@@ -95,6 +139,10 @@ struct prepared_data {
     angle_range range;                     ///< p_min/p_max of Eq. 3
     std::vector<double> tempo;             ///< [C] tempo factor per domain
     std::vector<std::string> joint_names;  ///< skeleton the model is trained for
+    /// [M, C] for every image and domain, the index of the same content and take performed in that domain
+    /// (another take of the content when that take is missing; the image itself for its own domain); -1: none
+    std::vector<int> partner;
+    std::size_t domains = 0;               ///< C
     std::size_t size() const noexcept { return labels.size(); }
 };
 
@@ -116,12 +164,14 @@ inline void crop_image(const float* src, std::size_t H, std::size_t W, float* ds
 }
 
 /// @brief Keyframes, Eq. 3 images, labels and tempo factors of a labelled dataset for a configuration.
-/// @param range p_min/p_max to use (a resumed run keeps its own); default: computed over `clips`.
+/// @param range the Eq. 3 range to use (a resumed run keeps its own); default: computed over `clips`.
+/// @param range_mode "global" (the paper's one p_min/p_max) or "channel" (compute_channel_range()), when
+///        `range` is not given.
 /// @throws shape_error when the clips' joint count is not the configuration's; value_error for an
 ///         emotion the configuration does not know (naming the file).
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
-                           std::optional<angle_range> range = {})
+                           std::optional<angle_range> range = {}, std::string_view range_mode = "global")
 {
     constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
     if (clips.empty()) throw value_error("train: no clips to train on");
@@ -139,9 +189,27 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
         kfs.push_back(extract_keyframes<K>(c.motion));
     }
     for (const auto& j : clips.front().motion.skel.joints) p.joint_names.push_back(j.name);
-    p.range = range ? *range : compute_range(kfs);
+    if (range_mode != "global" && range_mode != "channel")
+        throw value_error("train: range '" + std::string(range_mode) + "' is not 'global' or 'channel'");
+    p.range = range ? *range : range_mode == "channel" ? compute_channel_range(kfs) : compute_range(kfs);
     p.range.keyframes = K;
     p.range.joints = J;
+    p.range.validate("train: range");
+    p.domains = info.domains;
+    p.partner.assign(clips.size() * info.domains, -1);
+    for (std::size_t m = 0; m < clips.size(); ++m) {
+        // preference: the image itself, then the same take, then the first other take of the content
+        const auto rank = [&](int i) {
+            if (i < 0) return 0;
+            const auto u = static_cast<std::size_t>(i);
+            return u == m ? 3 : clips[u].take == clips[m].take ? 2 : 1;
+        };
+        for (std::size_t q = 0; q < clips.size(); ++q) {
+            if (clips[q].content != clips[m].content) continue;
+            int& slot = p.partner[m * info.domains + static_cast<std::size_t>(p.labels[q])];
+            if (rank(static_cast<int>(q)) > rank(slot)) slot = static_cast<int>(q);
+        }
+    }
     p.tempo = tempo_factors(clips, info.domain_names, info.neutral);
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
@@ -228,6 +296,12 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
         info.range.p_max = j.at("p_max").get<double>();
         info.range.keyframes = j.at("keyframes").get<std::size_t>();
         info.range.joints = j.at("joints").get<std::size_t>();
+        if (j.contains("range")) {  // per-channel ranges (handemo-range/2); older checkpoints have p_min/p_max only
+            const auto r = parse_range(j.at("range").dump(), path.string() + " (metadata 'range')");
+            if (r.keyframes != info.range.keyframes || r.joints != info.range.joints)
+                throw fail("metadata 'range' is for another image size");
+            info.range = r;
+        }
         info.tempo = detail::json_doubles(j.at("tempo"));
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = j.at("step").get<long>();
@@ -283,6 +357,15 @@ public:
         rng init_rng(opt_.seed ^ 0x9E3779B97F4A7C15ULL);
         init_pytorch_default(g_, init_rng);
         init_pytorch_default(d_, init_rng);
+        g_.set_residual(opt_.residual);
+        if (opt_.residual) g_.zero_last_conv();
+        if ((opt_.lambda_pair > 0) && data_.partner.size() != data_.size() * C)
+            throw value_error("train: lambda_pair needs the prepared data's partner table (prepare_data)");
+        if (opt_.ema > 0) {
+            ema_.emplace();
+            ema_->set_residual(opt_.residual);
+            copy_parameters(g_, *ema_);
+        }
         adam_options ao;
         ao.beta1 = opt_.beta1;
         ao.beta2 = opt_.beta2;
@@ -293,11 +376,15 @@ public:
         cursor_ = perm_.size();  // shuffle before the first batch
         x_.resize(image_shape::size);
         xh_.resize(image_shape::size);
+        y_.resize(image_shape::size);
+        mask_.resize(image_shape::size);
         org_.resize(label_shape::size);
         trg_.resize(label_shape::size);
     }
 
     generator<float, cfg>& gen() noexcept { return g_; }
+    /// @brief The generator transfer uses: the EMA of G's weights when options.ema > 0, else G.
+    generator<float, cfg>& inference_gen() noexcept { return ema_ ? *ema_ : g_; }
     discriminator<float, cfg>& disc() noexcept { return d_; }
     long step() const noexcept { return step_; }
     const std::vector<loss_row>& log() const noexcept { return log_; }
@@ -356,9 +443,30 @@ public:
             auto g_rec = l1_loss(x2, rec);
             auto lg = g_fake + float(opt_.lambda_cls) * g_cls + float(opt_.lambda_rec) * g_rec;
             check_finite({{"G/fake", g_fake.item()}, {"G/cls", g_cls.item()}, {"G/rec", g_rec.item()}});
+            last_[11] = last_[12] = last_[13] = 0;
+            if (opt_.lambda_id > 0) {  // identity: G(x, c_org) = x
+                auto g_id = l1_loss(x2, g_.forward(t, x2, t.template input<label_shape>(org_.data())));
+                check_finite({{"G/id", g_id.item()}});
+                last_[11] = g_id.item();
+                lg = lg + float(opt_.lambda_id) * g_id;
+            }
+            if (opt_.lambda_pair > 0 && paired_ > 0) {  // paired: G(x, c) = the same take performed in c
+                auto yv = t.template input<image_shape>(y_.data());
+                auto mv = t.template input<image_shape>(mask_.data());
+                auto g_pair = float(double(image_shape::size) / paired_) * mean(abs((f2 - yv) * mv));
+                check_finite({{"G/pair", g_pair.item()}});
+                last_[12] = g_pair.item();
+                lg = lg + float(opt_.lambda_pair) * g_pair;
+            }
+            if (opt_.lambda_delta > 0) {  // size of the change
+                auto g_delta = l1_loss(f2, x2);
+                last_[13] = g_delta.item();
+                lg = lg + float(opt_.lambda_delta) * g_delta;
+            }
             last_[6] = g_fake.item(), last_[7] = g_cls.item(), last_[8] = g_rec.item(), last_[9] = lg.item();
             t.backward(lg);
             og_->step(g_, lr_g);
+            if (ema_) update_ema();
             d_.set_requires_grad(true);
         }
         last_[10] = lr_d;
@@ -398,6 +506,7 @@ public:
         f.source = (out_dir / "checkpoint.safetensors").string();
         add_parameters(f, g_, "G.");
         add_parameters(f, d_, "D.");
+        if (ema_) add_parameters(f, *ema_, "G_ema.");
         add_adam(f, "adam.G.", *og_);
         add_adam(f, "adam.D.", *od_);
         const auto st = gen_.state();
@@ -416,6 +525,7 @@ public:
                             {"neutral", info_.neutral},
                             {"p_min", data_.range.p_min},
                             {"p_max", data_.range.p_max},
+                            {"range", range_to_json(data_.range)},
                             {"keyframes", Base::keyframes},
                             {"joints", Base::joints},
                             {"tempo", data_.tempo},
@@ -426,8 +536,9 @@ public:
         f.metadata["handemo"] = j.dump();
         f.metadata["checksum"] = detail::checkpoint_checksum(f);
         write_safetensors(out_dir / "checkpoint.safetensors", f);
-        save_parameters(out_dir / "generator.safetensors", g_,
-                        {{"format", "pytorch-state-dict"}, {"config", info_.name}, {"step", std::to_string(step_)}});
+        save_parameters(out_dir / "generator.safetensors", inference_gen(),
+                        {{"format", "pytorch-state-dict"}, {"config", info_.name}, {"step", std::to_string(step_)},
+                         {"residual", opt_.residual ? "true" : "false"}, {"ema", ema_ ? "true" : "false"}});
         save_range(out_dir / "range.json", data_.range);
         write_file_atomic(out_dir / "log.csv", loss_log_csv(log_));
     }
@@ -442,6 +553,7 @@ public:
             throw value_error("train: " + path.string() + " is a " + info.config + " checkpoint, not " + info_.name);
         load_parameters(f, g_, "G.");
         load_parameters(f, d_, "D.");
+        if (ema_) load_parameters(f, *ema_, "G_ema.");
         load_adam(f, "adam.G.", *og_);
         load_adam(f, "adam.D.", *od_);
         const auto st = f.get<std::uint64_t>("rng.state", std::vector<std::size_t>{rng::state_size});
@@ -455,10 +567,17 @@ public:
         cursor_ = static_cast<std::size_t>(pc.back());
         const auto& lt = f.at("log");
         const auto lg = lt.to_vector<double>();
-        const std::size_t cols = loss_columns().size() + 1;
+        // a log written with fewer columns (an older version) is padded with NaN
+        const std::size_t cols = lt.shape.size() == 2 ? lt.shape[1] : loss_columns().size() + 1;
+        if (cols < 2 || cols > loss_columns().size() + 1)
+            throw format_error("checkpoint: " + path.string() + ": log has " + std::to_string(cols) + " columns, expected at most " +
+                               std::to_string(loss_columns().size() + 1));
         log_.clear();
-        for (std::size_t i = 0; i + cols <= lg.size(); i += cols)
-            log_.push_back({static_cast<long>(lg[i]), std::vector<double>(lg.begin() + long(i) + 1, lg.begin() + long(i + cols))});
+        for (std::size_t i = 0; i + cols <= lg.size(); i += cols) {
+            std::vector<double> v(lg.begin() + long(i) + 1, lg.begin() + long(i + cols));
+            v.resize(loss_columns().size(), std::nan(""));
+            log_.push_back({static_cast<long>(lg[i]), std::move(v)});
+        }
         data_.range = info.range;
         step_ = info.step;
     }
@@ -493,6 +612,7 @@ private:
             const std::size_t m = perm_[cursor_++];
             std::copy_n(data_.images.data() + m * per, per, x_.data() + n * per);
             lab_[n] = data_.labels[m];
+            idx_[n] = m;
         }
         // target labels: a random permutation of the batch's own labels (as the StarGAN reference)
         std::array<std::size_t, N> idx;
@@ -505,6 +625,47 @@ private:
             org_[n * C + static_cast<std::size_t>(lab_[n])] = 1.f;
             trg_[n * C + static_cast<std::size_t>(tl_[n])] = 1.f;
         }
+        // paired targets: the same content and take performed in the target emotion, masked to the K x J image
+        paired_ = 0;
+        if (opt_.lambda_pair > 0) {
+            std::fill(y_.begin(), y_.end(), 0.f);
+            std::fill(mask_.begin(), mask_.end(), 0.f);
+            for (std::size_t n = 0; n < N; ++n) {
+                const int q = data_.partner[idx_[n] * C + static_cast<std::size_t>(tl_[n])];
+                if (q < 0) continue;
+                std::copy_n(data_.images.data() + static_cast<std::size_t>(q) * per, per, y_.data() + n * per);
+                for (std::size_t c = 0; c < 3; ++c)
+                    for (std::size_t i = 0; i < data_.K; ++i)
+                        std::fill_n(mask_.data() + n * per + (c * H + i) * W, data_.J, 1.f);
+                paired_ += 3 * data_.K * data_.J;
+            }
+        }
+    }
+
+    /// ema = d ema + (1 - d) g after every G update, d = min(options.ema, (1 + u) / (10 + u)) for the u-th
+    /// update (TensorFlow's ExponentialMovingAverage warm-up, so early weights do not dominate a short run).
+    void update_ema()
+    {
+        const double u = static_cast<double>((step_ + 1) / opt_.n_critic);
+        const float d = static_cast<float>(std::min(opt_.ema, (1.0 + u) / (10.0 + u)));
+        std::vector<std::span<float>> src;
+        g_.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) { src.push_back(v); });
+        std::size_t i = 0;
+        ema_->for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
+            const auto& g = src[i++];
+            for (std::size_t k = 0; k < v.size(); ++k) v[k] = d * v[k] + (1 - d) * g[k];
+        });
+    }
+
+    static void copy_parameters(generator<float, cfg>& from, generator<float, cfg>& to)
+    {
+        std::vector<std::span<float>> src;
+        from.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) { src.push_back(v); });
+        std::size_t i = 0;
+        to.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
+            std::copy(src[i].begin(), src[i].end(), v.begin());
+            ++i;
+        });
     }
 
     double accuracy(const float* logits) const noexcept
@@ -537,9 +698,12 @@ private:
     std::optional<adam<float>> og_, od_;
     std::vector<std::size_t> perm_;
     std::size_t cursor_ = 0;
-    std::vector<float> x_, xh_, org_, trg_;
+    std::optional<generator<float, cfg>> ema_;
+    std::vector<float> x_, xh_, org_, trg_, y_, mask_;
     std::array<int, N> lab_{}, tl_{};
-    std::array<double, 11> last_{};
+    std::array<std::size_t, N> idx_{};
+    std::size_t paired_ = 0;  ///< unmasked values of the batch's paired targets
+    std::array<double, 14> last_{};
     std::vector<loss_row> log_;
     long step_ = 0;
 };

@@ -4,6 +4,10 @@
 // ratios learned from the training data, see dataset.hpp), because time-normalised keyframes cannot carry
 // Table 1's "fast" and "slow". Position channels (a body's root translation) are kept from the input and
 // stretched in time to the new length.
+// A residual model (train_options::residual) changes the input rather than redraw it: its output image is
+// x + change, and transfer adds the change to the input's own keyframe angles (change x half the channel's
+// span, in degrees), so the Eq. 3 quantisation and clamping of the input never reach the output and a model
+// that changes nothing returns the input's keyframes exactly.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -81,12 +85,25 @@ public:
                               " (keyframes x joints), the model expects " + std::to_string(keyframes()) + "x" +
                               std::to_string(joints()));
         if (target >= info_.domains.size()) throw value_error("transfer: target domain out of range");
-        const auto net = to_network(px);
+        return from_network(generate(to_network(px), target));
+    }
+
+    /// @brief Whether the model's G is residual (its output is x + change).
+    bool residual() const { return info_.options.is_object() && info_.options.value("residual", false); }
+
+    /// @brief G on a network image [3, K, J] in [-1, 1] (float output, not quantised).
+    /// @throws value_error when G produces a non-finite value.
+    network_image<dynamic_keyframes> generate(const network_image<dynamic_keyframes>& net, std::size_t target) const
+    {
+        if (net.count() != keyframes() || net.joints != joints() || net.data.size() != 3 * keyframes() * joints())
+            throw shape_error("transfer: network image is " + std::to_string(net.count()) + "x" + std::to_string(net.joints) +
+                              ", the model expects " + std::to_string(keyframes()) + "x" + std::to_string(joints()));
+        if (target >= info_.domains.size()) throw value_error("transfer: target domain out of range");
         network_image<dynamic_keyframes> out = net;
         run_generator(net.data.data(), target, out.data.data());
         for (float v : out.data)
             if (!std::isfinite(v)) throw value_error("transfer: the generator produced a non-finite value (corrupted weights?)");
-        return from_network(out);
+        return out;
     }
 
     /// @brief Transfers a clip to `target` emotion (source emotion defaults to the neutral domain).
@@ -97,9 +114,23 @@ public:
         in.validate("transfer: input");
         const auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
         transfer_result r;
-        for (double a : kf.angles) r.clamped_values += (a < info_.range.p_min || a > info_.range.p_max) ? 1 : 0;
-        r.image = translate(encode(kf, info_.range), domain(target));
-        auto out_kf = decode(r.image, info_.range);
+        const std::size_t C = joints() * 3;
+        for (std::size_t i = 0; i < kf.angles.size(); ++i) r.clamped_values += info_.range.contains(kf.angles[i], i % C) ? 0 : 1;
+        const auto net = to_network(encode(kf, info_.range));
+        const auto gen = generate(net, domain(target));
+        r.image = from_network(gen);
+        auto out_kf = kf;
+        if (residual()) {
+            // angle-space residual: input angles + G's change (network units x degrees per unit of the channel)
+            const std::size_t plane = keyframes() * joints();
+            for (std::size_t p = 0; p < plane; ++p)
+                for (std::size_t c = 0; c < 3; ++c) {
+                    const std::size_t ch = (p % joints()) * 3 + c;
+                    out_kf.angles[p * 3 + c] += double(gen.data[c * plane + p] - net.data[c * plane + p]) * info_.range.half_span(ch);
+                }
+        } else {
+            out_kf = decode(r.image, info_.range);
+        }
         r.tempo = tempo(target, source);
         const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(out_kf, in.skel, frames, in.fps);
@@ -139,7 +170,8 @@ public:
             throw format_error("checkpoint: " + f.source + ": range is for " + std::to_string(info_.range.keyframes) + "x" +
                                std::to_string(info_.range.joints) + ", configuration " + info_.config + " is " +
                                std::to_string(K) + "x" + std::to_string(J));
-        load_parameters(f, g_, "G.");
+        load_parameters(f, g_, f.find("G_ema.main.0.weight") ? "G_ema." : "G.");  // the EMA weights when trained with them
+        g_.set_residual(residual());
         g_.set_requires_grad(false);
     }
 
