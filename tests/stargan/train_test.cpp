@@ -339,7 +339,7 @@ TEST_CASE("end to end: where emotions are large offsets, transfer of an unseen c
     std::vector<labelled_clip> all;
     const auto emos = hand_domains();
     for (auto& it : synthesize_dataset(1, 3)) {
-        if (it.emotion != emotion::neutral) continue;
+        if (it.emo != emotion::neutral) continue;
         if (it.motion == hand_motion::pushing || it.motion == hand_motion::hand_on_mouse || it.motion == hand_motion::impatient)
             continue;
         for (std::size_t e = 0; e < emos.size(); ++e) {

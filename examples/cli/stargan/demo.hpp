@@ -6,6 +6,7 @@
 #include "../registry.hpp"
 #include "options.hpp"
 
+#include <handemo/eval/baselines.hpp>
 #include <handemo/eval/metrics.hpp>
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
@@ -65,8 +66,13 @@ inline void run_demo(demo_cli& o)
     std::cout << "demo 3/4: transferring the unseen '" << mname << "' neutral take to every emotion\n";
     std::vector<clip> strip, truth;
     std::vector<std::string> titles;
-    std::printf("  %-8s %6s %7s %16s %18s %12s %12s\n", "emotion", "tempo", "frames", "RMSE to real (deg)",
-                "RMSE input-real", "ROM out/in", "ROM real/in");
+    // the baselines StarGAN has to beat, fitted on the same training clips
+    const auto offset = eval::mean_offset_baseline<9>::fit(clips, m->info().neutral);
+    std::printf("  keyframe RMSE to the real clip of each emotion (deg), lower is better:\n");
+    std::printf("  %-8s %6s %7s %9s %9s %12s %6s %11s %12s\n", "emotion", "tempo", "frames", "stargan", "identity",
+                "mean-offset", "wins", "ROM out/in", "ROM real/in");
+    double sum_s = 0, sum_i = 0, sum_o = 0;
+    int wins = 0, n = 0;
     for (const auto& e : m->info().domains) {
         if (e == m->info().neutral) {
             strip.push_back(input);
@@ -78,14 +84,21 @@ inline void run_demo(demo_cli& o)
         write_bvh(outdir / (mname + "_" + e + ".bvh"), r.motion);
         write_bmp(outdir / (mname + "_" + e + ".bmp"), to_image(r.image));
         const clip real = read_bvh(data / (file_stem(held, emotion_from_string(e), 0) + ".bvh"));
-        std::printf("  %-8s %6.2f %7zu %16.2f %18.2f %12.2f %12.2f\n", e.c_str(), r.tempo, r.motion.frames,
-                    eval::keyframe_rmse(r.motion, real), eval::keyframe_rmse(input, real),
-                    eval::range_of_motion(r.motion) / eval::range_of_motion(input),
+        const double rs = eval::keyframe_rmse(r.motion, real), ri = eval::keyframe_rmse(input, real),
+                     ro = eval::keyframe_rmse(offset.transfer(input, e, r.tempo), real);
+        const bool win = rs < ri && rs < ro;
+        sum_s += rs, sum_i += ri, sum_o += ro, wins += win, ++n;
+        std::printf("  %-8s %6.2f %7zu %9.2f %9.2f %12.2f %6s %11.2f %12.2f\n", e.c_str(), r.tempo, r.motion.frames, rs, ri, ro,
+                    win ? "yes" : "no", eval::range_of_motion(r.motion) / eval::range_of_motion(input),
                     eval::range_of_motion(real) / eval::range_of_motion(input));
         strip.push_back(r.motion);
         truth.push_back(real);
         titles.push_back(e);
     }
+    std::printf("  %-8s %6s %7s %9.2f %9.2f %12.2f %3d/%-2d\n", "mean", "", "", sum_s / n, sum_i / n, sum_o / n, wins, n);
+    std::cout << "  " << (sum_s < sum_i && sum_s < sum_o ? "StarGAN beats both baselines on the unseen motion"
+                                                         : "StarGAN does NOT beat both baselines on the unseen motion")
+              << " (preset " << o.ov.preset << ")\n";
     // 4. pictures
     filmstrip_options fo;
     fo.rows = 6;

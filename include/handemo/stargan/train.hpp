@@ -33,6 +33,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <numeric>
 #include <optional>
 #include <string>
@@ -61,6 +62,9 @@ struct train_options {
     double lambda_delta = 0.0;  ///< size of the change mean |G(x, c) - x|
     double ema = 0.0;           ///< decay of an exponential moving average of G's weights used for transfer; 0: off
     std::string range = "global";  ///< Eq. 3 range: "global" (the paper's one p_min/p_max) or "channel" (handemo-range/2)
+    /// transfer scales the output keyframes' excursions about their per-channel mean by amplitude[target] /
+    /// amplitude[source], learned from the training pairs as the tempo is (amplitude_factors())
+    bool amplitude = false;
 
     /// @throws value_error naming the option.
     void validate() const
@@ -83,7 +87,7 @@ struct train_options {
                 {"lambda_gp", lambda_gp}, {"g_lr", g_lr},        {"d_lr", d_lr},             {"beta1", beta1},
                 {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed},
                 {"residual", residual}, {"lambda_id", lambda_id}, {"lambda_pair", lambda_pair},
-                {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}};
+                {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}, {"amplitude", amplitude}};
     }
 };
 
@@ -138,13 +142,70 @@ struct prepared_data {
     std::vector<std::string> sources;      ///< [M] file names, for messages
     angle_range range;                     ///< p_min/p_max of Eq. 3
     std::vector<double> tempo;             ///< [C] tempo factor per domain
+    std::vector<double> amplitude;         ///< [C] amplitude factor per domain (amplitude_factors())
     std::vector<std::string> joint_names;  ///< skeleton the model is trained for
     /// [M, C] for every image and domain, the index of the same content and take performed in that domain
     /// (another take of the content when that take is missing; the image itself for its own domain); -1: none
     std::vector<int> partner;
+    /// [3, H, W] weight of each pixel in the paired loss: the channel's degrees per network unit over their
+    /// mean (1 for a global range), so the loss counts degrees as the evaluation does; 0 in the padding
+    std::vector<float> pair_weight;
     std::size_t domains = 0;               ///< C
     std::size_t size() const noexcept { return labels.size(); }
 };
+
+/// @brief Excursion of keyframes: the sum over channels of each channel's standard deviation over the keyframes.
+template <std::size_t K>
+double keyframe_excursion(const keyframes<K>& kf)
+{
+    const std::size_t C = kf.joints * 3, n = kf.count();
+    double total = 0;
+    for (std::size_t ch = 0; ch < C; ++ch) {
+        double m = 0, q = 0;
+        for (std::size_t i = 0; i < n; ++i) m += kf.angles[i * C + ch];
+        m /= static_cast<double>(n);
+        for (std::size_t i = 0; i < n; ++i) q += (kf.angles[i * C + ch] - m) * (kf.angles[i * C + ch] - m);
+        total += std::sqrt(q / static_cast<double>(n));
+    }
+    return total;
+}
+
+/// @brief Amplitude factor per domain, relative to `neutral` (Table 1's "amplitude", learned as the tempo is):
+/// the median over training pairs (a clip of the domain, the neutral clip of the same content and take, or
+/// the content's first neutral take) of the ratio of their keyframe excursions. 1 for the neutral domain and
+/// for a domain without pairs.
+template <std::size_t K>
+std::vector<double> amplitude_factors(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
+                                      const std::vector<std::string>& domains, const std::string& neutral)
+{
+    std::map<std::pair<std::string, std::string>, double> by_take;
+    std::map<std::string, double> first;
+    for (std::size_t m = 0; m < clips.size(); ++m)
+        if (clips[m].emotion == neutral) {
+            const double e = keyframe_excursion(kfs[m]);
+            by_take[{clips[m].content, clips[m].take}] = e;
+            first.try_emplace(clips[m].content, e);
+        }
+    std::vector<double> out(domains.size(), 1.0);
+    for (std::size_t d = 0; d < domains.size(); ++d) {
+        if (domains[d] == neutral) continue;
+        std::vector<double> r;
+        for (std::size_t m = 0; m < clips.size(); ++m) {
+            if (clips[m].emotion != domains[d]) continue;
+            double base = 0;
+            if (auto it = by_take.find({clips[m].content, clips[m].take}); it != by_take.end())
+                base = it->second;
+            else if (auto f = first.find(clips[m].content); f != first.end())
+                base = f->second;
+            const double e = keyframe_excursion(kfs[m]);
+            if (base > 1e-9 && std::isfinite(e)) r.push_back(e / base);
+        }
+        if (r.empty()) continue;
+        std::sort(r.begin(), r.end());
+        out[d] = r.size() % 2 ? r[r.size() / 2] : 0.5 * (r[r.size() / 2 - 1] + r[r.size() / 2]);
+    }
+    return out;
+}
 
 /// @brief Pads a [3, K, J] network image into [3, H, W] (zeros bottom/right).
 inline void pad_image(const float* src, std::size_t K, std::size_t J, float* dst, std::size_t H, std::size_t W) noexcept
@@ -196,6 +257,15 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     p.range.joints = J;
     p.range.validate("train: range");
     p.domains = info.domains;
+    {
+        double mean_half = 0;
+        for (std::size_t ch = 0; ch < J * 3; ++ch) mean_half += p.range.half_span(ch) / static_cast<double>(J * 3);
+        p.pair_weight.assign(3 * H * W, 0.f);
+        for (std::size_t c = 0; c < 3; ++c)
+            for (std::size_t i = 0; i < K; ++i)
+                for (std::size_t j = 0; j < J; ++j)
+                    p.pair_weight[(c * H + i) * W + j] = static_cast<float>(p.range.half_span(j * 3 + c) / mean_half);
+    }
     p.partner.assign(clips.size() * info.domains, -1);
     for (std::size_t m = 0; m < clips.size(); ++m) {
         // preference: the image itself, then the same take, then the first other take of the content
@@ -211,6 +281,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
         }
     }
     p.tempo = tempo_factors(clips, info.domain_names, info.neutral);
+    p.amplitude = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
         const auto net = to_network(encode(kfs[m], p.range));
@@ -262,6 +333,7 @@ struct checkpoint_info {
     std::string neutral;
     angle_range range;
     std::vector<double> tempo;
+    std::vector<double> amplitude;  ///< [C] (all 1 for checkpoints written before it existed)
     std::vector<std::string> joint_names;
     long step = 0;
     nlohmann::json options;
@@ -303,6 +375,7 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
             info.range = r;
         }
         info.tempo = detail::json_doubles(j.at("tempo"));
+        info.amplitude = j.contains("amplitude") ? detail::json_doubles(j.at("amplitude")) : std::vector<double>(info.tempo.size(), 1.0);
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = j.at("step").get<long>();
         info.options = j.at("options");
@@ -311,6 +384,11 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
     }
     info.range.validate(("checkpoint: " + path.string() + ": range").c_str());
     if (info.tempo.size() != info.domains.size()) throw fail("tempo has " + std::to_string(info.tempo.size()) + " entries for " + std::to_string(info.domains.size()) + " domains");
+    if (info.amplitude.size() != info.domains.size())
+        throw fail("amplitude has " + std::to_string(info.amplitude.size()) + " entries for " + std::to_string(info.domains.size()) + " domains");
+    for (std::size_t d = 0; d < info.domains.size(); ++d)
+        if (!(info.tempo[d] > 0.01 && info.tempo[d] < 100) || !(info.amplitude[d] > 0.01 && info.amplitude[d] < 100))
+            throw fail("tempo or amplitude of domain '" + info.domains[d] + "' is not in (0.01, 100)");
     return {std::move(f), std::move(info)};
 }
 
@@ -359,7 +437,7 @@ public:
         init_pytorch_default(d_, init_rng);
         g_.set_residual(opt_.residual);
         if (opt_.residual) g_.zero_last_conv();
-        if ((opt_.lambda_pair > 0) && data_.partner.size() != data_.size() * C)
+        if ((opt_.lambda_pair > 0) && (data_.partner.size() != data_.size() * C || data_.pair_weight.size() != 3 * H * W))
             throw value_error("train: lambda_pair needs the prepared data's partner table (prepare_data)");
         if (opt_.ema > 0) {
             ema_.emplace();
@@ -453,7 +531,7 @@ public:
             if (opt_.lambda_pair > 0 && paired_ > 0) {  // paired: G(x, c) = the same take performed in c
                 auto yv = t.template input<image_shape>(y_.data());
                 auto mv = t.template input<image_shape>(mask_.data());
-                auto g_pair = float(double(image_shape::size) / paired_) * mean(abs((f2 - yv) * mv));
+                auto g_pair = float(double(image_shape::size) / double(paired_)) * mean(abs((f2 - yv) * mv));
                 check_finite({{"G/pair", g_pair.item()}});
                 last_[12] = g_pair.item();
                 lg = lg + float(opt_.lambda_pair) * g_pair;
@@ -529,6 +607,7 @@ public:
                             {"keyframes", Base::keyframes},
                             {"joints", Base::joints},
                             {"tempo", data_.tempo},
+                            {"amplitude", data_.amplitude},
                             {"joint_names", data_.joint_names},
                             {"step", step_},
                             {"options", opt_.to_json()}};
@@ -634,9 +713,7 @@ private:
                 const int q = data_.partner[idx_[n] * C + static_cast<std::size_t>(tl_[n])];
                 if (q < 0) continue;
                 std::copy_n(data_.images.data() + static_cast<std::size_t>(q) * per, per, y_.data() + n * per);
-                for (std::size_t c = 0; c < 3; ++c)
-                    for (std::size_t i = 0; i < data_.K; ++i)
-                        std::fill_n(mask_.data() + n * per + (c * H + i) * W, data_.J, 1.f);
+                std::copy_n(data_.pair_weight.data(), per, mask_.data() + n * per);
                 paired_ += 3 * data_.K * data_.J;
             }
         }

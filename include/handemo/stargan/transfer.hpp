@@ -31,6 +31,7 @@ struct transfer_result {
     keyframe_pixels<dynamic_keyframes> image;  ///< the generated K x J motion image (Eq. 3 pixels)
     std::size_t clamped_values = 0;   ///< input keyframe angles outside [p_min, p_max] (clamped by Eq. 3)
     double tempo = 1.0;               ///< duration factor applied
+    double amplitude = 1.0;           ///< excursion factor applied (1 unless the model learned amplitudes)
 };
 
 /// @brief Resamples every position channel of `c` to `frames` frames (linear in time).
@@ -68,6 +69,26 @@ public:
     double tempo(std::string_view target, std::optional<std::string_view> source = {}) const
     {
         return info_.tempo[domain(target)] / info_.tempo[domain(source ? *source : std::string_view(info_.neutral))];
+    }
+
+    /// @brief Amplitude factor of a transfer from `source` (default: neutral) to `target`: amplitude[target] /
+    /// amplitude[source], the learned median excursion ratios to neutral (applied when the model was trained
+    /// with train_options::amplitude).
+    double amplitude(std::string_view target, std::optional<std::string_view> source = {}) const
+    {
+        return info_.amplitude[domain(target)] / info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
+    }
+
+    /// @brief Scales every channel's excursion about its mean over the keyframes by `f`.
+    static void scale_excursions(handemo::keyframes<dynamic_keyframes>& kf, double f) noexcept
+    {
+        const std::size_t C = kf.joints * 3, n = kf.count();
+        for (std::size_t ch = 0; ch < C; ++ch) {
+            double m = 0;
+            for (std::size_t i = 0; i < n; ++i) m += kf.angles[i * C + ch];
+            m /= static_cast<double>(n);
+            for (std::size_t i = 0; i < n; ++i) kf.angles[i * C + ch] = m + f * (kf.angles[i * C + ch] - m);
+        }
     }
 
     /// @brief Frame count of an output lasting `tempo` times an input of `frames` frames (at least 2).
@@ -131,6 +152,9 @@ public:
         } else {
             out_kf = decode(r.image, info_.range);
         }
+        r.amplitude = amplitude(target, source);
+        if (info_.options.is_object() && info_.options.value("amplitude", false)) scale_excursions(out_kf, r.amplitude);
+        else r.amplitude = 1.0;
         r.tempo = tempo(target, source);
         const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(out_kf, in.skel, frames, in.fps);
