@@ -118,3 +118,56 @@ TEST_CASE("eval refuses an unknown held-out content and a one-content data set")
     CHECK_THROWS_AS(run_eval<hand_tiny>(clips, info, o, dir), value_error);
     CHECK(!fs::exists(dir));
 }
+
+TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed is refused before training")
+{
+    const auto clips = toy_set();  // synthesize_dataset(1, 3) at 60 fps
+    const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
+    eval_options o = {};
+    o.train = default_train_options();
+    o.train.iters = 4;
+    o.train.threads = 1;
+    o.folds = {"pointing"};
+    o.progress_out = nullptr;
+    o.write_partial = false;
+    o.synth_seed = 3;
+    const fs::path dir = fs::temp_directory_path() / ("handemo_eval_oracle_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    const auto r = run_eval<hand_tiny>(clips, info, o, dir);
+    // 1 fold x 4 targets x 1 take x 6 methods
+    REQUIRE(r.samples.size() == 24);
+    double oracle = 0, identity = 0;
+    for (const auto& s : r.samples) {
+        if (s.method == "oracle") {
+            const clip expected = synthesize_as(hand_motion::pointing, emotion::neutral, emotion_from_string(s.target), 0, 3);
+            CHECK(s.rmse_real > 0);  // the real take has its own per-take variation
+            CHECK(s.rmse_real == doctest::Approx(keyframe_rmse(expected, synthesize(hand_motion::pointing, emotion_from_string(s.target), 0, 3))));
+            oracle += s.rmse_real;
+        }
+        if (s.method == "identity") identity += s.rmse_real;
+    }
+    MESSAGE("pointing: mean keyframe RMSE to the real take, oracle " << oracle / 4 << " deg, identity " << identity / 4 << " deg");
+    CHECK(oracle < identity);
+    CHECK(has_method(r, "oracle"));
+    const std::string md = markdown_report(r);
+    CHECK(md.find("| all | oracle |") != std::string::npos);
+    CHECK(md.find("**oracle**") != std::string::npos);
+    CHECK(summary_csv(r).find("all,oracle,rmse_real,") != std::string::npos);
+    CHECK(summary_svg(r).find("oracle") != std::string::npos);
+
+    // without the seed: no oracle row anywhere in the report
+    o.synth_seed.reset();
+    o.reuse_models = true;
+    const auto plain = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(!has_method(plain, "oracle"));
+    CHECK(markdown_report(plain).find("oracle") == std::string::npos);
+
+    // a seed that does not regenerate the neutral takes, and names that are not synthetic takes
+    o.synth_seed = 4;
+    CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("--synth-seed 4"), value_error);
+    auto renamed = clips;
+    renamed[0].path = "walk_neutral_0.bvh";
+    o.synth_seed = 3;
+    CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(renamed, info, o, dir), doctest::Contains("walk_neutral_0.bvh"), value_error);
+    fs::remove_all(dir);
+}

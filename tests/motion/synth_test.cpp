@@ -234,3 +234,50 @@ TEST_CASE("synth: motion types are distinct movements (nearest-centroid on keyfr
             CHECK_MESSAGE(dist / static_cast<double>(x[ia].size()) > 2.0, a << " vs " << b);
         }
 }
+
+namespace {
+// RMSE in degrees over the 9 uniform keyframes (synthetic angles stay within joint limits: no wrapping).
+double keyframe_distance(const clip& a, const clip& b)
+{
+    const auto ka = extract_keyframes<9>(a), kb = extract_keyframes<9>(b);
+    REQUIRE(ka.angles.size() == kb.angles.size());
+    double s = 0;
+    for (std::size_t i = 0; i < ka.angles.size(); ++i) s += (ka.angles[i] - kb.angles[i]) * (ka.angles[i] - kb.angles[i]);
+    return std::sqrt(s / static_cast<double>(ka.angles.size()));
+}
+}  // namespace
+
+TEST_CASE("synth: synthesize_as keeps the input take's variation and takes the target's style")
+{
+    for (hand_motion m : all_hand_motions)
+        for (int take = 0; take < 2; ++take) {
+            // neutral -> neutral: the oracle is the neutral take itself, bit for bit
+            const clip in = synthesize(m, emotion::neutral, take, 2024);
+            const clip same = synthesize_as(m, emotion::neutral, emotion::neutral, take, 2024);
+            CHECK(same.frames == in.frames);
+            CHECK(same.angles == in.angles);
+            CHECK(same.positions == in.positions);
+        }
+    // Against the real emotional take, the oracle (same style, the neutral take's variation) is closer on
+    // average than the neutral input: only per-take variation separates it from the real clip.
+    double oracle = 0, input = 0;
+    int n = 0;
+    for (hand_motion m : all_hand_motions)
+        for (emotion e : all_emotions) {
+            if (e == emotion::neutral) continue;
+            for (int take = 0; take < 3; ++take) {
+                const clip in = synthesize(m, emotion::neutral, take, 2024);
+                const clip real = synthesize(m, e, take, 2024);
+                const clip orc = synthesize_as(m, emotion::neutral, e, take, 2024);
+                CHECK(orc.fps == real.fps);
+                // the target's tempo with the input take's jitter: within the jitter range of the real duration
+                CHECK(orc.duration() / real.duration() == doctest::Approx(1.0).epsilon(0.16));
+                oracle += keyframe_distance(orc, real), input += keyframe_distance(in, real), ++n;
+            }
+        }
+    oracle /= n, input /= n;
+    MESSAGE("synth oracle: mean keyframe RMSE to the real take " << oracle << " deg, neutral input " << input << " deg");
+    CHECK(oracle < input);
+    CHECK_THROWS_WITH_AS(synthesize_as(hand_motion::patting, emotion::neutral, emotion::sad, 0, 1, -1.0),
+                         doctest::Contains("synthesize_as: fps"), value_error);
+}

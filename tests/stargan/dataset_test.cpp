@@ -1,7 +1,11 @@
 #include <doctest/doctest.h>
 #include <handemo/stargan/dataset.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using namespace handemo;
@@ -71,4 +75,150 @@ TEST_CASE("load_folder refuses a folder whose clips have different skeletons")
     fs::copy_file(fs::path(HANDEMO_SHARED_DIR) / "data" / "xia" / "neutral_16_000.bvh", dir / "h_wave_sad_0.bvh");
     CHECK_THROWS_AS(stargan::load_folder(dir), shape_error);
     fs::remove_all(dir);
+}
+
+namespace {
+
+/// A labelled clip of `seconds` at 10 fps (the tempo estimators read durations only).
+stargan::labelled_clip timed_clip(const std::string& content, const std::string& emotion, double seconds, const std::string& take = "0")
+{
+    stargan::labelled_clip c;
+    c.path = content + "_" + emotion + "_" + take;
+    c.content = content, c.emotion = emotion, c.take = take;
+    c.motion = clip::make(hand_skeleton(), static_cast<std::size_t>(std::lround(seconds * 10)), 10);
+    return c;
+}
+
+double cv_error_of(const stargan::tempo_fit_result& r, stargan::tempo_estimator e)
+{
+    for (const auto& c : r.candidates)
+        if (c.estimator == e) return c.cv_error;
+    FAIL("no candidate " << stargan::to_string(e));
+    return 0;
+}
+
+}  // namespace
+
+TEST_CASE("tempo_fit recovers consistent duration ratios and prefers the simplest exact estimator")
+{
+    const std::vector<std::string> domains{"neutral", "slow", "fast"};
+    std::vector<stargan::labelled_clip> d;
+    const double neutral_seconds[] = {2.0, 3.0, 4.0, 5.0};
+    for (int i = 0; i < 4; ++i) {
+        const std::string content = "c" + std::to_string(i);
+        d.push_back(timed_clip(content, "neutral", neutral_seconds[i]));
+        d.push_back(timed_clip(content, "slow", 1.5 * neutral_seconds[i]));
+        d.push_back(timed_clip(content, "fast", 0.5 * neutral_seconds[i]));
+    }
+    const auto r = stargan::tempo_fit(d, domains, "neutral");
+    CHECK(r.cv_contents == 4);
+    CHECK(r.pairs == 8);
+    REQUIRE(r.candidates.size() == stargan::tempo_estimator_count);
+    for (const auto& c : r.candidates) {
+        CAPTURE(stargan::to_string(c.estimator));
+        if (c.estimator == stargan::tempo_estimator::keep) {
+            CHECK(c.cv_error == doctest::Approx(0.5 * (std::log(1.5) + std::log(2.0))));
+            continue;
+        }
+        CHECK(c.factors[1] == doctest::Approx(1.5));
+        CHECK(c.factors[2] == doctest::Approx(0.5));
+        CHECK(c.cv_error == doctest::Approx(0.0).epsilon(1e-9));
+    }
+    CHECK(r.estimator == stargan::tempo_estimator::median);  // every estimator but keep is exact: the simplest wins
+    CHECK(r.factors == std::vector<double>{1.0, 1.5, 0.5});
+    CHECK(stargan::tempo_factors(d, domains, "neutral") == r.factors);
+}
+
+TEST_CASE("tempo_fit does not blow up when one content's neutral capture is truncated")
+{
+    // Bandai's dash/run/walk-back neutrals are 20-31 frame fragments: the per-take ratio becomes 4-13x while the
+    // other contents agree on 1.5x. Here one of five contents has its neutral cut to a sixth.
+    const std::vector<std::string> domains{"neutral", "slow"};
+    std::vector<stargan::labelled_clip> d;
+    for (int i = 0; i < 5; ++i) {
+        const std::string content = "c" + std::to_string(i);
+        const double n = 2.0 + i;
+        d.push_back(timed_clip(content, "neutral", i == 0 ? n / 6 : n));
+        d.push_back(timed_clip(content, "slow", 1.5 * n));
+    }
+    const auto r = stargan::tempo_fit(d, domains, "neutral");
+    INFO("chosen " << stargan::to_string(r.estimator) << ", factor " << r.factors[1]);
+    CHECK(r.factors[0] == 1.0);
+    CHECK(r.factors[1] > 1.5 / 1.1);  // within 10% of the four agreeing contents, far from the truncated 9x
+    CHECK(r.factors[1] < 1.5 * 1.1);
+    CHECK(r.estimator != stargan::tempo_estimator::keep);
+    // the median ignores the truncated take entirely
+    CHECK(stargan::tempo_estimate(stargan::tempo_estimator::median, d, domains, "neutral")[1] == doctest::Approx(1.5));
+}
+
+TEST_CASE("tempo_fit keeps the duration when contents disagree on the direction of the change")
+{
+    // "x" doubles the duration of c0 and c2 and halves that of c1 and c3: no factor predicts a left-out content.
+    const std::vector<std::string> domains{"neutral", "x"};
+    std::vector<stargan::labelled_clip> d;
+    for (int i = 0; i < 4; ++i) {
+        const std::string content = "c" + std::to_string(i);
+        d.push_back(timed_clip(content, "neutral", 2.0));
+        d.push_back(timed_clip(content, "x", i % 2 ? 1.0 : 4.0));
+    }
+    const auto r = stargan::tempo_fit(d, domains, "neutral");
+    CHECK(r.estimator == stargan::tempo_estimator::keep);
+    CHECK(r.factors == std::vector<double>{1.0, 1.0});
+    CHECK(cv_error_of(r, stargan::tempo_estimator::keep) == doctest::Approx(std::log(2.0)));
+    for (const auto& c : r.candidates)
+        if (c.estimator != stargan::tempo_estimator::keep) CHECK(c.cv_error > std::log(2.0));
+}
+
+TEST_CASE("tempo_fit without a second content uses the duration-weighted ratio and reports no CV error")
+{
+    const std::vector<std::string> domains{"neutral", "slow"};
+    const std::vector<stargan::labelled_clip> d{timed_clip("a", "neutral", 2.0, "0"), timed_clip("a", "slow", 6.0, "0"),
+                                                timed_clip("a", "neutral", 4.0, "1"), timed_clip("a", "slow", 6.0, "1")};
+    const auto r = stargan::tempo_fit(d, domains, "neutral");
+    CHECK(r.cv_contents == 0);
+    CHECK(r.estimator == stargan::tempo_estimator::weighted);
+    CHECK(r.factors[1] == doctest::Approx(12.0 / 6.0));
+    for (const auto& c : r.candidates) CHECK(std::isnan(c.cv_error));
+}
+
+TEST_CASE("tempo_fit on Bandai: its choice predicts left-out contents' durations no worse than keeping them")
+{
+    const fs::path dir = fs::path(HANDEMO_SHARED_DIR) / "data" / "bandai";
+    if (!fs::is_directory(dir)) {
+        MESSAGE("skipped: no Bandai data at " << dir.string());
+        return;
+    }
+    const auto d = stargan::load_folder(dir);
+    const std::vector<std::string> domains{"normal", "happy", "sad", "angry", "proud", "not-confident", "tired", "active"};
+    const auto r = stargan::tempo_fit(d, domains, "normal");
+    for (const auto& c : r.candidates) {
+        std::string f;
+        for (double x : c.factors) f += " " + std::to_string(x).substr(0, 4);
+        MESSAGE("Bandai tempo " << stargan::to_string(c.estimator) << ": LOO-content mean |log error| " << c.cv_error << ", factors" << f);
+    }
+    MESSAGE("Bandai tempo: chosen " << stargan::to_string(r.estimator));
+    CHECK(r.cv_contents == 7);
+    CHECK(cv_error_of(r, r.estimator) <= cv_error_of(r, stargan::tempo_estimator::keep));
+    // Nested: the whole procedure (including its choice) fitted without each content, scored on that content.
+    double chosen = 0, keep = 0;
+    const auto contents = stargan::contents_of(d);
+    for (const auto& held : contents) {
+        std::vector<stargan::labelled_clip> train, test;
+        for (const auto& c : d) (c.content == held ? test : train).push_back(c);
+        const auto f = stargan::tempo_fit(train, domains, "normal").factors;
+        double e = 0, k = 0;
+        std::size_t n = 0;
+        for (const auto& c : test) {
+            if (c.emotion == "normal") continue;
+            const auto base = std::find_if(test.begin(), test.end(), [&](const auto& b) { return b.emotion == "normal" && b.take == c.take; });
+            REQUIRE(base != test.end());
+            const double real = c.motion.duration() / base->motion.duration();
+            const auto i = static_cast<std::size_t>(std::find(domains.begin(), domains.end(), c.emotion) - domains.begin());
+            e += std::abs(std::log(f[i] / real)), k += std::abs(std::log(real)), ++n;
+        }
+        chosen += e / static_cast<double>(n), keep += k / static_cast<double>(n);
+    }
+    chosen /= static_cast<double>(contents.size()), keep /= static_cast<double>(contents.size());
+    MESSAGE("Bandai tempo, nested LOO-content mean |log error|: tempo_fit " << chosen << ", keep " << keep);
+    CHECK(chosen <= keep);
 }

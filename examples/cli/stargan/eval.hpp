@@ -1,6 +1,7 @@
 // `handemo eval --data DIR --config NAME --report OUT_DIR [...]`: the leave-one-content-out evaluation of
 // emotion transfer against captured motion and baselines (the hand paper's Section 5 future work); writes
 // report.md, results.csv, summary.csv, summary.svg and per-fold models and loss curves into OUT_DIR.
+// `--synth-seed S` (the synthetic hand set's seed) adds the "oracle" row (synthesize_as(), synth.hpp).
 #pragma once
 
 #include "../registry.hpp"
@@ -8,6 +9,7 @@
 
 #include <handemo/eval/protocol.hpp>
 
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -18,6 +20,8 @@ namespace handemo::cli::eval_cmd {
 struct eval_cli {
     std::string data, config = "hand-embedded", report;
     handemo::cli::train_overrides ov;
+    std::uint64_t synth_seed = 0;
+    bool has_synth_seed = false;
     handemo::eval::eval_options opt{.train = handemo::eval::default_train_options()};
     std::string command;
 };
@@ -27,10 +31,12 @@ void run_eval_cli(eval_cli& o)
     using namespace handemo;
     finish_train_options(o.opt.train, o.ov);
     o.opt.command = o.command;
+    if (o.has_synth_seed) o.opt.synth_seed = o.synth_seed;
     const auto r = eval::run_eval_named(o.data, o.config, o.opt, o.report);
     std::cout << "eval: " << r.folds.size() << " folds, " << r.samples.size() << " scored clips in " << r.seconds / 60.0
               << " min; wrote " << o.report << "/report.md, results.csv, summary.csv, summary.svg\n";
     for (const std::string& m : eval::method_names()) {
+        if (!eval::has_method(r, m)) continue;
         std::cout << "eval: " << m << ":";
         for (const auto& d : eval::metric_defs()) {
             if (d.better == 0) continue;
@@ -55,8 +61,15 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--seed", t.seed, "Random seed (fold i trains with seed + i)")->capture_default_str();
     sub->add_option("--folds", o->opt.folds, "Held-out contents to run, comma separated (default: all)")->delimiter(',');
     handemo::cli::add_train_options(sub, t, o->ov);
+    auto* seed_opt = sub->add_option("--synth-seed", o->synth_seed,
+                                     "Seed of a synthetic hand set (`handemo synth --seed`): adds the 'oracle' method, the input "
+                                     "take re-synthesised in the target's style");
+    sub->add_option("--synth-fps", o->opt.synth_fps, "Frame rate the synthetic set was made at (`handemo synth --fps`)")
+        ->capture_default_str()
+        ->needs(seed_opt);
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
-    sub->callback([o, sub] {
+    sub->callback([o, sub, seed_opt] {
+        o->has_synth_seed = seed_opt->count() > 0;
         o->command = "handemo eval";
         for (const auto* opt : sub->get_options())
             if (opt->count() > 0 && opt->get_name() != "--help") {

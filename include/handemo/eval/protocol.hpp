@@ -2,8 +2,11 @@
 // training, Section 4; numeric comparison with captured motion is its Section 5 future work). For each fold:
 // train StarGAN (Eq. 4-5, train.hpp) on every other content, transfer each held-out neutral take to every
 // other emotion (Section 3.4, transfer.hpp), run the baselines (baselines.hpp) and score everything against
-// the held-out take of the target emotion (metrics.hpp, classifier.hpp). Templated on the configuration so a
-// program instantiates only the networks it uses; run_eval_named() dispatches by name (all configurations).
+// the held-out take of the target emotion (metrics.hpp, classifier.hpp). On the synthetic hand set (synth.hpp)
+// with its seed known, an "oracle" row re-synthesises each neutral input take with the target's style and the
+// input take's own per-take variation (synthesize_as()): the floor that per-take variation leaves. Templated on
+// the configuration so a program instantiates only the networks it uses; run_eval_named() dispatches by name
+// (all configurations).
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -12,6 +15,7 @@
 #include <handemo/eval/classifier.hpp>
 #include <handemo/eval/metrics.hpp>
 #include <handemo/eval/report.hpp>
+#include <handemo/motion/synth.hpp>
 #include <handemo/render/svg.hpp>
 #include <handemo/stargan/configs.hpp>
 #include <handemo/stargan/dataset.hpp>
@@ -19,9 +23,11 @@
 #include <handemo/stargan/transfer.hpp>
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -39,6 +45,11 @@ struct eval_options {
     /// Load a fold's model from out_dir/folds/<content>/checkpoint.safetensors instead of training it when that
     /// checkpoint was trained with exactly these options to the end (re-scoring after a metric change).
     bool reuse_models = false;
+    /// Seed the synthetic hand set was generated with (`handemo synth --seed`): adds the method "oracle",
+    /// synthesize_as() of each neutral input's take with the target emotion's style (see synth.hpp). Every clip
+    /// name must parse with parse_file_stem() and every neutral clip must be reproduced by this seed and synth_fps.
+    std::optional<std::uint64_t> synth_seed;
+    double synth_fps = 60.0;  ///< frame rate the synthetic set was generated at (`handemo synth --fps`)
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
@@ -98,7 +109,39 @@ inline std::string options_text(const eval_options& o)
     for (auto it = j.begin(); it != j.end(); ++it) s += it.key() + " " + it.value().dump() + "\n";
     s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nfold seed train.seed + fold index\n";
     s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
+    if (o.synth_seed) s += "synthetic set seed " + std::to_string(*o.synth_seed) + " at " + std::to_string(o.synth_fps) + " fps (oracle row)\n";
     return s;
+}
+
+/// Labels of a synthetic clip for the oracle, checking that `seed` and `fps` regenerate every neutral clip (a
+/// wrong seed would make the oracle a different take). Angles are compared to 1e-3 degrees (BVH and CSV keep 6
+/// decimals).
+inline std::vector<stem_labels> synth_labels(const std::vector<stargan::labelled_clip>& clips, const std::string& neutral,
+                                             std::uint64_t seed, double fps)
+{
+    std::vector<stem_labels> out;
+    for (const auto& c : clips) {
+        const std::string stem = c.path.stem().string();
+        try {
+            out.push_back(parse_file_stem(stem));
+        } catch (const value_error& e) {
+            throw value_error(std::string("eval: --synth-seed: ") + e.what() + " (file " + c.path.string() +
+                              "; the oracle needs the synthetic hand set's names)");
+        }
+        if (c.emotion != neutral) continue;
+        const auto& l = out.back();
+        const clip again = synthesize(l.motion, l.emo, l.take, seed, fps);
+        double worst = again.frames == c.motion.frames && again.angles.size() == c.motion.angles.size() ? 0.0 : std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; worst < std::numeric_limits<double>::infinity() && i < again.angles.size(); ++i)
+            worst = std::max(worst, std::abs(again.angles[i] - c.motion.angles[i]));
+        if (!(worst <= 1e-3))
+            throw value_error("eval: --synth-seed " + std::to_string(seed) + " at " + std::to_string(fps) + " fps does not reproduce " +
+                              c.path.string() + " (" + std::to_string(again.frames) + " frames regenerated, " +
+                              std::to_string(c.motion.frames) + " read" +
+                              (worst < std::numeric_limits<double>::infinity() ? ", max angle difference " + std::to_string(worst) + " deg" : std::string()) +
+                              "): give the seed and fps the set was generated with");
+    }
+    return out;
 }
 
 }  // namespace detail
@@ -108,7 +151,8 @@ inline std::string options_text(const eval_options& o)
 /// @param out_dir the report folder: per-fold models and loss curves go to out_dir/folds/<content>/
 /// @return every record; the caller writes the report with write_report() (run_eval_named() does).
 /// @throws value_error for an unknown held-out content, a data set with a single content, or no neutral takes
-///         in a fold; the errors of training and transfer otherwise.
+///         in a fold; with opt.synth_seed, for a clip name that is not a synthetic take or a neutral clip the seed
+///         does not reproduce; the errors of training and transfer otherwise.
 template <stargan::stargan_config Config>
 eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const stargan::config_info& info, const eval_options& opt,
                      const std::filesystem::path& out_dir)
@@ -129,6 +173,9 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
             throw value_error("eval: --folds: content '" + f + "' is not in the data set (contents: " + known + ")");
         }
     for (const auto& c : clips) (void)stargan::domain_index(info, c.emotion);  // unknown emotion: error naming it
+    // labels of the synthetic set, parallel to clips (empty without synth_seed)
+    const std::vector<stem_labels> synth =
+        opt.synth_seed ? detail::synth_labels(clips, info.neutral, *opt.synth_seed, opt.synth_fps) : std::vector<stem_labels>{};
 
     eval_result res;
     res.config = info.name;
@@ -255,11 +302,17 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 const auto tr_res = model.transfer(in->src->motion, target);
                 const std::size_t nn = nearest_neighbour<K>(in->src->motion, train, target);
                 const clip mo = offset.transfer(in->src->motion, target, tr_res.tempo);
-                const std::pair<const char*, const clip*> outs[] = {{"stargan", &tr_res.motion},
-                                                                    {"identity", &in->src->motion},
-                                                                    {"mean-offset", &mo},
-                                                                    {"nearest-neighbour", &train[nn].motion},
-                                                                    {"real", &real->src->motion}};
+                std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &tr_res.motion},
+                                                                         {"identity", &in->src->motion},
+                                                                         {"mean-offset", &mo},
+                                                                         {"nearest-neighbour", &train[nn].motion},
+                                                                         {"real", &real->src->motion}};
+                clip oracle;
+                if (opt.synth_seed) {
+                    const stem_labels& l = synth[static_cast<std::size_t>(in->src - clips.data())];
+                    oracle = synthesize_as(l.motion, l.emo, emotion_from_string(target), l.take, *opt.synth_seed, opt.synth_fps);
+                    outs.push_back({"oracle", &oracle});
+                }
                 const double real_rom = ratio(real->ch.range_of_motion, in->ch.range_of_motion, "range of motion");
                 const double real_speed = ratio(real->ch.speed, in->ch.speed, "speed");
                 for (const auto& [method, out] : outs) {

@@ -21,10 +21,11 @@
 
 namespace handemo::eval {
 
-/// @brief Method names in report order; "real" is the captured target clip (the reference row).
+/// @brief Method names in report order; "real" is the captured target clip (the reference row), "oracle" the
+/// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed).
 inline const std::vector<std::string>& method_names()
 {
-    static const std::vector<std::string> m{"stargan", "identity", "mean-offset", "nearest-neighbour", "real"};
+    static const std::vector<std::string> m{"stargan", "identity", "mean-offset", "nearest-neighbour", "real", "oracle"};
     return m;
 }
 
@@ -67,6 +68,12 @@ struct eval_result {
     std::vector<sample_record> samples;
     double seconds = 0;
 };
+
+/// @brief Whether any sample of `r` is of `method` (the report leaves out rows of methods that were not run).
+inline bool has_method(const eval_result& r, const std::string& method)
+{
+    return std::any_of(r.samples.begin(), r.samples.end(), [&](const sample_record& s) { return s.method == method; });
+}
 
 /// @brief One metric of the report.
 struct metric_def {
@@ -268,7 +275,12 @@ inline std::string markdown_report(const eval_result& r)
     s += "Methods: **stargan** (the trained G, tempo from the training set's duration ratios); **identity** (output = input); "
          "**mean-offset** (input keyframes + the training-set mean keyframe difference emotion - neutral over same content "
          "and take pairs, same tempo as stargan); **nearest-neighbour** (the training clip of the target emotion with the "
-         "closest keyframes); **real** (the captured target clip itself: the reference).\n\n";
+         "closest keyframes); **real** (the captured target clip itself: the reference)";
+    if (has_method(r, "oracle"))
+        s += "; **oracle** (synthetic set only: the neutral input's take synthesised again with the target emotion's "
+             "style parameters and the input take's own per-take variation, synthesize_as(); its distance to the real "
+             "take is the floor that per-take variation leaves)";
+    s += ".\n\n";
     s += "Metrics: RMSE over the 9 uniform keyframes (differences wrapped to (-180, 180]); emotion recognised: a "
          "nearest-centroid classifier (shrunk pooled within-class covariance) on keyframe features, trained only on the "
          "real training clips of the fold, never on the discriminator; content kept: the nearest `" + r.neutral +
@@ -288,6 +300,7 @@ inline std::string markdown_report(const eval_result& r)
     all_targets.insert(all_targets.begin(), "all");
     for (const auto& t : all_targets)
         for (const auto& me : method_names()) {
+            if (!has_method(r, me)) continue;
             s += "| " + t + " | " + me + " |";
             for (const auto& m : ms) {
                 const auto v = over_folds(r, m, t, me);
@@ -371,7 +384,7 @@ inline std::string markdown_report(const eval_result& r)
              "nearest-neighbour wins on emotion recognition it copies a real emotional clip of another content (see its "
              "content-kept column), which no transfer method can match without giving up content; where the ROM or speed "
              "ratio errors lose, G's amplitude change is too small (raise lambda_cls or train longer, judged on the training "
-             "set) and the tempo is the training-set median, not the take's.\n";
+             "set) and the tempo is the training-set estimate (tempo_fit()), not the take's.\n";
     }
     return s;
 }

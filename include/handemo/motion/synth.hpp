@@ -316,19 +316,16 @@ inline std::uint64_t synth_seed(hand_motion m, emotion e, int take, std::uint64_
 
 }  // namespace detail
 
-/// @brief Synthesises one take: `motion` performed with `emo`, exactly 2 cycles, on hand_skeleton().
-/// @param take take number (any int; different takes differ by the seeded per-take variation)
-/// @param seed dataset seed; the same (motion, emotion, take, seed, fps) always gives the same clip
-/// @param fps frame rate (> 0)
-/// @return a clip of round(2 period / tempo x fps) + 1 frames, angles within every joint limit, root
-///         translation (pushing only) in the forearm's position channels.
-/// @throws value_error for a non-positive fps.
-inline clip synthesize(hand_motion motion, emotion emo, int take, std::uint64_t seed, double fps = 60.0)
+namespace detail {
+
+/// One take of `motion` with the style `st`, its per-take variation drawn from `rng_seed`. The sequence of
+/// random draws does not depend on the style, so one seed gives the same variation under every style
+/// (synthesize_as() relies on it).
+inline clip synthesize_take(hand_motion motion, const emotion_style& st, std::uint64_t rng_seed, double fps, const char* who)
 {
     if (!(fps > 0) || !std::isfinite(fps) || fps > 10000)
-        throw value_error("synthesize: fps " + std::to_string(fps) + " is not in (0, 10000]");
-    const emotion_style st = style_of(emo);
-    detail::synth_rng rng(detail::synth_seed(motion, emo, take, seed));
+        throw value_error(std::string(who) + ": fps " + std::to_string(fps) + " is not in (0, 10000]");
+    synth_rng rng(rng_seed);
     const double tempo_var = rng.uniform(0.93, 1.07);
     const double amp_var = rng.uniform(0.9, 1.1);
     const double phase0 = rng.uniform(-0.03, 0.03);
@@ -339,7 +336,7 @@ inline clip synthesize(hand_motion motion, emotion emo, int take, std::uint64_t 
         tremor_hz[f] = st.tremor_hz * rng.uniform(0.9, 1.1);
         tremor_phase[f] = rng.uniform();
     }
-    auto tracks = detail::motion_tracks(motion);
+    auto tracks = motion_tracks(motion);
     std::vector<double> amp_jit(tracks.size()), base_jit(tracks.size());
     for (std::size_t i = 0; i < tracks.size(); ++i) {
         amp_jit[i] = rng.uniform(0.95, 1.05);
@@ -370,7 +367,7 @@ inline clip synthesize(hand_motion motion, emotion emo, int take, std::uint64_t 
             const auto& tr = tracks[i];
             double ph = phi + phase0 - tr.phase;
             if (tr.finger >= 0) ph -= finger_lag[static_cast<std::size_t>(tr.finger)];
-            double w = tr.amp != 0.0 ? detail::shape(detail::wave_value(tr.w, ph, tr.width), st.sharpness) : 0.0;
+            double w = tr.amp != 0.0 ? shape(wave_value(tr.w, ph, tr.width), st.sharpness) : 0.0;
             const double amp = tr.amp * amp_var * amp_jit[i] * st.amplitude;
             const double off = tr.axis < 3 ? tr.base + base_jit[i] : tr.base;
             v[tr.joint * 6 + tr.axis] += off + amp * w;
@@ -397,6 +394,35 @@ inline clip synthesize(hand_motion motion, emotion emo, int take, std::uint64_t 
         }
     }
     return c;
+}
+
+}  // namespace detail
+
+/// @brief Synthesises one take: `motion` performed with `emo`, exactly 2 cycles, on hand_skeleton().
+/// @param take take number (any int; different takes differ by the seeded per-take variation)
+/// @param seed dataset seed; the same (motion, emotion, take, seed, fps) always gives the same clip
+/// @param fps frame rate (> 0)
+/// @return a clip of round(2 period / tempo x fps) + 1 frames, angles within every joint limit, root
+///         translation (pushing only) in the forearm's position channels.
+/// @throws value_error for a non-positive fps.
+inline clip synthesize(hand_motion motion, emotion emo, int take, std::uint64_t seed, double fps = 60.0)
+{
+    return detail::synthesize_take(motion, style_of(emo), detail::synth_seed(motion, emo, take, seed), fps, "synthesize");
+}
+
+/// @brief The oracle of a transfer on the synthetic set: take `take` of `input_emotion` performed again with
+/// `target_emotion`'s style, keeping the input take's per-take variation (tempo, amplitude and per-track
+/// jitter, phases, base pose, noise: the same random draws). Its distance to the real take of
+/// `target_emotion` is what per-take variation alone leaves: no transfer that sees only the input can be
+/// expected to come closer. synthesize_as(m, e, e, ...) == synthesize(m, e, ...).
+/// @param take, seed, fps as for synthesize() (those of the input take)
+/// @return a clip of round(2 period / tempo x fps) + 1 frames, with the target's tempo and the input's tempo jitter.
+/// @throws value_error for a non-positive fps.
+inline clip synthesize_as(hand_motion motion, emotion input_emotion, emotion target_emotion, int take, std::uint64_t seed,
+                          double fps = 60.0)
+{
+    return detail::synthesize_take(motion, style_of(target_emotion), detail::synth_seed(motion, input_emotion, take, seed), fps,
+                                   "synthesize_as");
 }
 
 /// @brief File stem of a take: `hand_<motion>_<emotion>_<take>` (motion names use '-', e.g. hand-on-mouse).

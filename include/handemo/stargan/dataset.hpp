@@ -2,8 +2,11 @@
 // clips whose content (motion type) and emotion come from file names `<prefix>_<content>_<emotion>_<take>`
 // (the synthetic hand set: `hand_crawling_angry_0.bvh`; Bandai: `dataset-1_walk_happy_001.bvh`) or from a
 // `manifest.csv` (`path,content,emotion`). Also the tempo factors of the transfer step: Table 1's "fast" and
-// "slow" cannot live in K time-normalised keyframes, so each target emotion gets the median ratio of its
-// clips' durations to the neutral take of the same content.
+// "slow" cannot live in K time-normalised keyframes, so each target emotion gets a factor on the input's
+// duration, estimated from its clips' durations relative to the neutral take of the same content. The
+// estimator (median ratio, duration-weighted ratio, geometric mean, a robust two-way fit, or no change) is
+// chosen per data set by leave-one-content-out cross-validation on the training clips (tempo_fit()): on
+// Bandai, truncated neutral captures (20-31 frames) make per-take ratios of 3-13x.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -15,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -206,41 +210,237 @@ inline std::vector<std::string> contents_of(const std::vector<labelled_clip>& d)
     return {s.begin(), s.end()};
 }
 
-/// @brief Tempo factor per domain: the median over clips of that emotion of duration / duration of the
-/// neutral clip of the same content (the same take when there is one, otherwise the mean over the
-/// content's neutral takes). Domains without data, and the neutral domain itself, get 1.
+/// @brief The tempo estimators tempo_fit() chooses from, simplest first (the order breaks ties).
+enum class tempo_estimator : std::uint8_t {
+    keep,      ///< 1: keep the input's duration
+    median,    ///< median over pairs of duration / paired neutral duration
+    weighted,  ///< sum of durations / sum of the paired neutral durations (duration-weighted ratio)
+    log_mean,  ///< exp of the mean log ratio: the least-squares fit of log duration = take effect + style effect
+    two_way,   ///< Tukey's median polish of log duration = take effect + style effect (robust two-way fit)
+};
+inline constexpr std::size_t tempo_estimator_count = 5;
+
+/// @brief Name of an estimator: keep, median, weighted, log-mean, two-way.
+constexpr std::string_view to_string(tempo_estimator e) noexcept
+{
+    constexpr std::string_view n[] = {"keep", "median", "weighted", "log-mean", "two-way"};
+    return n[static_cast<int>(e)];
+}
+
+/// @brief One candidate of tempo_fit(): its factors on the whole set and its cross-validation error.
+struct tempo_candidate {
+    tempo_estimator estimator;
+    std::vector<double> factors;  ///< [C] fitted on every given clip
+    double cv_error;              ///< mean over contents of the mean |log(predicted / real ratio)|; NaN without CV
+};
+
+/// @brief The tempo factors tempo_fit() chose, the estimator that made them and every candidate's score.
+struct tempo_fit_result {
+    std::vector<double> factors;            ///< [C] the chosen estimator's factors
+    tempo_estimator estimator;              ///< the chosen estimator
+    std::vector<tempo_candidate> candidates;  ///< every estimator, in tempo_estimator order
+    std::size_t cv_contents = 0;            ///< contents scored by leave-one-content-out (0: no CV, fallback)
+    std::size_t pairs = 0;                  ///< (emotion clip, neutral) pairs in the given clips
+};
+
+namespace detail {
+
+/// One emotion clip and the neutral duration it is compared with (same content and take, otherwise the mean
+/// over the content's neutral takes).
+struct tempo_pair {
+    std::size_t domain;
+    std::string content;
+    double duration, neutral_duration;
+    double ratio() const noexcept { return duration / neutral_duration; }
+};
+
+inline std::vector<tempo_pair> tempo_pairs(const std::vector<const labelled_clip*>& d, const std::vector<std::string>& domains,
+                                           const std::string& neutral)
+{
+    std::map<std::pair<std::string, std::string>, double> neutral_by_take;
+    std::map<std::string, std::pair<double, int>> neutral_mean;
+    for (const auto* c : d)
+        if (c->emotion == neutral) {
+            neutral_by_take[{c->content, c->take}] = c->motion.duration();
+            auto& m = neutral_mean[c->content];
+            m.first += c->motion.duration();
+            m.second += 1;
+        }
+    std::vector<tempo_pair> out;
+    for (const auto* c : d) {
+        if (c->emotion == neutral) continue;
+        const auto k = std::find(domains.begin(), domains.end(), c->emotion);
+        if (k == domains.end()) continue;
+        double base = 0;
+        if (auto it = neutral_by_take.find({c->content, c->take}); it != neutral_by_take.end())
+            base = it->second;
+        else if (auto m = neutral_mean.find(c->content); m != neutral_mean.end())
+            base = m->second.first / m->second.second;
+        if (base > 0 && c->motion.duration() > 0)
+            out.push_back({static_cast<std::size_t>(k - domains.begin()), c->content, c->motion.duration(), base});
+    }
+    return out;
+}
+
+inline double median_of(std::vector<double> v)
+{
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// Tukey's median polish of log duration over rows (content, take) and columns (domains): alternately
+/// subtract row and column medians of the residuals. Returns exp(column effect - neutral column effect).
+inline std::vector<double> tempo_two_way(const std::vector<const labelled_clip*>& d, const std::vector<std::string>& domains,
+                                         const std::string& neutral)
+{
+    std::vector<double> out(domains.size(), 1.0);
+    const auto nk = std::find(domains.begin(), domains.end(), neutral);
+    if (nk == domains.end()) return out;
+    // cells: row index, column index, residual (the mean log duration of the clips in the cell)
+    std::map<std::pair<std::string, std::string>, std::size_t> row_of;
+    std::map<std::pair<std::size_t, std::size_t>, std::pair<double, int>> sums;
+    for (const auto* c : d) {
+        const auto k = std::find(domains.begin(), domains.end(), c->emotion);
+        if (k == domains.end() || !(c->motion.duration() > 0)) continue;
+        const auto row = row_of.try_emplace({c->content, c->take}, row_of.size()).first->second;
+        auto& s = sums[{row, static_cast<std::size_t>(k - domains.begin())}];
+        s.first += std::log(c->motion.duration());
+        s.second += 1;
+    }
+    struct cell {
+        std::size_t row, col;
+        double res;
+    };
+    std::vector<cell> cells;
+    for (const auto& [rc, s] : sums) cells.push_back({rc.first, rc.second, s.first / s.second});
+    std::vector<double> col_effect(domains.size(), 0.0);
+    std::vector<bool> has_col(domains.size(), false);
+    for (const auto& c : cells) has_col[c.col] = true;
+    const std::size_t neutral_col = static_cast<std::size_t>(nk - domains.begin());
+    if (!has_col[neutral_col]) return out;
+    auto sweep = [&](bool rows, std::size_t count) {
+        double moved = 0;
+        for (std::size_t i = 0; i < count; ++i) {
+            std::vector<double> v;
+            for (const auto& c : cells)
+                if ((rows ? c.row : c.col) == i) v.push_back(c.res);
+            if (v.empty()) continue;
+            const double m = median_of(std::move(v));
+            if (!rows) col_effect[i] += m;
+            for (auto& c : cells)
+                if ((rows ? c.row : c.col) == i) c.res -= m;
+            moved = std::max(moved, std::abs(m));
+        }
+        return moved;
+    };
+    for (int it = 0; it < 100; ++it) {
+        const double moved = std::max(sweep(true, row_of.size()), sweep(false, domains.size()));
+        if (moved < 1e-12) break;
+    }
+    for (std::size_t k = 0; k < domains.size(); ++k)
+        if (has_col[k] && k != neutral_col) out[k] = std::exp(col_effect[k] - col_effect[neutral_col]);
+    return out;
+}
+
+inline std::vector<double> tempo_estimate(tempo_estimator e, const std::vector<const labelled_clip*>& d,
+                                          const std::vector<std::string>& domains, const std::string& neutral)
+{
+    std::vector<double> out(domains.size(), 1.0);
+    if (e == tempo_estimator::keep) return out;
+    if (e == tempo_estimator::two_way) return tempo_two_way(d, domains, neutral);
+    const auto pairs = tempo_pairs(d, domains, neutral);
+    for (std::size_t k = 0; k < domains.size(); ++k) {
+        std::vector<double> ratios;
+        double num = 0, den = 0, logs = 0;
+        for (const auto& p : pairs)
+            if (p.domain == k) ratios.push_back(p.ratio()), num += p.duration, den += p.neutral_duration, logs += std::log(p.ratio());
+        if (ratios.empty()) continue;
+        switch (e) {
+        case tempo_estimator::median: out[k] = median_of(std::move(ratios)); break;
+        case tempo_estimator::weighted: out[k] = num / den; break;
+        default: out[k] = std::exp(logs / static_cast<double>(ratios.size())); break;  // log_mean
+        }
+    }
+    return out;
+}
+
+}  // namespace detail
+
+/// @brief The tempo factors of one estimator (see tempo_estimator): per domain, the duration of its clips
+/// relative to the neutral clip of the same content (the same take when there is one, otherwise the mean over
+/// the content's neutral takes). Domains without data, and the neutral domain itself, get 1.
+/// @param domains domain names in label order; @param neutral name of the neutral domain
+/// @return [C] factors
+inline std::vector<double> tempo_estimate(tempo_estimator e, const std::vector<labelled_clip>& d,
+                                          const std::vector<std::string>& domains, const std::string& neutral)
+{
+    std::vector<const labelled_clip*> p;
+    for (const auto& c : d) p.push_back(&c);
+    return detail::tempo_estimate(e, p, domains, neutral);
+}
+
+/// @brief Fits the tempo factors of the transfer step: every tempo_estimator is scored by leave-one-content-out
+/// cross-validation inside `d` (for each content holding (emotion, neutral) pairs: fit on the other contents,
+/// error = mean over that content's pairs of |log(predicted factor / real duration ratio)|; the score is the
+/// mean of these errors over the contents) and the estimator with the lowest score wins, ties going to the
+/// simpler (earlier in tempo_estimator). Only the given clips are used: pass the training set, never held-out
+/// data. With fewer than two contents holding pairs there is no cross-validation: `weighted` is used and
+/// every cv_error is NaN.
+/// @param domains domain names in label order; @param neutral name of the neutral domain
+/// @return the chosen factors ([C], 1 for the neutral domain and domains without data), the estimator and
+///         every candidate's factors and score.
+inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
+                                  const std::string& neutral)
+{
+    std::vector<const labelled_clip*> all;
+    for (const auto& c : d) all.push_back(&c);
+    const auto pairs = detail::tempo_pairs(all, domains, neutral);
+    std::set<std::string> scored;
+    for (const auto& p : pairs) scored.insert(p.content);
+
+    tempo_fit_result r;
+    r.pairs = pairs.size();
+    r.cv_contents = scored.size() >= 2 ? scored.size() : 0;
+    for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
+        const auto e = static_cast<tempo_estimator>(i);
+        r.candidates.push_back({e, detail::tempo_estimate(e, all, domains, neutral), std::nan("")});
+    }
+    if (r.cv_contents == 0) {
+        r.estimator = tempo_estimator::weighted;
+        r.factors = r.candidates[static_cast<std::size_t>(r.estimator)].factors;
+        return r;
+    }
+    std::vector<double> total(tempo_estimator_count, 0.0);
+    for (const auto& held : scored) {
+        std::vector<const labelled_clip*> train;
+        for (const auto* c : all)
+            if (c->content != held) train.push_back(c);
+        for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
+            const auto f = detail::tempo_estimate(static_cast<tempo_estimator>(i), train, domains, neutral);
+            double err = 0;
+            std::size_t n = 0;
+            for (const auto& p : pairs)
+                if (p.content == held) err += std::abs(std::log(f[p.domain] / p.ratio())), ++n;
+            total[i] += err / static_cast<double>(n);
+        }
+    }
+    std::size_t best = 0;
+    for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
+        r.candidates[i].cv_error = total[i] / static_cast<double>(scored.size());
+        if (r.candidates[i].cv_error < r.candidates[best].cv_error - 1e-12) best = i;
+    }
+    r.estimator = static_cast<tempo_estimator>(best);
+    r.factors = r.candidates[best].factors;
+    return r;
+}
+
+/// @brief Tempo factor per domain: tempo_fit()'s choice (used by prepare_data() and stored in checkpoints).
 /// @param domains domain names in label order; @param neutral name of the neutral domain
 inline std::vector<double> tempo_factors(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
                                          const std::string& neutral)
 {
-    std::map<std::pair<std::string, std::string>, double> neutral_by_take;
-    std::map<std::string, std::pair<double, int>> neutral_mean;
-    for (const auto& c : d)
-        if (c.emotion == neutral) {
-            neutral_by_take[{c.content, c.take}] = c.motion.duration();
-            auto& m = neutral_mean[c.content];
-            m.first += c.motion.duration();
-            m.second += 1;
-        }
-    std::vector<double> out(domains.size(), 1.0);
-    for (std::size_t k = 0; k < domains.size(); ++k) {
-        if (domains[k] == neutral) continue;
-        std::vector<double> ratios;
-        for (const auto& c : d) {
-            if (c.emotion != domains[k]) continue;
-            double base = 0;
-            if (auto it = neutral_by_take.find({c.content, c.take}); it != neutral_by_take.end())
-                base = it->second;
-            else if (auto m = neutral_mean.find(c.content); m != neutral_mean.end())
-                base = m->second.first / m->second.second;
-            if (base > 0 && c.motion.duration() > 0) ratios.push_back(c.motion.duration() / base);
-        }
-        if (ratios.empty()) continue;
-        std::sort(ratios.begin(), ratios.end());
-        const std::size_t n = ratios.size();
-        out[k] = n % 2 ? ratios[n / 2] : 0.5 * (ratios[n / 2 - 1] + ratios[n / 2]);
-    }
-    return out;
+    return tempo_fit(d, domains, neutral).factors;
 }
 
 }  // namespace handemo::stargan

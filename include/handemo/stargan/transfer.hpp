@@ -1,7 +1,7 @@
 // Emotion transfer of new motions with a trained model (Section 3.4 of the hand paper): keyframes ->
 // Eq. 3 image -> G(image, target) -> image -> Eq. 6 keyframes -> full-rate motion by interpolation.
-// Tempo: the output lasts the input's duration times tempo[target] / tempo[source] (the median duration
-// ratios learned from the training data, see dataset.hpp), because time-normalised keyframes cannot carry
+// Tempo: the output lasts the input's duration times tempo[target] / tempo[source] (duration ratios
+// to neutral learned from the training data by tempo_fit(), see dataset.hpp), because time-normalised keyframes cannot carry
 // Table 1's "fast" and "slow". Position channels (a body's root translation) are kept from the input and
 // stretched in time to the new length.
 // A residual model (train_options::residual) changes the input rather than redraw it: its output image is
@@ -65,7 +65,7 @@ public:
     }
 
     /// @brief Duration factor of a transfer from `source` (default: the neutral domain) to `target`:
-    /// tempo[target] / tempo[source], the learned median duration ratios to neutral.
+    /// tempo[target] / tempo[source], the learned duration ratios to neutral (tempo_fit()).
     double tempo(std::string_view target, std::optional<std::string_view> source = {}) const
     {
         return info_.tempo[domain(target)] / info_.tempo[domain(source ? *source : std::string_view(info_.neutral))];
