@@ -121,7 +121,7 @@ inline void run_demo(demo_cli& o)
 static handemo::cli::add_command reg_demo{1, [](CLI::App& app) {
     auto* sub = app.add_subcommand("demo", "Main job: synthesise data, train leaving one motion type out, transfer it to every emotion");
     auto o = std::make_shared<handemo::cli::demo_cmd::demo_cli>();
-    o->opt.iters = 3000;
+    o->opt.iters = 2000;
     o->opt.checkpoint_every = 500;
     sub->add_option("--out", o->out, "Output folder")->capture_default_str();
     sub->add_option("--config", o->config, "StarGAN configuration")->capture_default_str();

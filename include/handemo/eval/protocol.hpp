@@ -53,12 +53,11 @@ struct eval_options {
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
-/// default; `--preset paper` gives StarGAN as the paper trains it) with 4000 iterations per fold, a
+/// default; `--preset paper` gives StarGAN as the paper trains it) with its 2000 iterations per fold, a
 /// checkpoint at the end of each fold only. Chosen from training-set numbers only, never from held-out results.
 inline stargan::train_options default_train_options()
 {
-    stargan::train_options o = stargan::handemo_options();
-    o.iters = 4000;
+    stargan::train_options o = stargan::handemo_options();  // 2000 iterations, n_critic 1
     o.checkpoint_every = 1000000;  // the end of each fold only
     return o;
 }
@@ -255,6 +254,11 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         t0 = clock::now();
         auto [ckf, ckinfo] = stargan::read_checkpoint(fold_dir / "checkpoint.safetensors");
         const stargan::detail::emotion_model_impl<Config> model(ckf, ckinfo);
+        // the same model without the learned amplitude stage: what G alone does (an ablation row)
+        const bool has_amp = ckinfo.options.is_object() && ckinfo.options.value("amplitude", false);
+        auto g_info = ckinfo;
+        if (has_amp) g_info.options["amplitude"] = false;
+        const stargan::detail::emotion_model_impl<Config> model_g(ckf, g_info);
 
         // ---- baselines and the independent emotion classifier, from the training clips only
         const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
@@ -300,6 +304,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                     continue;
                 }
                 const auto tr_res = model.transfer(in->src->motion, target);
+                const clip g_only = has_amp ? model_g.transfer(in->src->motion, target).motion : clip{};
                 const std::size_t nn = nearest_neighbour<K>(in->src->motion, train, target);
                 const clip mo = offset.transfer(in->src->motion, target, tr_res.tempo);
                 std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &tr_res.motion},
@@ -307,6 +312,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                                                                          {"mean-offset", &mo},
                                                                          {"nearest-neighbour", &train[nn].motion},
                                                                          {"real", &real->src->motion}};
+                if (has_amp) outs.push_back({"stargan-g", &g_only});
                 clip oracle;
                 if (opt.synth_seed) {
                     const stem_labels& l = synth[static_cast<std::size_t>(in->src - clips.data())];

@@ -25,7 +25,7 @@ namespace handemo::eval {
 /// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed).
 inline const std::vector<std::string>& method_names()
 {
-    static const std::vector<std::string> m{"stargan", "identity", "mean-offset", "nearest-neighbour", "real", "oracle"};
+    static const std::vector<std::string> m{"stargan", "stargan-g", "identity", "mean-offset", "nearest-neighbour", "real", "oracle"};
     return m;
 }
 
@@ -316,6 +316,13 @@ inline std::string markdown_report(const eval_result& r)
     std::vector<std::string> losses;
     for (const std::string b : {"identity", "mean-offset", "nearest-neighbour"}) {
         s += "**vs " + b + "**\n\n";
+        {  // keyframe RMSE pair by pair: (fold, target emotion) pairs where StarGAN's mean is lower
+            int better = 0, n = 0;
+            for (const auto& c : cmp)
+                if (c.baseline == b && c.metric == "rmse_real" && c.target != "all") better += c.folds_better, n += c.folds;
+            if (n) s += "- RMSE to real, (fold, target emotion) pairs: StarGAN lower in " + std::to_string(better) + " of " + std::to_string(n) +
+                        " (" + detail::fmt(100.0 * better / n, 0) + "%).\n";
+        }
         for (const auto& m : ms) {
             if (m.better == 0) continue;
             std::string win, lose;
