@@ -17,7 +17,7 @@ struct train_overrides {
     std::string preset = "handemo";
     double lr = -1;
     std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
-        lambda_delta, ema;
+        lambda_delta, ema, augment;
     std::optional<int> n_critic;
     std::optional<bool> residual, amplitude;
     std::optional<std::string> range;
@@ -49,6 +49,8 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
     sub->add_option("--ema", o.ema, "Decay of the EMA of G's weights used for transfer, 0 = off (handemo 0.999, paper 0)");
     sub->add_option("--amplitude", o.amplitude,
                     "Scale the output's excursions by the learned amplitude ratio of the emotions, as the tempo (handemo true)");
+    sub->add_option("--augment", o.augment,
+                    "Per-channel offset jitter of training images and paired targets, std in network units (handemo 0.1, paper 0)");
     sub->add_option("--range", o.range, "Eq. 3 range: 'channel' (per channel, wrapped against a reference) or 'global' (the paper's)");
 }
 
@@ -74,6 +76,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.ema = o.ema.value_or(p.ema);
     t.range = o.range.value_or(p.range);
     t.amplitude = o.amplitude.value_or(p.amplitude);
+    t.augment = o.augment.value_or(p.augment);
     t.validate();
 }
 

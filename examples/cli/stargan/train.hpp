@@ -53,6 +53,12 @@ inline void run_train(train_cli& o)
         write_file_atomic(fs::path(o.out) / "losses.svg", svg);
         std::cout << "train: " << tr.step() << " iterations done; wrote " << (fs::path(o.out) / "checkpoint.safetensors").string()
                   << " (G, D, Adam, RNG, range, tempo), generator.safetensors (PyTorch names), log.csv, losses.svg, range.json\n";
+        if (o.opt.amplitude) {
+            std::cout << "train: amplitude factors (excursion relative to " << info.neutral << "):";
+            for (std::size_t k = 0; k < info.domains; ++k) std::cout << " " << info.domain_names[k] << " " << tr.data().amplitude[k];
+            std::cout << " (leave-one-content-out on the training clips: RMSE " << tr.data().amplitude_check.second << " deg scaled vs "
+                      << tr.data().amplitude_check.first << " unscaled" << (tr.data().amplitude_check.second < tr.data().amplitude_check.first ? ")" : "; not used)") << "\n";
+        }
         std::cout << "train: tempo factors (duration relative to " << info.neutral << "):";
         for (std::size_t k = 0; k < info.domains; ++k) std::cout << " " << info.domain_names[k] << " " << tr.data().tempo[k];
         std::cout << "\n";

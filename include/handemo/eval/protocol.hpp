@@ -305,6 +305,14 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 }
                 const auto tr_res = model.transfer(in->src->motion, target);
                 const clip g_only = has_amp ? model_g.transfer(in->src->motion, target).motion : clip{};
+                // identity with the same learned amplitude and tempo, no G: what the amplitude stage alone buys
+                clip amp_only;
+                if (has_amp) {
+                    auto k = extract_keyframes<dynamic_keyframes>(in->src->motion, K);
+                    stargan::emotion_model::scale_excursions(k, tr_res.amplitude);
+                    amp_only = reconstruct(k, in->src->motion.skel, tr_res.motion.frames, in->src->motion.fps);
+                    amp_only.positions = stargan::stretch_positions(in->src->motion, tr_res.motion.frames);
+                }
                 const std::size_t nn = nearest_neighbour<K>(in->src->motion, train, target);
                 const clip mo = offset.transfer(in->src->motion, target, tr_res.tempo);
                 std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &tr_res.motion},
@@ -312,7 +320,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                                                                          {"mean-offset", &mo},
                                                                          {"nearest-neighbour", &train[nn].motion},
                                                                          {"real", &real->src->motion}};
-                if (has_amp) outs.push_back({"stargan-g", &g_only});
+                if (has_amp) outs.push_back({"stargan-g", &g_only}), outs.push_back({"amplitude-only", &amp_only});
                 clip oracle;
                 if (opt.synth_seed) {
                     const stem_labels& l = synth[static_cast<std::size_t>(in->src - clips.data())];

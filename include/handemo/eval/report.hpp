@@ -25,7 +25,8 @@ namespace handemo::eval {
 /// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed).
 inline const std::vector<std::string>& method_names()
 {
-    static const std::vector<std::string> m{"stargan", "stargan-g", "identity", "mean-offset", "nearest-neighbour", "real", "oracle"};
+    static const std::vector<std::string> m{"stargan", "stargan-g", "identity", "mean-offset", "amplitude-only",
+                                            "nearest-neighbour", "real", "oracle"};
     return m;
 }
 
@@ -218,7 +219,7 @@ inline std::vector<comparison> compare_with_baselines(const eval_result& r)
     std::vector<comparison> out;
     auto targets = targets_of(r);
     targets.insert(targets.begin(), "all");
-    for (const std::string b : {"identity", "mean-offset", "nearest-neighbour"})
+    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour"})
         for (const auto& m : metric_defs()) {
             if (m.better == 0) continue;
             for (const auto& t : targets) {
@@ -276,6 +277,9 @@ inline std::string markdown_report(const eval_result& r)
          "**mean-offset** (input keyframes + the training-set mean keyframe difference emotion - neutral over same content "
          "and take pairs, same tempo as stargan); **nearest-neighbour** (the training clip of the target emotion with the "
          "closest keyframes); **real** (the captured target clip itself: the reference)";
+    if (has_method(r, "stargan-g"))
+        s += "; **stargan-g** (the same trained G without the learned amplitude stage: what G alone does); "
+             "**amplitude-only** (the input with the learned amplitude and tempo, no G: what the amplitude stage alone does)";
     if (has_method(r, "oracle"))
         s += "; **oracle** (synthetic set only: the neutral input's take synthesised again with the target emotion's "
              "style parameters and the input take's own per-take variation, synthesize_as(); its distance to the real "
@@ -314,7 +318,8 @@ inline std::string markdown_report(const eval_result& r)
     s += "## Where StarGAN beats each baseline and where it does not\n\n";
     const auto cmp = compare_with_baselines(r);
     std::vector<std::string> losses;
-    for (const std::string b : {"identity", "mean-offset", "nearest-neighbour"}) {
+    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour"}) {
+        if (!has_method(r, b)) continue;
         s += "**vs " + b + "**\n\n";
         {  // keyframe RMSE pair by pair: (fold, target emotion) pairs where StarGAN's mean is lower
             int better = 0, n = 0;

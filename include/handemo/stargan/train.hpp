@@ -65,6 +65,9 @@ struct train_options {
     /// transfer scales the output keyframes' excursions about their per-channel mean by amplitude[target] /
     /// amplitude[source], learned from the training pairs as the tempo is (amplitude_factors())
     bool amplitude = false;
+    /// per-channel offset jitter: every training image (and its paired target) gets the same random offset per
+    /// channel, N(0, augment) in network units, so G's change cannot hinge on the absolute pose; 0: off
+    double augment = 0.0;
 
     /// @throws value_error naming the option.
     void validate() const
@@ -78,6 +81,7 @@ struct train_options {
         if (!(decay_start >= 0 && decay_start <= 1)) bad("decay_start must be in [0, 1]");
         if (checkpoint_every < 1) bad("checkpoint_every is below 1");
         if (log_every < 1) bad("log_every is below 1");
+        if (!(augment >= 0 && augment < 1)) bad("augment " + std::to_string(augment) + " is not in [0, 1)");
         if (!(ema >= 0 && ema < 1)) bad("ema decay " + std::to_string(ema) + " is not in [0, 1)");
         if (range != "global" && range != "channel") bad("range '" + range + "' is not 'global' or 'channel'");
     }
@@ -87,7 +91,8 @@ struct train_options {
                 {"lambda_gp", lambda_gp}, {"g_lr", g_lr},        {"d_lr", d_lr},             {"beta1", beta1},
                 {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed},
                 {"residual", residual}, {"lambda_id", lambda_id}, {"lambda_pair", lambda_pair},
-                {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}, {"amplitude", amplitude}};
+                {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}, {"amplitude", amplitude},
+                {"augment", augment}};
     }
 };
 
@@ -116,6 +121,7 @@ inline train_options handemo_options()
     o.ema = 0.999;
     o.range = "channel";
     o.amplitude = true;
+    o.augment = 0.1;
     o.n_critic = 1;
     o.iters = 2000;
     return o;
@@ -149,6 +155,9 @@ struct prepared_data {
     angle_range range;                     ///< p_min/p_max of Eq. 3
     std::vector<double> tempo;             ///< [C] tempo factor per domain
     std::vector<double> amplitude;         ///< [C] amplitude factor per domain (amplitude_factors())
+    /// amplitude_cv() on the training clips: mean RMSE without / with the factors; when scaling does not
+    /// beat identity there, `amplitude` is set to all 1 (the data set carries no usable amplitude style)
+    std::pair<double, double> amplitude_check{std::nan(""), std::nan("")};
     std::vector<std::string> joint_names;  ///< skeleton the model is trained for
     /// [M, C] for every image and domain, the index of the same content and take performed in that domain
     /// (another take of the content when that take is missing; the image itself for its own domain); -1: none
@@ -211,6 +220,56 @@ std::vector<double> amplitude_factors(const std::vector<labelled_clip>& clips, c
         out[d] = r.size() % 2 ? r[r.size() / 2] : 0.5 * (r[r.size() / 2 - 1] + r[r.size() / 2]);
     }
     return out;
+}
+
+/// @brief Leave-one-content-out check of the amplitude factors on training clips: for each content, the
+/// factors fitted on the other contents scale that content's neutral keyframes toward each of its emotional
+/// takes. Returns the mean keyframe RMSE (wrapped degrees) over those pairs without scaling (identity) and
+/// with it; NaN when there are fewer than two contents or no pairs.
+template <std::size_t K>
+std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
+                                       const std::vector<std::string>& domains, const std::string& neutral)
+{
+    std::vector<std::string> contents;
+    for (const auto& c : clips)
+        if (std::find(contents.begin(), contents.end(), c.content) == contents.end()) contents.push_back(c.content);
+    if (contents.size() < 2) return {std::nan(""), std::nan("")};
+    const auto rmse = [](const keyframes<K>& a, const keyframes<K>& b) {
+        double q = 0;
+        for (std::size_t i = 0; i < a.angles.size(); ++i) q += std::pow(wrap_angle_deg(a.angles[i] - b.angles[i]), 2);
+        return std::sqrt(q / static_cast<double>(a.angles.size()));
+    };
+    double s_id = 0, s_amp = 0;
+    std::size_t n = 0;
+    for (const auto& held : contents) {
+        std::vector<labelled_clip> other_c;
+        std::vector<keyframes<K>> other_k;
+        for (std::size_t m = 0; m < clips.size(); ++m)
+            if (clips[m].content != held) other_c.push_back(clips[m]), other_k.push_back(kfs[m]);
+        const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral);
+        for (std::size_t m = 0; m < clips.size(); ++m) {
+            if (clips[m].content != held || clips[m].emotion == neutral) continue;
+            const keyframes<K>* base = nullptr;
+            for (std::size_t q = 0; q < clips.size(); ++q)
+                if (clips[q].content == held && clips[q].emotion == neutral && (!base || clips[q].take == clips[m].take)) base = &kfs[q];
+            if (!base) continue;
+            const auto d = static_cast<std::size_t>(std::find(domains.begin(), domains.end(), clips[m].emotion) - domains.begin());
+            if (d >= domains.size()) continue;
+            auto scaled = *base;
+            const std::size_t C = scaled.joints * 3, kn = scaled.count();
+            for (std::size_t ch = 0; ch < C; ++ch) {
+                double mu = 0;
+                for (std::size_t i = 0; i < kn; ++i) mu += scaled.angles[i * C + ch];
+                mu /= static_cast<double>(kn);
+                for (std::size_t i = 0; i < kn; ++i) scaled.angles[i * C + ch] = mu + f[d] * (scaled.angles[i * C + ch] - mu);
+            }
+            s_id += rmse(*base, kfs[m]);
+            s_amp += rmse(scaled, kfs[m]);
+            ++n;
+        }
+    }
+    if (!n) return {std::nan(""), std::nan("")};
+    return {s_id / static_cast<double>(n), s_amp / static_cast<double>(n)};
 }
 
 /// @brief Pads a [3, K, J] network image into [3, H, W] (zeros bottom/right).
@@ -288,6 +347,8 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     }
     p.tempo = tempo_factors(clips, info.domain_names, info.neutral);
     p.amplitude = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
+    p.amplitude_check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
+    if (!(p.amplitude_check.second < p.amplitude_check.first)) p.amplitude.assign(p.amplitude.size(), 1.0);
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
         const auto net = to_network(encode(kfs[m], p.range));
@@ -723,6 +784,17 @@ private:
                 paired_ += 3 * data_.K * data_.J;
             }
         }
+        if (opt_.augment > 0)
+            for (std::size_t n = 0; n < N; ++n)
+                for (std::size_t c = 0; c < 3; ++c)
+                    for (std::size_t j = 0; j < data_.J; ++j) {
+                        const float off = static_cast<float>(opt_.augment * gen_.normal());
+                        for (std::size_t i = 0; i < data_.K; ++i) {
+                            const std::size_t at = n * per + (c * H + i) * W + j;
+                            x_[at] += off;
+                            y_[at] += off;
+                        }
+                    }
     }
 
     /// ema = d ema + (1 - d) g after every G update, d = min(options.ema, (1 + u) / (10 + u)) for the u-th
