@@ -92,9 +92,9 @@ inline vec3 euler_zxy_deg(const mat3& r) noexcept
     const double b = std::asin(sb);
     double a, c;
     if (std::abs(std::cos(b)) < 1e-9) {
-        // R = Rz(a + c) Rx(+-90): take everything as a.
+        // R = Rz(a +- c) Rx(+-90): take everything as a.
         c = 0;
-        a = sb > 0 ? std::atan2(r[3], r[0]) : std::atan2(r[3], r[0]);
+        a = std::atan2(r[3], r[0]);
     } else {
         a = std::atan2(-r[1], r[4]);
         c = std::atan2(-r[6], r[8]);
