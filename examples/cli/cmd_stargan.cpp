@@ -8,3 +8,9 @@
 #include "stargan/transfer.hpp"
 #include "stargan/demo.hpp"
 #include "stargan/eval.hpp"
+
+namespace handemo::cli {
+/// For `handemo glove live` (cmd_glove.cpp), so that the glove's translation unit does not compile every
+/// generator configuration again.
+std::unique_ptr<stargan::emotion_model> load_emotion_model(const std::filesystem::path& path) { return stargan::load_model(path); }
+}  // namespace handemo::cli

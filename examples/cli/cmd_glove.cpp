@@ -1,0 +1,21 @@
+// The glove subcommands (list, record, calibrate, live, simulate) in their own translation unit: the only
+// one of the CLI that includes <handemo/glove.hpp> (hidapi), built into the CLI only when the
+// handemo::glove target exists (examples/CMakeLists.txt).
+#include "registry.hpp"
+
+#include "glove/common.hpp"
+#include "glove/list.hpp"
+#include "glove/record.hpp"
+#include "glove/calibrate.hpp"
+#include "glove/simulate.hpp"
+#include "glove/live.hpp"
+
+static handemo::cli::add_command reg_glove{85, [](CLI::App& app) {
+    auto* glove = app.add_subcommand("glove", "Capture hand motion with a data glove (HID): list, record, calibrate, live transfer, simulate");
+    glove->require_subcommand(1);
+    handemo::cli::glove_cmd::add_list(glove);
+    handemo::cli::glove_cmd::add_record(glove);
+    handemo::cli::glove_cmd::add_calibrate(glove);
+    handemo::cli::glove_cmd::add_live(glove);
+    handemo::cli::glove_cmd::add_simulate(glove);
+}};
