@@ -243,7 +243,7 @@ TEST_CASE("residual G (handemo preset) is exactly the identity at initialisation
     o.iters = 10;
     o.threads = 1;
     o.progress_out = nullptr;
-    const auto data = prepare_data<hand_tiny>(clips, tiny_info(), {}, o.range);
+    const auto data = prepare_data<hand_tiny>(clips, tiny_info(), o);
     CHECK(data.range.per_channel());
     trainer<hand_tiny> tr(tiny_info(), data, o);
     // G(x, c) == x for every training image and target before any step
@@ -314,7 +314,7 @@ TEST_CASE("EMA weights: saved beside G, used by transfer, resumed bitwise")
     o.log_every = 1;
     o.checkpoint_every = 10;
     const fs::path a = fresh_dir("handemo_ema_a"), b = fresh_dir("handemo_ema_b");
-    const auto data = prepare_data<hand_tiny>(clips, tiny_info(), {}, o.range);
+    const auto data = prepare_data<hand_tiny>(clips, tiny_info(), o);
     trainer<hand_tiny> full(tiny_info(), data, o);
     full.run(a);
     CHECK(params_of(full.inference_gen()) != params_of(full.gen()));  // the average lags G
@@ -370,7 +370,7 @@ TEST_CASE("end to end: where emotions are large offsets, transfer of an unseen c
     o.progress_out = nullptr;
     o.checkpoint_every = 10000;
     const fs::path d = fresh_dir("handemo_e2e_offsets");
-    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(train, tiny_info(), {}, o.range), o);
+    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(train, tiny_info(), o), o);
     tr.run(d);
     const auto model = load_model(d);
     const labelled_clip* in = nullptr;

@@ -47,7 +47,7 @@ inline void run_train(train_cli& o)
             if (!fs::exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
             range = read_checkpoint(ck).second.range;  // a resumed run keeps its Eq. 3 range
         }
-        trainer<Config> tr(info, prepare_data<Config>(clips, info, range, o.opt.range), o.opt);
+        trainer<Config> tr(info, prepare_data<Config>(clips, info, o.opt, range), o.opt);
         tr.run(o.out, o.resume);
         const std::string svg = plot_losses_svg(loss_log_csv(tr.log()), {.title = "handemo train " + info.name + " (" + o.data + ")"});
         write_file_atomic(fs::path(o.out) / "losses.svg", svg);

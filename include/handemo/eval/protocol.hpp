@@ -243,7 +243,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
             fsum.train_g_cls = detail::csv_tail_mean(log, "G/cls");
             fsum.reused_model = true;
         } else {
-            stargan::trainer<Config> tr(info, stargan::prepare_data<Config>(train, info, {}, to.range), to);
+            stargan::trainer<Config> tr(info, stargan::prepare_data<Config>(train, info, to), to);
             tr.run(fold_dir);
             fsum.train_d_acc = detail::tail_mean(tr.log(), 5);
             fsum.train_g_cls = detail::tail_mean(tr.log(), 7);

@@ -169,6 +169,20 @@ struct prepared_data {
     std::size_t size() const noexcept { return labels.size(); }
 };
 
+/// @brief Scales every channel's excursion about its mean over the keyframes by `f` (in place).
+template <std::size_t K>
+void scale_keyframe_excursions(keyframes<K>& kf, double f) noexcept
+{
+    if (f == 1.0) return;
+    const std::size_t C = kf.joints * 3, n = kf.count();
+    for (std::size_t ch = 0; ch < C; ++ch) {
+        double m = 0;
+        for (std::size_t i = 0; i < n; ++i) m += kf.angles[i * C + ch];
+        m /= static_cast<double>(n);
+        for (std::size_t i = 0; i < n; ++i) kf.angles[i * C + ch] = m + f * (kf.angles[i * C + ch] - m);
+    }
+}
+
 /// @brief Excursion of keyframes: the sum over channels of each channel's standard deviation over the keyframes.
 template <std::size_t K>
 double keyframe_excursion(const keyframes<K>& kf)
@@ -293,11 +307,17 @@ inline void crop_image(const float* src, std::size_t H, std::size_t W, float* ds
 /// @param range the Eq. 3 range to use (a resumed run keeps its own); default: computed over `clips`.
 /// @param range_mode "global" (the paper's one p_min/p_max) or "channel" (compute_channel_range()), when
 ///        `range` is not given.
+/// @param amplitude_normalise train in the amplitude-normalised space of the amplitude stage
+///        (train_options::amplitude): every image's excursions about its per-channel keyframe mean are divided
+///        by its emotion's amplitude factor, so G learns what the emotions change besides amplitude and
+///        transfer scales G's output by the target's factor (inputs by 1/the source's); no-op when the
+///        factors are 1 (amplitude_cv() found none worth using).
 /// @throws shape_error when the clips' joint count is not the configuration's; value_error for an
 ///         emotion the configuration does not know (naming the file).
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
-                           std::optional<angle_range> range = {}, std::string_view range_mode = "global")
+                           std::optional<angle_range> range = {}, std::string_view range_mode = "global",
+                           bool amplitude_normalise = false)
 {
     constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
     if (clips.empty()) throw value_error("train: no clips to train on");
@@ -351,10 +371,20 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     if (!(p.amplitude_check.second < p.amplitude_check.first)) p.amplitude.assign(p.amplitude.size(), 1.0);
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
-        const auto net = to_network(encode(kfs[m], p.range));
+        auto kf = kfs[m];
+        if (amplitude_normalise) scale_keyframe_excursions(kf, 1.0 / p.amplitude[static_cast<std::size_t>(p.labels[m])]);
+        const auto net = to_network(encode(kf, p.range));
         pad_image(net.data.data(), K, J, p.images.data() + m * 3 * H * W, H, W);
     }
     return p;
+}
+
+/// @brief prepare_data() with the range mode and amplitude normalisation of `opt`.
+template <stargan_config Config>
+prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
+                           std::optional<angle_range> range = {})
+{
+    return prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude);
 }
 
 namespace detail {

@@ -80,16 +80,7 @@ public:
     }
 
     /// @brief Scales every channel's excursion about its mean over the keyframes by `f`.
-    static void scale_excursions(handemo::keyframes<dynamic_keyframes>& kf, double f) noexcept
-    {
-        const std::size_t C = kf.joints * 3, n = kf.count();
-        for (std::size_t ch = 0; ch < C; ++ch) {
-            double m = 0;
-            for (std::size_t i = 0; i < n; ++i) m += kf.angles[i * C + ch];
-            m /= static_cast<double>(n);
-            for (std::size_t i = 0; i < n; ++i) kf.angles[i * C + ch] = m + f * (kf.angles[i * C + ch] - m);
-        }
-    }
+    static void scale_excursions(handemo::keyframes<dynamic_keyframes>& kf, double f) noexcept { scale_keyframe_excursions(kf, f); }
 
     /// @brief Frame count of an output lasting `tempo` times an input of `frames` frames (at least 2).
     static std::size_t output_frames(std::size_t frames, double tempo) noexcept
@@ -133,7 +124,11 @@ public:
     {
         check_skeleton(in.skel);
         in.validate("transfer: input");
-        const auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
+        auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
+        const bool amp = info_.options.is_object() && info_.options.value("amplitude", false);
+        // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
+        const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
+        if (amp) scale_excursions(kf, 1.0 / a_src);
         transfer_result r;
         const std::size_t C = joints() * 3;
         for (std::size_t i = 0; i < kf.angles.size(); ++i) r.clamped_values += info_.range.contains(kf.angles[i], i % C) ? 0 : 1;
@@ -152,9 +147,9 @@ public:
         } else {
             out_kf = decode(r.image, info_.range);
         }
-        r.amplitude = amplitude(target, source);
-        if (info_.options.is_object() && info_.options.value("amplitude", false)) scale_excursions(out_kf, r.amplitude);
-        else r.amplitude = 1.0;
+        // back from the normalised space: the target's excursions (net: amplitude[target] / amplitude[source])
+        r.amplitude = amp ? amplitude(target, source) : 1.0;
+        if (amp) scale_excursions(out_kf, info_.amplitude[domain(target)]);
         r.tempo = tempo(target, source);
         const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(out_kf, in.skel, frames, in.fps);

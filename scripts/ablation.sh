@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The ablation of the handemo preset on the synthetic hand set (README, "Ablation"): the full leave-one-
+# content-out evaluation once per variant, then one Markdown table of keyframe RMSE to the real clip (mean +- std
+# over the 7 folds) and the share of (fold, target) pairs where the variant beats mean-offset.
+# Usage: scripts/ablation.sh [OUT_DIR] [VARIANT ...]   (default OUT_DIR /tmp/handemo_ablation, all variants)
+# Needs build/examples/handemo (the README's first command builds it). Each variant takes ~15-25 min on one core;
+# two run at a time (one thread each).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-/tmp/handemo_ablation}; shift || true
+bin=build/examples/handemo
+declare -A args=(
+  [handemo]=""
+  [paper]="--preset paper --iters 4000"
+  [no-pair]="--lambda-pair 0"
+  [no-residual]="--residual false"
+  [no-augment]="--augment 0"
+  [global-range]="--range global"
+  [no-ema]="--ema 0"
+  [no-id]="--lambda-id 0"
+)
+variants=("$@")
+if ((${#variants[@]} == 0)); then variants=(handemo paper no-pair no-residual no-augment global-range no-ema no-id); fi
+mkdir -p "$out"
+[[ -d "$out/data" ]] || "$bin" synth --out "$out/data" --takes 3 --seed 1 >/dev/null
+run() {  # variant
+  local v=$1
+  [[ -f "$out/$v/summary.csv" ]] && return 0
+  # shellcheck disable=SC2086
+  "$bin" eval --data "$out/data" --config hand-embedded --report "$out/$v" --threads 1 --synth-seed 1 ${args[$v]} \
+    >"$out/$v.log" 2>&1
+}
+running=0
+for v in "${variants[@]}"; do
+  [[ -n "${args[$v]+x}" ]] || { echo "ablation: unknown variant '$v' (known: ${!args[*]})" >&2; exit 1; }
+  run "$v" & running=$((running + 1))
+  if ((running == 2)); then wait -n; running=$((running - 1)); fi
+done
+wait
+echo "| variant | options | RMSE to real (deg) | G alone (deg) | identity | mean-offset | pairs beating mean-offset |"
+echo "|---|---|---|---|---|---|---|"
+for v in "${variants[@]}"; do
+  s="$out/$v/summary.csv"; r="$out/$v/report.md"
+  [[ -f "$s" ]] || continue
+  get() { awk -F, -v m="$1" '$1=="all" && $2==m && $3=="rmse_real" {printf "%.2f +- %.2f", $4, $5}' "$s"; }
+  pairs=$(grep -A2 '^\*\*vs mean-offset\*\*' "$r" | grep -o 'lower in [0-9]* of [0-9]* ([0-9]*%)' | head -1)
+  g=$(get stargan-g); [[ -n "$g" ]] || g="(no amplitude stage)"
+  echo "| $v | \`${args[$v]:-(defaults)}\` | $(get stargan) | $g | $(get identity) | $(get mean-offset) | ${pairs#lower in } |"
+done
