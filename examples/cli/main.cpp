@@ -1,4 +1,5 @@
-// handemo: the command-line front end. Subcommands are in cmd_*.cpp; errors print one line and exit 1.
+// handemo: the command-line front end. Subcommands are headers under motion/, render/ and stargan/, compiled
+// in cmd_motion.cpp, cmd_render.cpp and cmd_stargan.cpp; errors print one line and exit 1.
 #include "registry.hpp"
 
 #include <handemo/core/error.hpp>
