@@ -234,6 +234,7 @@ TEST_CASE("bvh: malformed files are format_errors naming file, line and field")
     expect_error(replace(tiny, "0.0333333", "0"), 14, "Frame Time 0 is not positive");
     expect_error(replace(tiny, "0.0333333", "-0.04"), 14, "Frame Time -0.04 is not positive");
     expect_error(replace(tiny, "0.0333333", "fast"), 14, "Frame Time: 'fast' is not a number");
+    expect_error(replace(tiny, "0.0333333", "1e-310"), 14, "Frame Time 1e-310 gives a frame rate of inf");
 }
 
 TEST_CASE("bvh: absurd sizes are refused before allocating")

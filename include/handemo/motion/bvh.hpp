@@ -401,6 +401,9 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
     }
     const double frame_time = cur.number({time_text, tm.line}, "Frame Time");
     if (!(frame_time > 0)) cur.fail(tm.line, "Frame Time " + std::string(time_text) + " is not positive");
+    if (!std::isfinite(1.0 / frame_time))  // a subnormal such as 1e-310
+        cur.fail(tm.line, "Frame Time " + std::string(time_text) + " gives a frame rate of " +
+                              std::to_string(1.0 / frame_time) + ", expected a finite one");
     if (auto rest = cur.rest_of_line(); !rest.empty())
         cur.fail(cur.line(), "unexpected '" + std::string(rest) + "' after Frame Time");
 
