@@ -1,7 +1,10 @@
 # Shared helpers of the CLI tests (cmake -P scripts that run the built `handemo`):
 #   run_ok(<name> <cli args>...)     the command must exit 0
-#   run_fail(<name> <cli args>...)   the command must exit non-zero with exactly one stderr line
-#                                    "handemo: error: ..."; that line is left in ${last_error}
+#   run_fail(<name> <cli args>...)   the command must exit 1 (the README: every failure, usage errors
+#                                    included, exits 1) with exactly one stderr line starting
+#                                    "handemo: error: "; that line is left in ${last_error}
+#   run_fail_file(<name> <file> <cli args>...)  as run_fail, and the error line must name <file> (its
+#                                    file name; the message may show the path as given or resolved)
 #   expect_error_matches(<regex>)    ${last_error} must match
 # Needs HANDEMO_CLI.
 function(run_ok name)
@@ -14,8 +17,8 @@ endfunction()
 
 function(run_fail name)
   execute_process(COMMAND ${HANDEMO_CLI} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(rc EQUAL 0)
-    message(FATAL_ERROR "${name}: expected a non-zero exit, got 0\n${out}")
+  if(NOT rc STREQUAL "1")
+    message(FATAL_ERROR "${name}: expected exit code 1, got '${rc}'\n${out}\n${err}")
   endif()
   string(STRIP "${err}" e)
   string(FIND "${e}" "\n" nl)
@@ -23,6 +26,17 @@ function(run_fail name)
     message(FATAL_ERROR "${name}: expected one line 'handemo: error: ...', got:\n${err}")
   endif()
   set(last_error "${e}" PARENT_SCOPE)
+  set(last_name "${name}" PARENT_SCOPE)
+endfunction()
+
+function(run_fail_file name file)
+  run_fail(${name} ${ARGN})
+  get_filename_component(base "${file}" NAME)
+  string(FIND "${last_error}" "${base}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "${name}: error '${last_error}' does not name the file '${base}'")
+  endif()
+  set(last_error "${last_error}" PARENT_SCOPE)
   set(last_name "${name}" PARENT_SCOPE)
 endfunction()
 

@@ -1,4 +1,5 @@
-// handemo: the command-line front end. Subcommands are in cmd_*.cpp; errors print one line and exit 1.
+// handemo: the command-line front end. Subcommands are headers under motion/, render/ and stargan/, compiled
+// in cmd_motion.cpp, cmd_render.cpp and cmd_stargan.cpp; errors print one line and exit 1.
 #include "registry.hpp"
 
 #include <handemo/core/error.hpp>
@@ -23,7 +24,9 @@ int main(int argc, char** argv)
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // app.exit prints --help / --version (code 0) or the one-line usage error; CLI11's own codes
+        // (106 required option missing, 109 extra arguments, ...) become 1, as every other failure.
+        return app.exit(e) == 0 ? 0 : 1;
     } catch (const std::exception& e) {
         std::cerr << "handemo: error: " << e.what() << "\n";
         return 1;

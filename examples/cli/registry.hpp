@@ -1,5 +1,6 @@
-// The handemo CLI is one program with subcommands; each subcommand lives in its own cmd_*.cpp and
-// registers itself here at static-initialisation time, so adding one never edits a shared file.
+// The handemo CLI is one program with subcommands; each subcommand lives in its own header (motion/,
+// render/, stargan/), included by its group's cmd_<group>.cpp, and registers itself here at
+// static-initialisation time, so adding one edits only its group's cmd_<group>.cpp.
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -1,7 +1,11 @@
 #include <doctest/doctest.h>
 #include <handemo/core/io.hpp>
 
+#include <csignal>
 #include <filesystem>
+#include <string>
+
+#include <sys/resource.h>
 
 namespace fs = std::filesystem;
 
@@ -26,7 +30,62 @@ TEST_CASE("read_file names the missing file")
                          doctest::Contains("/nonexistent/handemo.bvh"), handemo::io_error);
 }
 
-TEST_CASE("write_file_atomic into an unwritable place throws io_error and keeps the old file")
+TEST_CASE("write_file_atomic into an unwritable place throws io_error")
 {
     CHECK_THROWS_AS(handemo::write_file_atomic("/proc/handemo_cannot_write/x", "x"), handemo::io_error);
+}
+
+namespace {
+int entries(const fs::path& dir)
+{
+    int n = 0;
+    for ([[maybe_unused]] auto& e : fs::directory_iterator(dir)) ++n;
+    return n;
+}
+}  // namespace
+
+TEST_CASE("write_file_atomic whose write fails keeps the old file and leaves no temporary")
+{
+    // The write itself fails half-way: the process may not write files larger than 64 bytes
+    // (RLIMIT_FSIZE, which binds root too, unlike a read-only directory). A writer that truncated the
+    // old file in place would lose it here.
+    const fs::path dir = fs::temp_directory_path() / "handemo_io_fail_test";
+    fs::remove_all(dir);
+    const fs::path p = dir / "model.json";
+    handemo::write_file_atomic(p, "old content");
+    const std::string big(1 << 20, 'x');
+
+    rlimit saved{};
+    REQUIRE(getrlimit(RLIMIT_FSIZE, &saved) == 0);
+    const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // EFBIG instead of a signal
+    rlimit small = saved;
+    small.rlim_cur = 64;
+    REQUIRE(setrlimit(RLIMIT_FSIZE, &small) == 0);
+    std::string what;
+    try {
+        handemo::write_file_atomic(p, big);
+    } catch (const handemo::io_error& e) {
+        what = e.what();
+    }
+    setrlimit(RLIMIT_FSIZE, &saved);
+    std::signal(SIGXFSZ, old_handler);
+
+    CHECK(what.find(p.string()) != std::string::npos);  // io_error thrown, naming the file
+    CHECK(handemo::read_file(p) == "old content");
+    CHECK(entries(dir) == 1);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("write_file_atomic whose rename fails keeps what was there and leaves no temporary")
+{
+    // The target is a non-empty directory: the temporary is written, the rename over it fails.
+    const fs::path dir = fs::temp_directory_path() / "handemo_io_rename_test";
+    fs::remove_all(dir);
+    const fs::path p = dir / "out";
+    handemo::write_file_atomic(p / "kept.txt", "old content");
+    CHECK_THROWS_WITH_AS(handemo::write_file_atomic(p, "new"), doctest::Contains(p.string().c_str()), handemo::io_error);
+    CHECK(fs::is_directory(p));
+    CHECK(handemo::read_file(p / "kept.txt") == "old content");
+    CHECK(entries(dir) == 1);
+    fs::remove_all(dir);
 }

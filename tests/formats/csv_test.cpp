@@ -1,4 +1,4 @@
-// Tests of the CSV motion format: exact round trip on real clips, column matching by name in any order,
+// Tests of the CSV motion format (real clips: shared_data_test.cpp), column matching by name in any order,
 // the fps comment, and one test per malformed input (file, line and column named).
 #include <doctest/doctest.h>
 #include <handemo/motion/csv.hpp>
@@ -13,8 +13,6 @@ namespace fs = std::filesystem;
 using namespace handemo;
 
 namespace {
-
-const fs::path shared_dir = HANDEMO_SHARED_DIR;
 
 const std::string tiny_bvh =
     "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n"
@@ -77,22 +75,9 @@ TEST_CASE("csv: columns are matched by name in any order; CRLF, blanks and comme
     CHECK(parse_csv(tiny_csv.substr(tiny_csv.find('\n') + 1), "n.csv", ref.skel).fps == 30.0);
 }
 
-TEST_CASE("csv: round trip of real clips is exact (Bandai with underscores in names, Xia)")
+TEST_CASE("csv: a missing file is an error")
 {
-    const fs::path dir = fs::temp_directory_path() / ("handemo_formats_csv_" + std::to_string(::getpid()));
-    for (const fs::path& p : {shared_dir / "data/bandai/dataset-1_walk_sad_002.bvh", shared_dir / "data/xia/neutral_16_000.bvh"}) {
-        CAPTURE(p);
-        const clip a = read_bvh(p);
-        const fs::path out = dir / (p.stem().string() + ".csv");
-        write_csv(out, a);
-        const clip b = read_csv(out, a.skel);
-        CHECK(b.frames == a.frames);
-        CHECK(b.fps == a.fps);
-        CHECK(b.angles == a.angles);
-        CHECK(b.positions == a.positions);
-    }
-    fs::remove_all(dir);
-    CHECK_THROWS_AS((void)read_csv(dir / "missing.csv", skeleton{}), error);
+    CHECK_THROWS_AS((void)read_csv(fs::temp_directory_path() / "handemo_no_such_dir" / "missing.csv", skeleton{}), error);
 }
 
 TEST_CASE("csv: malformed files are format_errors naming file, line and column")

@@ -65,7 +65,8 @@ std::vector<T> with_guard(const std::vector<double>& v)
 template <class T>
 void check_geometry(const hk::conv_geometry& g, double tol, unsigned seed)
 {
-    INFO(describe(g), " T=", sizeof(T) == 4 ? "float" : "double");
+    const char* type_name = sizeof(T) == 4 ? "float" : "double";  // INFO keeps a reference: no temporaries
+    INFO(describe(g), " T=", type_name);
     std::mt19937 rng(seed);
     const auto x = random_vector(g.x_size(), rng), w = random_vector(g.w_size(), rng),
                b = random_vector(std::size_t(g.out_channels), rng), gy = random_vector(g.y_size(), rng),
@@ -153,6 +154,44 @@ std::vector<hk::conv_geometry> stargan_shapes(int cd, int b)
     };
 }
 
+/// Which fast-path route each pass of the SIMD kernels takes for a geometry (the dispatch predicates of
+/// detail/conv_simd.hpp), counted over the geometries a test checks, so a test can assert that its random
+/// draws really exercised every route it claims to.
+struct route_counts {
+    int forward_dot = 0, forward_stride1 = 0, forward_packed = 0;
+    int backward_data_by_forward = 0, backward_data_gemm = 0;
+    int backward_weight_stride1 = 0, backward_weight_packed = 0;
+
+    template <class T>
+    void add(const hk::conv_geometry& g)
+    {
+        namespace d = hk::detail;
+        if (d::use_dot_forward<T>(g)) ++forward_dot;
+        else if (d::use_stride1_forward<T>(g)) ++forward_stride1;
+        else ++forward_packed;
+        if (d::backward_data_by_forward(g)) ++backward_data_by_forward;
+        else ++backward_data_gemm;
+        if (d::use_stride1_backward_weight<T>(g)) ++backward_weight_stride1;
+        else ++backward_weight_packed;
+    }
+    int total_forward() const { return forward_dot + forward_stride1 + forward_packed; }
+};
+
+void check_every_route(const route_counts& r, int geometries)
+{
+    INFO("forward dot/stride1/packed ", r.forward_dot, "/", r.forward_stride1, "/", r.forward_packed,
+         ", backward_data by-forward/gemm ", r.backward_data_by_forward, "/", r.backward_data_gemm,
+         ", backward_weight stride1/packed ", r.backward_weight_stride1, "/", r.backward_weight_packed);
+    CHECK(r.total_forward() == geometries);
+    CHECK(r.forward_dot > 0);
+    CHECK(r.forward_stride1 > 0);
+    CHECK(r.forward_packed > 0);
+    CHECK(r.backward_data_by_forward > 0);
+    CHECK(r.backward_data_gemm > 0);
+    CHECK(r.backward_weight_stride1 > 0);
+    CHECK(r.backward_weight_packed > 0);
+}
+
 }  // namespace
 
 TEST_CASE("conv kernels match the reference on the StarGAN shapes (embedded cd=32, batch 1 and 3)")
@@ -174,15 +213,20 @@ TEST_CASE("conv kernels match the reference on random odd geometries")
     std::mt19937 rng(20200427u);
     auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
     int tested = 0;
+    route_counts routes_f, routes_d;
     while (tested < 60) {
         hk::conv_geometry g{pick(0, 1) ? 1 : 3, pick(1, 13), pick(1, 11), pick(1, 11), pick(1, 13),
                             pick(1, 7), pick(1, 7), pick(1, 2), pick(0, 3)};
         if (!g.valid()) continue;
         check_geometry<float>(g, 1e-5, unsigned(tested));
         check_geometry<double>(g, 1e-12, unsigned(tested) + 1000u);
+        routes_f.add<float>(g);
+        routes_d.add<double>(g);
         ++tested;
     }
-    CHECK(tested == 60);
+    // The draws must reach every SIMD route in both precisions, or "odd geometries" tests less than it says.
+    check_every_route(routes_f, tested);
+    check_every_route(routes_d, tested);
 }
 
 TEST_CASE("conv kernels match the reference on random geometries with many channels (every dispatch route)")
@@ -190,12 +234,28 @@ TEST_CASE("conv kernels match the reference on random geometries with many chann
     std::mt19937 rng(5u);
     auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
     int tested = 0;
+    route_counts routes;
     while (tested < 16) {
         const int k = pick(1, 7);
         hk::conv_geometry g{pick(1, 3), pick(14, 40), pick(1, 9), pick(1, 9), pick(1, 40), k, k, pick(1, 2), pick(0, 3)};
         if (!g.valid()) continue;
         check_geometry<float>(g, 1e-5, unsigned(tested) + 77u);
+        routes.add<float>(g);
         ++tested;
     }
-    CHECK(tested == 16);
+    // The random draws alone miss some routes on some instruction sets (with 16 float lanes no draw above
+    // takes the stride-1 backward-weight path), so one geometry per route, chosen to take it for 4, 8 and
+    // 16 lanes, is checked too.
+    const hk::conv_geometry anchors[] = {
+        {1, 32, 3, 6, 32, 3, 3, 1, 1},    // forward dot (K = 288, 18 pixels)
+        {1, 8, 12, 24, 32, 7, 7, 1, 3},   // forward stride-1, backward-data by forward
+        {3, 20, 12, 24, 40, 4, 4, 2, 1},  // forward packed, backward-data GEMM, backward-weight packed
+        {1, 20, 12, 24, 8, 3, 3, 1, 1},   // backward-weight stride 1 (8 outputs, wide grid 310)
+    };
+    for (const auto& g : anchors) {
+        check_geometry<float>(g, 1e-5, unsigned(tested) + 77u);
+        routes.add<float>(g);
+        ++tested;
+    }
+    check_every_route(routes, tested);  // the title's claim: every dispatch route was taken
 }

@@ -1,11 +1,11 @@
 // thread_pool: every index runs exactly once, chunking is static (same index -> same thread every
-// run), per-chunk floating-point reductions are bit-identical across runs, exceptions propagate.
+// run, contiguous chunks), exceptions propagate. That the library's reductions through the pool are
+// bitwise repeatable is tested on the library code itself: tests/autodiff/pool_determinism_test.cpp.
 #include <doctest/doctest.h>
 
 #include <handemo/kernels/thread_pool.hpp>
 
 #include <atomic>
-#include <cmath>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -34,25 +34,6 @@ TEST_CASE("thread_pool runs each index once, on a fixed thread")
         pool.parallel_for(-3, 4, [&](int i) { sum += i; });
         CHECK(sum == 0);
     }
-}
-
-TEST_CASE("thread_pool per-chunk reductions are deterministic")
-{
-    hk::thread_pool pool(3);
-    std::vector<float> data(100003);
-    for (std::size_t i = 0; i < data.size(); ++i) data[i] = float(std::sin(double(i)) * 1e3);
-    auto reduce = [&] {
-        const int chunks = 7;
-        std::vector<float> part(chunks, 0.0f);
-        pool.parallel_for(0, chunks, [&](int c) {
-            for (std::size_t i = std::size_t(c); i < data.size(); i += chunks) part[std::size_t(c)] += data[i];
-        });
-        float s = 0;
-        for (float p : part) s += p;
-        return s;
-    };
-    const float first = reduce();
-    for (int rep = 0; rep < 20; ++rep) CHECK(reduce() == first);
 }
 
 TEST_CASE("thread_pool rethrows the exception of an iteration and stays usable")

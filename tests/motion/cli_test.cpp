@@ -47,7 +47,7 @@ run_result run(const std::string& args)
 void expect_failure(const std::string& args, const std::string& needle)
 {
     const run_result r = run(args);
-    CHECK_MESSAGE(r.rc != 0, args);
+    CHECK_MESSAGE(r.rc == 1, args);  // the README: every failure exits 1
     CHECK_MESSAGE(r.err.rfind("handemo: error: ", 0) == 0, r.err);
     CHECK_MESSAGE(r.err.find(needle) != std::string::npos, "'" << needle << "' not in: " << r.err);
     CHECK_MESSAGE(std::count(r.err.begin(), r.err.end(), '\n') == 1, r.err);
@@ -122,7 +122,7 @@ TEST_CASE("cli: synth -> encode -> decode round trip and failure cases")
     CHECK(!fs::exists(w / "img2" / "range.json"));
     CHECK(read_image(w / "img2" / "hand_pointing_happy_0.bmp") == read_image(w / "img" / "hand_pointing_happy_0.bmp"));
 
-    // Failure cases: one line on stderr, non-zero exit, nothing crashes.
+    // Failure cases: one line on stderr, exit 1, nothing crashes.
     expect_failure("encode " + W + "/missing.bvh --out " + W + "/x", "does not exist");
     expect_failure("decode " + W + "/missing.bmp --like " + W + "/data/hand_pointing_happy_0.bvh --range " + W +
                        "/img/range.json --out " + W + "/x.bvh",

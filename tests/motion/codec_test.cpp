@@ -124,6 +124,10 @@ TEST_CASE("codec: range JSON save/load and its errors")
     expect_error(R"({"format": "other", "p_min": 0, "p_max": 1, "keyframes": 9, "joints": 23})", "'format'");
     expect_error(R"({"format": "handemo-range/1", "p_min": 0, "p_max": 1, "keyframes": -9, "joints": 23})", "'keyframes'");
     expect_error(R"({"format": "handemo-range/1", "p_min": 0, "p_max": 1, "keyframes": 9})", "'joints'");
+    // Numbers beyond double: nlohmann throws out_of_range while parsing; it must surface as a format_error.
+    expect_error(R"({"format": "handemo-range/1", "p_min": 1e400, "p_max": 1, "keyframes": 9, "joints": 23})", "1e400");
+    expect_error(R"({"format": "handemo-range/1", "p_min": 0, "p_max": -1e400, "keyframes": 9, "joints": 23})", "out of range");
+    expect_error(R"({"format": "handemo-range/1", "p_min": 0, "p_max": 1, "keyframes": 1e400, "joints": 23})", "out of range");
     CHECK_THROWS_AS(load_range(dir / "missing.json"), io_error);
     CHECK_THROWS_AS(save_range(dir / "x.json", angle_range{1, 0, 9, 23}), value_error);
     fs::remove_all(dir);

@@ -1,14 +1,14 @@
-// handemo's StarGAN in float against PyTorch in double (relative 1e-4 of each tensor's scale).
+// handemo's StarGAN in float against PyTorch in double: within 7.6e-6 of each tensor's scale (the README's bound).
 #include "golden_stargan.hpp"
 
 using handemo::test::golden::suite;
 using handemo::test::golden::tolerance;
 
 namespace {
-// float: error relative to the tensor's largest magnitude (L_G runs G twice; float rounding, amplified by
-// instance norm over 3x6 maps, reaches ~6e-4 per element on values ~100x below the tensor scale, while
-// the double model matches PyTorch to 5e-13, so the formulas are exact and this is float precision)
-constexpr tolerance tol{1e-4, 1.0};
+// float: error relative to the tensor's largest magnitude. Measured worst: 6.7e-6 (L_G's gradient of a G
+// bias, on an AVX-512 machine), 7.6e-6 on another; the double model matches PyTorch to ~5e-13, so the formulas are exact
+// and this is float precision.
+constexpr tolerance tol{7.6e-6, 1.0};
 }  // namespace
 
 TEST_CASE("tiny StarGAN (float): PyTorch weights load by name; G, G::infer and D forward match PyTorch")

@@ -1,11 +1,13 @@
-// handemo's StarGAN in double against PyTorch in double: agreement to rounding (1e-9 relative).
+// handemo's StarGAN in double against PyTorch in double: agreement to rounding, within 1e-12 relative
+// (floored at 1% of each tensor's largest magnitude; the README's bound). Measured worst: 5.1e-13 (a G
+// weight gradient through L_G, on an AVX-512 machine), 5e-13 on another.
 #include "golden_stargan.hpp"
 
 using handemo::test::golden::suite;
 using handemo::test::golden::tolerance;
 
 namespace {
-constexpr tolerance tol{1e-9, 1e-2};
+constexpr tolerance tol{1e-12, 1e-2};
 }
 
 TEST_CASE("tiny StarGAN (double): PyTorch weights load by name; G, G::infer and D forward match PyTorch")

@@ -1,5 +1,6 @@
 # Runs the built `handemo` CLI: render / image / plot on small inputs must write their outputs and exit 0;
-# bad input must exit non-zero with exactly one line on stderr starting with "handemo: error:".
+# bad input must exit 1 with exactly one line on stderr starting with "handemo: error:" (naming the file
+# when one is involved).
 # Variables: HANDEMO_CLI, DATA_DIR, WORK_DIR.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
@@ -37,11 +38,11 @@ if(NOT svg MATCHES "identity")
 endif()
 
 run_fail(render_titles render ${DATA_DIR}/arm.bvh --titles a,b --out ${WORK_DIR}/x.png)
-run_fail(render_ext render ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.jpg)
-run_fail(render_not_bvh render ${DATA_DIR}/losses.csv --out ${WORK_DIR}/x.png)
-run_fail(image_hand image ${WORK_DIR}/strip.bmp --joints hand --out ${WORK_DIR}/x.png)
-run_fail(image_not_image image ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.png)
-run_fail(plot_bad plot ${DATA_DIR}/bad.csv --out ${WORK_DIR}/x.svg)
+run_fail_file(render_ext ${WORK_DIR}/x.jpg render ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.jpg)
+run_fail_file(render_not_bvh ${DATA_DIR}/losses.csv render ${DATA_DIR}/losses.csv --out ${WORK_DIR}/x.png)
+run_fail_file(image_hand ${WORK_DIR}/strip.bmp image ${WORK_DIR}/strip.bmp --joints hand --out ${WORK_DIR}/x.png)
+run_fail_file(image_not_image ${DATA_DIR}/arm.bvh image ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.png)
+run_fail_file(plot_bad ${DATA_DIR}/bad.csv plot ${DATA_DIR}/bad.csv --out ${WORK_DIR}/x.svg)
 if(EXISTS ${WORK_DIR}/x.png OR EXISTS ${WORK_DIR}/x.svg)
   message(FATAL_ERROR "a failed command left an output file behind")
 endif()

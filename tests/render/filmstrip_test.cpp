@@ -1,6 +1,7 @@
 // Tests of skeleton figures and filmstrips (render/figure.hpp, render/filmstrip.hpp): determinism,
 // framing (every joint of every drawn frame projects inside its cell, with ink near it), limb colours,
-// views, and the errors for bad input. Real Bandai BVH clips are used when ../shared/data is present.
+// views, and the errors for bad input. Real Bandai BVH clips: shared_data_test.cpp (label shared-data).
+#include "framing.hpp"
 #include "helpers.hpp"
 
 #include <handemo/motion/bvh.hpp>
@@ -14,61 +15,8 @@
 #include <string>
 
 using namespace handemo;
+using handemo::test::check_framing;
 
-namespace {
-
-bool is_background(const rgb_image& im, long x, long y)
-{
-    const auto* p = im.at(static_cast<std::size_t>(y), static_cast<std::size_t>(x));
-    return p[0] == 255 && p[1] == 255 && p[2] == 255;
-}
-
-/// Every joint / end site of every drawn frame lies inside its cell, at least 2 px from the border, and some
-/// non-background pixel lies within 3 px of it. The border ring of each cell stays background.
-void check_framing(std::span<const clip> clips, const filmstrip_options& opt)
-{
-    const rgb_image im = render_filmstrip(clips, opt);
-    const filmstrip_plan plan = plan_filmstrip(clips, opt);
-    const long cw = static_cast<long>(opt.cell_width), ch = static_cast<long>(opt.cell_height), g = filmstrip_gap;
-    REQUIRE(opt.titles.empty());
-    REQUIRE(im.width == static_cast<std::size_t>(static_cast<long>(clips.size()) * (cw + g) + g));
-    REQUIRE(im.height == static_cast<std::size_t>(static_cast<long>(opt.rows) * (ch + g) + g));
-    for (std::size_t c = 0; c < clips.size(); ++c) {
-        for (std::size_t r = 0; r < opt.rows; ++r) {
-            const long x0 = g + static_cast<long>(c) * (cw + g), y0 = g + static_cast<long>(r) * (ch + g);
-            const std::size_t f = detail::filmstrip_frame(r, opt.rows, clips[c].frames);
-            const pose_positions P = clip_pose(clips[c], f);
-            const vec3 off = plan.track_offset(c, P, opt.figure);
-            for (std::size_t j = 0; j < clips[c].skel.size(); ++j) {
-                if (plan.layouts[c].hidden[j]) continue;
-                if (plan.layouts[c].kind == figure_kind::hand && clips[c].skel.joints[j].parent < 0) continue;  // forearm cut
-                for (const vec3& w : {P.joints[j], P.end_sites[j]}) {
-                    const point2 p = plan.project(w, off);
-                    CHECK(p.x >= 2);
-                    CHECK(p.y >= 2);
-                    CHECK(p.x <= static_cast<double>(cw) - 2);
-                    CHECK(p.y <= static_cast<double>(ch) - 2);
-                    bool ink = false;
-                    for (long dy = -3; dy <= 3 && !ink; ++dy)
-                        for (long dx = -3; dx <= 3 && !ink; ++dx) {
-                            const long x = x0 + static_cast<long>(p.x) + dx, y = y0 + static_cast<long>(p.y) + dy;
-                            if (x >= x0 && y >= y0 && x < x0 + cw && y < y0 + ch) ink = !is_background(im, x, y);
-                        }
-                    CHECK_MESSAGE(ink, "no ink near joint ", clips[c].skel.joints[j].name, " of clip ", c, " row ", r);
-                }
-            }
-            for (long x = x0; x < x0 + cw; ++x) {  // top border row of the cell (the frame label is at the bottom)
-                CHECK(is_background(im, x, y0));
-            }
-            for (long y = y0; y < y0 + ch; ++y) {
-                CHECK(is_background(im, x0, y));
-                CHECK(is_background(im, x0 + cw - 1, y));
-            }
-        }
-    }
-}
-
-}  // namespace
 
 TEST_CASE("figure: hand limbs are the five fingers with distinct colours, trunk grey")
 {
@@ -245,24 +193,4 @@ TEST_CASE("filmstrip: bad input gets a clear handemo error")
     CHECK_THROWS_WITH_AS(render_filmstrip(clips, opt), doctest::Contains("non-finite"), value_error);
     clips[0].angles.pop_back();
     CHECK_THROWS_AS(render_filmstrip(clips, opt), shape_error);
-}
-
-TEST_CASE("filmstrip: real Bandai clips (skipped without ../shared/data)")
-{
-    const std::filesystem::path dir = std::filesystem::path(HANDEMO_SHARED_DIR) / "data" / "bandai";
-    const auto a = dir / "dataset-1_walk_normal_001.bvh", b = dir / "dataset-1_walk_sad_001.bvh";
-    if (!std::filesystem::exists(a) || !std::filesystem::exists(b)) {
-        MESSAGE("Bandai data not found, skipped");
-        return;
-    }
-    const std::vector<clip> clips{read_bvh(a), read_bvh(b)};
-    const figure_layout L = analyse_figure(clips[0].skel);
-    CHECK(L.kind == figure_kind::body);
-    CHECK(L.hidden[0] == 1);           // joint_Root
-    CHECK(L.limb_heads.size() == 5);   // head, two arms, two legs
-    filmstrip_options opt;
-    opt.rows = 3;
-    opt.cell_width = 100;
-    opt.cell_height = 160;
-    check_framing(clips, opt);
 }

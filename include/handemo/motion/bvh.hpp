@@ -401,6 +401,9 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
     }
     const double frame_time = cur.number({time_text, tm.line}, "Frame Time");
     if (!(frame_time > 0)) cur.fail(tm.line, "Frame Time " + std::string(time_text) + " is not positive");
+    if (!std::isfinite(1.0 / frame_time))  // a subnormal such as 1e-310
+        cur.fail(tm.line, "Frame Time " + std::string(time_text) + " gives a frame rate of " +
+                              std::to_string(1.0 / frame_time) + ", expected a finite one");
     if (auto rest = cur.rest_of_line(); !rest.empty())
         cur.fail(cur.line(), "unexpected '" + std::string(rest) + "' after Frame Time");
 
@@ -417,12 +420,15 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
     for (std::size_t j = 0; j < sk.joints.size(); ++j)
         for (channel c : sk.joints[j].channels) columns.emplace_back(j, c);
 
+    // The clip grows one frame per parsed row (never sized from Frames or the row count: a row that is
+    // one short token must not reserve J*3 values), and its frame count is checked against Frames at the end.
     const std::size_t J = sk.joints.size();
-    clip out = clip::make(std::move(sk), static_cast<std::size_t>(frames), 1.0 / frame_time);
+    clip out = clip::make(std::move(sk), 0, 1.0 / frame_time);
     if (const double r = std::round(out.fps); r >= 1 && std::abs(out.fps - r) <= 1e-4 * r) out.fps = r;
+    std::vector<double> values(columns.size());
 
     std::size_t frame = 0;
-    while (frame < frames) {
+    while (frame < frames && !cur.at_end()) {
         const std::string_view row = cur.next_line();
         if (detail::is_blank_line(row)) continue;
         const long line = cur.line();
@@ -448,14 +454,24 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
             if (detail::parse_number(tok, v) != detail::number_status::ok)  // slow path: name the field
                 (void)cur.number({tok, line}, "frame " + std::to_string(frame) + " joint '" + out.skel.joints[j].name +
                                                   "' " + std::string(channel_name(ch)));
-            const auto a = static_cast<std::size_t>(channel_axis(ch));
-            (is_rotation(ch) ? out.angles : out.positions)[(frame * J + j) * 3 + a] = v;
+            values[k] = v;
             ++k;
         }
         if (k != columns.size())
             cur.fail(line, "row has " + std::to_string(k) + " values, expected " + std::to_string(columns.size()));
-        ++frame;
+        out.angles.resize(out.angles.size() + J * 3, 0.0);
+        for (std::size_t jj = 0; jj < J; ++jj)
+            for (std::size_t a = 0; a < 3; ++a) out.positions.push_back(out.skel.joints[jj].offset[a]);
+        for (std::size_t c = 0; c < columns.size(); ++c) {
+            const auto [j, ch] = columns[c];
+            const auto a = static_cast<std::size_t>(channel_axis(ch));
+            (is_rotation(ch) ? out.angles : out.positions)[(frame * J + j) * 3 + a] = values[c];
+        }
+        out.frames = ++frame;
     }
+    if (frame != frames)
+        cur.fail(frames_line, "Frames: " + std::to_string(frames) + " but the file has " + std::to_string(frame) +
+                                  " data row" + (frame == 1 ? "" : "s") + " (truncated motion?)");
     return out;
 }
 

@@ -233,6 +233,8 @@ inline angle_range parse_range(std::string_view text, const std::string& source)
         j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::parse_error& e) {
         throw format_error("range: " + source + ": malformed JSON at byte " + std::to_string(e.byte) + ": " + e.what());
+    } catch (const nlohmann::json::exception& e) {  // out_of_range.406: a number such as 1e400 overflows
+        throw format_error("range: " + source + ": number out of range: " + e.what());
     }
     if (!j.is_object()) throw format_error("range: " + source + ": top level is " + std::string(j.type_name()) + ", expected an object");
     auto field = [&](const char* name) -> const nlohmann::json& {

@@ -188,7 +188,9 @@ inline clip parse_csv(std::string_view text, std::string_view source_name, const
     for (std::size_t r = i; r < lines.size(); ++r) rows += lines[r].text.front() != '#';
     if (rows == 0) detail::csv_fail(source_name, header.number, "no data rows after the header");
 
-    clip out = clip::make(skel, rows, fps);
+    // The clip grows one frame per parsed row, never sized from the line count up front (a short line
+    // must not reserve the J*3 values of a frame before it is found to be a row).
+    clip out = clip::make(skel, 0, fps);
     const std::size_t J = skel.size();
     std::size_t frame = 0;
     for (; i < lines.size(); ++i) {
@@ -197,6 +199,10 @@ inline clip parse_csv(std::string_view text, std::string_view source_name, const
         if (fields.size() != cols.size())
             detail::csv_fail(source_name, lines[i].number, "row has " + std::to_string(fields.size()) + " fields, expected " +
                                       std::to_string(cols.size()) + " (as in the header)");
+        out.angles.resize(out.angles.size() + J * 3, 0.0);
+        for (std::size_t j = 0; j < J; ++j)
+            for (std::size_t a = 0; a < 3; ++a) out.positions.push_back(skel.joints[j].offset[a]);
+        out.frames = frame + 1;
         for (std::size_t k = 0; k < fields.size(); ++k) {
             double v = 0;
             const auto st = detail::parse_number(fields[k], v);

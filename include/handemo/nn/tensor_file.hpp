@@ -162,20 +162,38 @@ struct st_tensor {
 
     std::size_t numel() const noexcept { return shape_numel(shape); }
 
+    /// @brief Refuses to read a floating-point tensor as an integer type (a hostile file could hold
+    /// NaN or 1e30 where a step count or RNG state is expected, and that conversion is undefined).
+    /// @throws format_error naming `source` (when given), the tensor, its dtype and the requested type.
+    template <st_element T>
+    void require_readable_as(std::string_view source = {}) const
+    {
+        if constexpr (std::is_integral_v<T> && !std::same_as<T, bool>) {
+            if (detail::st_is_float(dtype))
+                throw format_error("safetensors: " + (source.empty() ? std::string() : std::string(source) + ": ") +
+                                   "tensor " + name + " has dtype " + std::string(st_dtype_name(dtype)) +
+                                   ", expected an integer dtype to read it as " +
+                                   (std::is_signed_v<T> ? "I" : "U") + std::to_string(8 * sizeof(T)));
+        }
+    }
+
     /// @brief The elements converted to T (static_cast from the stored dtype; F16/BF16 decoded).
+    /// @throws format_error when T is an integer type and the dtype is floating point.
     template <st_element T>
     std::vector<T> to_vector() const
     {
+        require_readable_as<T>();
         std::vector<T> out(numel());
         for (std::size_t i = 0; i < out.size(); ++i) out[i] = detail::read_element<T>(data.data(), dtype, i);
         return out;
     }
 
     /// @brief Copies the elements converted to T into `out` (whose size must be numel()).
-    /// @throws shape_error when the sizes differ.
+    /// @throws shape_error when the sizes differ; format_error for an integer T from a floating-point dtype.
     template <st_element T>
     void copy_to(std::span<T> out) const
     {
+        require_readable_as<T>();
         if (out.size() != numel())
             throw shape_error("safetensors: tensor " + name + " has " + std::to_string(numel()) +
                               " elements, destination has " + std::to_string(out.size()));
@@ -206,11 +224,13 @@ struct safetensors_file {
     }
 
     /// @brief The tensor `name` converted to T, checking its shape when `expected_shape` is given.
-    /// @throws format_error when missing; shape_error naming the tensor, found and expected shape.
+    /// @throws format_error when missing or when T is an integer type and the tensor's dtype floating point
+    /// (naming the file, the tensor and both types); shape_error naming the tensor, found and expected shape.
     template <st_element T>
     std::vector<T> get(std::string_view name, std::optional<std::vector<std::size_t>> expected_shape = {}) const
     {
         const st_tensor& t = at(name);
+        t.require_readable_as<T>(source);
         if (expected_shape && *expected_shape != t.shape)
             throw shape_error("safetensors: " + source + ": tensor " + t.name + " has shape " + shape_string(t.shape) +
                               ", expected " + shape_string(*expected_shape));
