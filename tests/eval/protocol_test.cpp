@@ -51,8 +51,8 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(r.folds[0].held_out == "patting");
     CHECK(r.folds[0].train_clips == 10);
     CHECK(r.folds[0].test_inputs == 1);
-    // 2 folds x 4 targets x 1 take x 5 methods
-    CHECK(r.samples.size() == 40);
+    // 2 folds x 4 targets x 1 take x 7 methods (the handemo preset's amplitude stage adds stargan-g and amplitude-only)
+    CHECK(r.samples.size() == 56);
     std::set<std::string> methods;
     for (const auto& s : r.samples) {
         methods.insert(s.method);
@@ -71,7 +71,7 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         }
         if (s.method == "nearest-neighbour") CHECK(s.predicted_content != s.fold);  // a clip of another content
     }
-    CHECK(methods.size() == 5);
+    CHECK(methods.size() == 7);
     for (const char* f : {"report.md", "results.csv", "summary.csv", "summary.svg", "folds/patting/checkpoint.safetensors",
                           "folds/patting/losses.svg", "folds/gripping/log.csv"})
         CHECK_MESSAGE(fs::exists(dir / f), f);
@@ -134,8 +134,8 @@ TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed 
     const fs::path dir = fs::temp_directory_path() / ("handemo_eval_oracle_test_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     const auto r = run_eval<hand_tiny>(clips, info, o, dir);
-    // 1 fold x 4 targets x 1 take x 6 methods
-    REQUIRE(r.samples.size() == 24);
+    // 1 fold x 4 targets x 1 take x 8 methods
+    REQUIRE(r.samples.size() == 32);
     double oracle = 0, identity = 0;
     for (const auto& s : r.samples) {
         if (s.method == "oracle") {
