@@ -45,7 +45,7 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
     sub->add_option("--lambda-id", o.lambda_id, "Weight of the identity loss |G(x, c_org) - x| (handemo 10, paper 0)");
     sub->add_option("--lambda-pair", o.lambda_pair,
                     "Weight of the paired loss |G(x, c) - same take in emotion c| (handemo 10, paper 0)");
-    sub->add_option("--lambda-delta", o.lambda_delta, "Weight of the change-size penalty |G(x, c) - x| (0)");
+    sub->add_option("--lambda-delta", o.lambda_delta, "Weight of the change-size penalty |G(x, c) - x| (handemo 5, paper 0)");
     sub->add_option("--ema", o.ema, "Decay of the EMA of G's weights used for transfer, 0 = off (handemo 0.999, paper 0)");
     sub->add_option("--amplitude", o.amplitude,
                     "Scale the output's excursions by the learned amplitude ratio of the emotions, as the tempo (handemo true)");

@@ -117,7 +117,7 @@ inline train_options handemo_options()
     o.lambda_cls = 5.0;
     o.lambda_id = 10.0;
     o.lambda_pair = 10.0;
-    o.lambda_delta = 0.0;
+    o.lambda_delta = 5.0;
     o.ema = 0.999;
     o.range = "channel";
     o.amplitude = true;
