@@ -77,6 +77,8 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         CHECK_MESSAGE(fs::exists(dir / f), f);
     const std::string md = read_file(dir / "report.md");
     CHECK(md.find("## Where StarGAN beats each baseline") != std::string::npos);
+    CHECK(md.find("![per fold](folds.svg)") != std::string::npos);
+    CHECK(read_file(dir / "folds.svg").find("data-series=\"stargan\"") != std::string::npos);
     CHECK(md.find("### held out: gripping") != std::string::npos);
     CHECK(md.find("## Closing note") != std::string::npos);
     const std::string csv = read_file(dir / "results.csv");

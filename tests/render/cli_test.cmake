@@ -1,4 +1,4 @@
-# Runs the built `handemo` CLI: render / image / plot on small inputs must write their outputs and exit 0;
+# Runs the built `handemo` CLI: render / view / image / plot on small inputs must write their outputs and exit 0;
 # bad input must exit non-zero with exactly one line on stderr starting with "handemo: error:".
 # Variables: HANDEMO_CLI, DATA_DIR, WORK_DIR.
 file(REMOVE_RECURSE ${WORK_DIR})
@@ -36,12 +36,21 @@ if(NOT svg MATCHES "identity")
   message(FATAL_ERROR "bars.svg does not name the methods")
 endif()
 
+run_ok(view view ${DATA_DIR}/arm.bvh ${DATA_DIR}/arm.bvh --titles "neutral,angry" --normalised-time --out ${WORK_DIR}/view.html)
+file(READ ${WORK_DIR}/view.html html)
+if(NOT html MATCHES "\"normalised\":true" OR NOT html MATCHES "\"title\":\"angry\"" OR html MATCHES "https?://")
+  message(FATAL_ERROR "view.html does not embed the clips as asked, or refers to the network")
+endif()
+
+run_fail(view_titles view ${DATA_DIR}/arm.bvh --titles a,b --out ${WORK_DIR}/x.html)
+run_fail(view_ext view ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.png)
+run_fail(view_not_bvh view ${DATA_DIR}/losses.csv --out ${WORK_DIR}/x.html)
 run_fail(render_titles render ${DATA_DIR}/arm.bvh --titles a,b --out ${WORK_DIR}/x.png)
 run_fail(render_ext render ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.jpg)
 run_fail(render_not_bvh render ${DATA_DIR}/losses.csv --out ${WORK_DIR}/x.png)
 run_fail(image_hand image ${WORK_DIR}/strip.bmp --joints hand --out ${WORK_DIR}/x.png)
 run_fail(image_not_image image ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.png)
 run_fail(plot_bad plot ${DATA_DIR}/bad.csv --out ${WORK_DIR}/x.svg)
-if(EXISTS ${WORK_DIR}/x.png OR EXISTS ${WORK_DIR}/x.svg)
+if(EXISTS ${WORK_DIR}/x.png OR EXISTS ${WORK_DIR}/x.svg OR EXISTS ${WORK_DIR}/x.html)
   message(FATAL_ERROR "a failed command left an output file behind")
 endif()
