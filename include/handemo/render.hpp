@@ -1,8 +1,9 @@
 // Render module: pictures of motion made with no GPU and no external renderer. A software rasteriser
 // (canvas, 5x7 font), skeleton figures and filmstrips as in the hand paper's Figures 4-12, enlarged
 // motion images as in its Figure 3 (the Eq. 3 encoding, 9 keyframes x 23 joints), and SVG plots of
-// training losses and evaluation results. Depends only on the core and motion headers (no stb): write the
-// returned rgb_image with handemo/image.hpp (write_png) and the SVG text with write_file_atomic.
+// training losses and evaluation results; and a self-contained HTML page that plays clips (viewer.hpp).
+// Depends only on the core and motion headers (no stb): write the returned rgb_image with handemo/image.hpp
+// (write_png) and the SVG and HTML text with write_file_atomic.
 #pragma once
 
 #include <handemo/render/canvas.hpp>
@@ -11,3 +12,4 @@
 #include <handemo/render/font.hpp>
 #include <handemo/render/motion_image.hpp>
 #include <handemo/render/svg.hpp>
+#include <handemo/render/viewer.hpp>

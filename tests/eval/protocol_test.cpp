@@ -72,11 +72,13 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         if (s.method == "nearest-neighbour") CHECK(s.predicted_content != s.fold);  // a clip of another content
     }
     CHECK(methods.size() == 7);
-    for (const char* f : {"report.md", "results.csv", "summary.csv", "summary.svg", "folds/patting/checkpoint.safetensors",
+    for (const char* f : {"report.md", "results.csv", "summary.csv", "summary.svg", "folds.svg", "folds/patting/checkpoint.safetensors",
                           "folds/patting/losses.svg", "folds/gripping/log.csv"})
         CHECK_MESSAGE(fs::exists(dir / f), f);
     const std::string md = read_file(dir / "report.md");
     CHECK(md.find("## Where StarGAN beats each baseline") != std::string::npos);
+    CHECK(md.find("![per fold](folds.svg)") != std::string::npos);
+    CHECK(read_file(dir / "folds.svg").find("data-series=\"stargan\"") != std::string::npos);
     CHECK(md.find("### held out: gripping") != std::string::npos);
     CHECK(md.find("## Closing note") != std::string::npos);
     const std::string csv = read_file(dir / "results.csv");
@@ -154,6 +156,7 @@ TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed 
     CHECK(md.find("**oracle**") != std::string::npos);
     CHECK(summary_csv(r).find("all,oracle,rmse_real,") != std::string::npos);
     CHECK(summary_svg(r).find("oracle") != std::string::npos);
+    CHECK(folds_svg(r).find("data-series=\"oracle\"") != std::string::npos);  // one line per method over the folds
 
     // without the seed: no oracle row anywhere in the report
     o.synth_seed.reset();

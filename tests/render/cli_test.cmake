@@ -1,4 +1,4 @@
-# Runs the built `handemo` CLI: render / image / plot on small inputs must write their outputs and exit 0;
+# Runs the built `handemo` CLI: render / view / image / plot on small inputs must write their outputs and exit 0;
 # bad input must exit 1 with exactly one line on stderr starting with "handemo: error:" (naming the file
 # when one is involved).
 # Variables: HANDEMO_CLI, DATA_DIR, WORK_DIR.
@@ -26,10 +26,10 @@ run_ok(image image ${WORK_DIR}/strip.bmp --out ${WORK_DIR}/view.png --scale 2 --
 expect_file(${WORK_DIR}/view.png "89504e47")
 run_ok(plot plot ${DATA_DIR}/losses.csv --out ${WORK_DIR}/losses.svg)
 file(READ ${WORK_DIR}/losses.svg svg)
-string(REGEX MATCHALL "<polyline" lines "${svg}")
+string(REGEX MATCHALL "class=\"ema\"" lines "${svg}")
 list(LENGTH lines n)
 if(NOT n EQUAL 2)
-  message(FATAL_ERROR "losses.svg has ${n} polylines, expected 2")
+  message(FATAL_ERROR "losses.svg has ${n} averaged series, expected 2")
 endif()
 run_ok(plot_bars plot ${DATA_DIR}/summary.csv --out ${WORK_DIR}/bars.svg)
 file(READ ${WORK_DIR}/bars.svg svg)
@@ -37,12 +37,21 @@ if(NOT svg MATCHES "identity")
   message(FATAL_ERROR "bars.svg does not name the methods")
 endif()
 
+run_ok(view view ${DATA_DIR}/arm.bvh ${DATA_DIR}/arm.bvh --titles "neutral,angry" --normalised-time --out ${WORK_DIR}/view.html)
+file(READ ${WORK_DIR}/view.html html)
+if(NOT html MATCHES "\"normalised\":true" OR NOT html MATCHES "\"title\":\"angry\"" OR html MATCHES "https?://")
+  message(FATAL_ERROR "view.html does not embed the clips as asked, or refers to the network")
+endif()
+
+run_fail(view_titles view ${DATA_DIR}/arm.bvh --titles a,b --out ${WORK_DIR}/x.html)
+run_fail(view_ext view ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.png)
+run_fail(view_not_bvh view ${DATA_DIR}/losses.csv --out ${WORK_DIR}/x.html)
 run_fail(render_titles render ${DATA_DIR}/arm.bvh --titles a,b --out ${WORK_DIR}/x.png)
 run_fail_file(render_ext ${WORK_DIR}/x.jpg render ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.jpg)
 run_fail_file(render_not_bvh ${DATA_DIR}/losses.csv render ${DATA_DIR}/losses.csv --out ${WORK_DIR}/x.png)
 run_fail_file(image_hand ${WORK_DIR}/strip.bmp image ${WORK_DIR}/strip.bmp --joints hand --out ${WORK_DIR}/x.png)
 run_fail_file(image_not_image ${DATA_DIR}/arm.bvh image ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.png)
 run_fail_file(plot_bad ${DATA_DIR}/bad.csv plot ${DATA_DIR}/bad.csv --out ${WORK_DIR}/x.svg)
-if(EXISTS ${WORK_DIR}/x.png OR EXISTS ${WORK_DIR}/x.svg)
+if(EXISTS ${WORK_DIR}/x.png OR EXISTS ${WORK_DIR}/x.svg OR EXISTS ${WORK_DIR}/x.html)
   message(FATAL_ERROR "a failed command left an output file behind")
 endif()

@@ -1,9 +1,11 @@
-// Tests of the SVG plots (render/svg.hpp): well-formed XML (checked by a small parser below), one polyline
-// per loss term, the y-scale decision, escaping, and the CSV errors.
+// Tests of the SVG plots (render/svg.hpp): well-formed XML (checked by a small parser below), one panel per
+// group of loss terms, a legend entry for every series, the moving average on a hand-made log, per-fold
+// panels, the y-scale decision, escaping, and the CSV errors.
 #include <handemo/render/svg.hpp>
 
 #include <doctest/doctest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -84,7 +86,144 @@ std::size_t count(const std::string& s, const std::string& what)
     return n;
 }
 
+/// Values of an attribute `name="..."` in every element of `s` that contains `marker` in its opening tag.
+std::vector<std::string> attr_values(const std::string& s, const std::string& marker, const std::string& name)
+{
+    std::vector<std::string> out;
+    for (auto p = s.find(marker); p != std::string::npos; p = s.find(marker, p + 1)) {
+        const auto open = s.rfind('<', p), close = s.find('>', p);
+        const std::string tag = s.substr(open, close - open);
+        const auto a = tag.find(" " + name + "=\"");
+        if (a == std::string::npos) continue;
+        const auto b = a + name.size() + 3;
+        out.push_back(tag.substr(b, tag.find('"', b) - b));
+    }
+    return out;
+}
+
+/// Text content of every <text class="legend"> element.
+std::vector<std::string> legend_names(const std::string& s)
+{
+    std::vector<std::string> out;
+    for (auto p = s.find("class=\"legend\""); p != std::string::npos; p = s.find("class=\"legend\"", p + 1)) {
+        const auto b = s.find('>', p) + 1;
+        out.push_back(s.substr(b, s.find('<', b) - b));
+    }
+    return out;
+}
+
+/// The full loss log of the trainer: step,D/real,D/fake,D/cls,D/gp,D/total,D/acc,G/fake,G/cls,G/rec,G/total,lr,G/id,G/pair,G/delta.
+std::string trainer_log(int rows, bool old_log)
+{
+    std::string csv = "step,D/real,D/fake,D/cls,D/gp,D/total,D/acc,G/fake,G/cls,G/rec,G/total,lr,G/id,G/pair,G/delta\n";
+    for (int s = 0; s < rows; ++s) {
+        const double d = 1.0 / (1 + s);
+        csv += std::to_string(s * 10) + "," + std::to_string(-1 - d) + "," + std::to_string(1 + (s % 2 ? 1e-8 : -1e-8)) + "," +
+               std::to_string(0.7 * d) + "," + std::to_string(10 * d) + "," + std::to_string(2 * d) + "," + std::to_string(0.5 + 0.4 * (1 - d)) +
+               "," + std::to_string(-0.5) + "," + std::to_string(0.6 * d) + "," + std::to_string(0.2 + d) + "," + std::to_string(1.1) + "," +
+               "0.0001," + (old_log ? "0,nan," : "0.1,0.2,") + (old_log ? "0" : "0.05") + "\n";
+    }
+    return csv;
+}
+
 }  // namespace
+
+TEST_CASE("svg: loss plot is small multiples, one panel per group, every series in the legend")
+{
+    const std::string svg = plot_losses_svg(trainer_log(300, false));
+    CHECK(xml_problem(svg) == "");
+    const auto groups = attr_values(svg, "class=\"panel\"", "data-group");
+    REQUIRE(groups == std::vector<std::string>{"D terms", "G terms", "D accuracy", "learning rate"});
+    const auto series = attr_values(svg, "class=\"ema\"", "data-series");
+    CHECK(series.size() == 14);
+    CHECK(count(svg, "class=\"raw\"") == 14);
+    const auto legend = legend_names(svg);
+    CHECK(legend == series);  // one legend entry per drawn series, none without
+    CHECK(svg.find("exponential moving average") != std::string::npos);
+    CHECK(svg.find("not plotted") == std::string::npos);
+    CHECK(svg.find("log scale") == std::string::npos);  // linear axes only
+    // colours are distinct within a panel: G terms has 7 series
+    std::vector<std::string> strokes = attr_values(svg, "class=\"ema\"", "stroke");
+    const std::vector<std::string> g_strokes(strokes.begin() + 5, strokes.begin() + 12);
+    for (std::size_t i = 0; i < g_strokes.size(); ++i)
+        for (std::size_t j = i + 1; j < g_strokes.size(); ++j) CHECK(g_strokes[i] != g_strokes[j]);
+
+    // an old log: G/id, G/pair, G/delta all 0 or NaN are left out and named in a note
+    const std::string old = plot_losses_svg(trainer_log(40, true));
+    CHECK(xml_problem(old) == "");
+    CHECK(attr_values(old, "class=\"ema\"", "data-series").size() == 11);
+    CHECK(legend_names(old).size() == 11);
+    CHECK(old.find("not plotted (every value 0 or missing): G/id, G/pair, G/delta") != std::string::npos);
+
+    // names are escaped; d_/g_ prefixes group too
+    const std::string esc = plot_losses_svg("step,d_adv,g_rec <L1> & \"more\"\n0,1,2\n1,2,3\n");
+    CHECK(xml_problem(esc) == "");
+    CHECK(esc.find("g_rec &lt;L1&gt; &amp; &quot;more&quot;") != std::string::npos);
+    CHECK(attr_values(esc, "class=\"panel\"", "data-group").size() == 2);
+}
+
+TEST_CASE("svg: loss groups and the moving average")
+{
+    CHECK(loss_group_of("D/real") == "D terms");
+    CHECK(loss_group_of("D/acc") == "D accuracy");
+    CHECK(loss_group_of("G/delta") == "G terms");
+    CHECK(loss_group_of("lr") == "learning rate");
+    CHECK(loss_group_of("rec") == "other terms");
+    const std::vector<double> x{4, 2, std::nan(""), 6, 0};
+    const auto e = exponential_moving_average(x, 0.5);
+    CHECK(e[0] == 4);
+    CHECK(e[1] == 3);  // 0.5 * 2 + 0.5 * 4
+    CHECK(std::isnan(e[2]));
+    CHECK(e[3] == 4.5);  // 0.5 * 6 + 0.5 * 3: the NaN row leaves the average
+    CHECK(e[4] == 2.25);
+    CHECK(loss_ema_alpha(100, 0.3) == 0.3);
+    CHECK(loss_ema_alpha(10) == 1.0);         // span 1: no smoothing on a short log
+    CHECK(loss_ema_alpha(500) == 2.0 / 21.0);  // span 20
+}
+
+TEST_CASE("svg: the drawn average is the stated moving average of a hand-made log")
+{
+    // hand-made log: x = 0, 10, 0, 10, 0 at steps 0..40, alpha 0.5 -> e = 0, 5, 2.5, 6.25, 3.125
+    loss_plot_options o;
+    o.ema_alpha = 0.5;
+    const std::string svg = plot_losses_svg("step,G/rec\n0,0\n10,10\n20,0\n30,10\n40,0\n", o);
+    CHECK(xml_problem(svg) == "");
+    CHECK(svg.find("e = 0.5 x + 0.5 e(previous row)") != std::string::npos);
+    const auto pts = attr_values(svg, "class=\"ema\"", "points");
+    REQUIRE(pts.size() == 1);
+    const double lo = std::stod(attr_values(svg, "class=\"panel\"", "data-lo")[0]), hi = std::stod(attr_values(svg, "class=\"panel\"", "data-hi")[0]);
+    const double top = std::stod(attr_values(svg, "class=\"panel\"", "y")[0]);
+    const double bottom = top + std::stod(attr_values(svg, "class=\"panel\"", "height")[0]);
+    std::vector<double> ys;
+    std::string p = pts[0];
+    for (std::size_t i = 0; i < p.size();) {
+        const auto comma = p.find(',', i), space = p.find(' ', comma);
+        ys.push_back(std::stod(p.substr(comma + 1, space - comma - 1)));
+        if (space == std::string::npos) break;
+        i = space + 1;
+    }
+    const std::vector<double> expect{0, 5, 2.5, 6.25, 3.125};
+    REQUIRE(ys.size() == expect.size());
+    for (std::size_t i = 0; i < ys.size(); ++i) {
+        const double v = lo + (bottom - ys[i]) / (bottom - top) * (hi - lo);
+        CHECK(v == doctest::Approx(expect[i]).epsilon(0.002 * (hi - lo)));
+    }
+    // the raw values are drawn too, faint
+    CHECK(count(svg, "stroke-opacity=\"0.28\"") == 1);
+}
+
+TEST_CASE("svg: per-fold small multiples")
+{
+    const std::vector<fold_point> pts{{"RMSE <deg>", "stargan", "crawling", 3.0}, {"RMSE <deg>", "identity", "crawling", 4.0},
+                                      {"RMSE <deg>", "stargan", "gripping", 2.0}, {"RMSE <deg>", "identity", "gripping", 5.0},
+                                      {"accuracy", "stargan", "crawling", 0.8},   {"accuracy", "identity", "gripping", std::nan("")}};
+    const std::string svg = plot_folds_svg(pts);
+    CHECK(xml_problem(svg) == "");
+    CHECK(svg.find("RMSE &lt;deg&gt;") != std::string::npos);
+    CHECK(legend_names(svg) == std::vector<std::string>{"stargan", "identity"});
+    CHECK(count(svg, "class=\"series\"") == 3);  // accuracy/identity has no finite value
+    CHECK_THROWS_AS(plot_folds_svg({}), value_error);
+}
 
 TEST_CASE("svg: the checker itself rejects broken XML")
 {
@@ -111,35 +250,6 @@ TEST_CASE("svg: y-scale decision")
     CHECK(choose_y_scale({}) == axis_scale::linear);
     const std::vector<double> nan_ignored{std::nan(""), 1.0, 100.0};
     CHECK(choose_y_scale(nan_ignored) == axis_scale::log);
-}
-
-TEST_CASE("svg: loss plot has one polyline per term, is well formed and escapes names")
-{
-    std::string csv = "step,d_adv,d_cls,g_rec <L1> & \"more\"\n";
-    for (int s = 0; s <= 300; s += 10)
-        csv += std::to_string(s) + "," + std::to_string(2.0 / (1 + s)) + "," + std::to_string(0.7 + 0.001 * s) + "," +
-               (s == 50 ? std::string("") : std::to_string(0.3 + 1.0 / (1 + s))) + "\n";
-    const std::string svg = plot_losses_svg(csv);
-    CHECK(xml_problem(svg) == "");
-    CHECK(count(svg, "<polyline") == 3);
-    CHECK(svg.find("g_rec &lt;L1&gt; &amp; &quot;more&quot;") != std::string::npos);
-    CHECK(svg.find("log scale") != std::string::npos);  // 2/301 .. 2: more than a decade, all positive
-
-    const std::string lin = plot_losses_svg("step,a\n0,1\n1,2\n2,3\n");
-    CHECK(xml_problem(lin) == "");
-    CHECK(lin.find("log scale") == std::string::npos);
-    const std::string sym = plot_losses_svg("# a comment\nstep,d_adv,gp\r\n0,-40,0.001\r\n1,5,0.02\r\n");
-    CHECK(xml_problem(sym) == "");
-    CHECK(sym.find("symmetric log scale") != std::string::npos);
-
-    // long logs are averaged down to max_points per polyline
-    std::string big = "step,x\n";
-    for (int s = 0; s < 10000; ++s) big += std::to_string(s) + "," + std::to_string(1 + s % 7) + "\n";
-    loss_plot_options o;
-    o.max_points = 100;
-    const std::string b = plot_losses_svg(big, o);
-    const auto p0 = b.find("points=\""), p1 = b.find('"', p0 + 8);
-    CHECK(count(b.substr(p0, p1 - p0), ",") == 100);
 }
 
 TEST_CASE("svg: loss CSV errors name the line and column")

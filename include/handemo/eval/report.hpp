@@ -258,6 +258,24 @@ inline std::string summary_svg(const eval_result& r)
     return plot_bars_svg(bars, o);
 }
 
+/// @brief The per-fold plot: one panel per metric with a direction, one line per method over the folds (the
+/// per-fold means pooled over targets that over_folds() averages), so a fold where a method breaks shows.
+inline std::string folds_svg(const eval_result& r)
+{
+    std::vector<fold_point> pts;
+    for (const auto& m : metric_defs()) {
+        if (m.better == 0) continue;
+        for (const auto& me : method_names())
+            for (const auto& f : r.folds) {
+                const double v = fold_mean(r, m, f.held_out, "all", me);
+                if (std::isfinite(v)) pts.push_back({m.title, me, f.held_out, v});
+            }
+    }
+    fold_plot_options o;
+    o.title = "handemo eval " + r.config + ": per fold (held-out motion)";
+    return plot_folds_svg(pts, o);
+}
+
 /// @brief The Markdown report (see write_report()).
 inline std::string markdown_report(const eval_result& r)
 {
@@ -313,6 +331,7 @@ inline std::string markdown_report(const eval_result& r)
             s += "\n";
         }
     s += "\n![summary](summary.svg)\n\n";
+    if (!r.samples.empty()) s += "![per fold](folds.svg)\n\n";
 
     // plain statements
     s += "## Where StarGAN beats each baseline and where it does not\n\n";
@@ -401,7 +420,8 @@ inline std::string markdown_report(const eval_result& r)
     return s;
 }
 
-/// @brief Writes report.md, results.csv (every sample), summary.csv and summary.svg into `dir` (atomically).
+/// @brief Writes report.md, results.csv (every sample), summary.csv, summary.svg and folds.svg into `dir`
+/// (atomically).
 /// @throws io_error when a file cannot be written.
 inline void write_report(const eval_result& r, const std::filesystem::path& dir)
 {
@@ -409,6 +429,7 @@ inline void write_report(const eval_result& r, const std::filesystem::path& dir)
     write_file_atomic(dir / "results.csv", samples_csv(r));
     write_file_atomic(dir / "summary.csv", summary_csv(r));
     if (!r.samples.empty()) write_file_atomic(dir / "summary.svg", summary_svg(r));
+    if (!r.samples.empty()) write_file_atomic(dir / "folds.svg", folds_svg(r));
     write_file_atomic(dir / "report.md", markdown_report(r));
 }
 

@@ -1,9 +1,11 @@
-// SVG plots written as plain text (no library): the StarGAN training losses of the hand paper (Eq. 4 and
-// Eq. 5: L_D = -L_adv + lambda_cls L_cls^r, L_G = L_adv + lambda_cls L_cls^f + lambda_rec L_rec, one curve
-// per logged term) from a CSV log, and grouped bar charts with error bars (mean +- std per metric and
-// method) for evaluation summaries. The y axis is logarithmic when every value is positive and they span
-// more than one decade; symmetric-logarithmic (sign(v) log10(1 + |v| / c)) when values of both signs span
-// more than three decades; linear otherwise. All text is XML-escaped.
+// SVG plots written as plain text (no library). The StarGAN training losses of the hand paper (Eq. 4 and
+// Eq. 5: L_D = -L_adv + lambda_cls L_cls^r, L_G = L_adv + lambda_cls L_cls^f + lambda_rec L_rec) from a CSV
+// log as small multiples: one panel per group of terms (D terms, G terms, D accuracy, learning rate) on a
+// shared step axis, linear y axes, each series in its own colour as an exponential moving average over its
+// raw values drawn faint. Per-fold evaluation numbers as small multiples too (one panel per metric, one line
+// per method), and grouped bar charts with error bars (mean +- std per metric and method) for evaluation
+// summaries. choose_y_scale / axis_scale remain for callers that want a log or symmetric-log axis. All text
+// is XML-escaped.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -27,9 +29,11 @@ enum class axis_scale { linear, log, symlog };
 
 /// @brief Options of plot_losses_svg.
 struct loss_plot_options {
-    std::size_t width = 860, height = 480;
+    std::size_t width = 860;
+    std::size_t panel_height = 200;  ///< pixels per panel (one panel per group of terms)
     std::string title = "training losses";
     std::size_t max_points = 2000;  ///< longer series are averaged in equal buckets of steps
+    double ema_alpha = 0;           ///< weight of the newest value in the moving average; 0 = automatic (loss_ema_alpha)
 };
 
 /// @brief One bar of an evaluation summary: `mean` +- `std` of `metric` for `method`.
@@ -302,73 +306,266 @@ inline loss_log parse_loss_csv(std::string_view text, const std::string& what = 
     return log;
 }
 
-/// @brief Plots a CSV training log as an SVG: one polyline per loss term, legend, ticked axes, and a
-/// log / symlog / linear y axis chosen by choose_y_scale over all values.
+/// @brief The group (panel) a loss-log column belongs to: "D terms" (names starting `D/`, `d_`, `D.`),
+/// "G terms" (`G/`, `g_`, `G.`), "D accuracy" (any name containing `acc`), "learning rate" (`lr`, or a name
+/// containing `learning`), else "other terms". Panels appear in this order.
+inline std::string loss_group_of(std::string_view term)
+{
+    std::string n(term);
+    for (auto& ch : n) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (n == "lr" || n.starts_with("lr_") || n.starts_with("lr/") || n.find("learning") != std::string::npos) return "learning rate";
+    if (n.find("acc") != std::string::npos) return "D accuracy";
+    auto pre = [&](char c) { return n.size() > 1 && n[0] == c && (n[1] == '/' || n[1] == '_' || n[1] == '.'); };
+    if (pre('d')) return "D terms";
+    if (pre('g')) return "G terms";
+    return "other terms";
+}
+
+/// @brief The smoothing weight used for a log of `rows` rows: `requested` when it is in (0, 1], else
+/// automatic, 2 / (span + 1) with span = max(1, rows / 25) (a window of about 4% of the run).
+inline double loss_ema_alpha(std::size_t rows, double requested = 0) noexcept
+{
+    if (requested > 0 && requested <= 1) return requested;
+    const double span = std::max(1.0, std::floor(static_cast<double>(rows) / 25.0));
+    return 2.0 / (span + 1.0);
+}
+
+/// @brief Exponential moving average: e_0 = x_0, e_i = alpha x_i + (1 - alpha) e_(i-1). Non-finite
+/// entries give NaN and leave the average unchanged (the next finite value continues from it).
+inline std::vector<double> exponential_moving_average(std::span<const double> x, double alpha)
+{
+    std::vector<double> e(x.size(), std::nan(""));
+    bool started = false;
+    double acc = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        if (!std::isfinite(x[i])) continue;
+        acc = started ? alpha * x[i] + (1 - alpha) * acc : x[i];
+        started = true;
+        e[i] = acc;
+    }
+    return e;
+}
+
+/// @brief Plots a CSV training log as small multiples: one panel per group of terms (loss_group_of: D
+/// terms, G terms, D accuracy, learning rate), all sharing one step axis, each with its own linear y axis.
+/// Every series is drawn twice in its own colour: the raw values faint, and their exponential moving
+/// average (the weight is written under the title) as the line. A series with no finite nonzero value
+/// (a column an old log fills with 0 or NaN) is left out and named in a note. The y range of a panel covers
+/// the averages and the 1st-99th percentile of the raw values (raw spikes beyond it are clipped, which the
+/// subtitle says). Each panel's frame carries `data-lo`/`data-hi` (values at its bottom/top edge) and
+/// `data-x0`/`data-x1` (steps at its left/right edge); each average line has `class="ema"` and
+/// `data-series`, each raw line `class="raw"`, each legend label `class="legend"`.
 /// @param csv_text header `step,<term>,...` then numeric rows (see parse_loss_csv).
 /// @return the SVG document.
 /// @throws format_error from parse_loss_csv.
 inline std::string plot_losses_svg(std::string_view csv_text, const loss_plot_options& opt = {})
 {
     const loss_log log = parse_loss_csv(csv_text, "plot_losses_svg");
-    std::vector<double> all;
-    for (auto& v : log.values) all.insert(all.end(), v.begin(), v.end());
-    const axis_scale kind = choose_y_scale(all);
-    const double W = static_cast<double>(std::max<std::size_t>(opt.width, 320)), H = static_cast<double>(std::max<std::size_t>(opt.height, 200));
-    const double L = 72, R = W - 180, T = 44, B = H - 52;
-    std::vector<double> yt;
-    const detail::y_axis ay = detail::make_y_axis(kind, all, T, B, yt);
+    const std::size_t n = log.steps.size();
+    const double alpha = loss_ema_alpha(n, opt.ema_alpha);
+
+    // Groups in panel order, with the non-empty series of each.
+    const std::array<std::string_view, 5> order{"D terms", "G terms", "D accuracy", "learning rate", "other terms"};
+    std::vector<std::string> groups;
+    std::vector<std::vector<std::size_t>> members;
+    std::vector<std::string> skipped;
+    for (auto g : order) {
+        std::vector<std::size_t> m;
+        for (std::size_t t = 0; t < log.terms.size(); ++t) {
+            if (loss_group_of(log.terms[t]) != g) continue;
+            const bool empty = std::none_of(log.values[t].begin(), log.values[t].end(), [](double v) { return std::isfinite(v) && v != 0; });
+            if (empty)
+                skipped.push_back(log.terms[t]);
+            else
+                m.push_back(t);
+        }
+        if (!m.empty()) groups.emplace_back(g), members.push_back(std::move(m));
+    }
+
+    const double W = static_cast<double>(std::max<std::size_t>(opt.width, 420));
+    const double ph = static_cast<double>(std::max<std::size_t>(opt.panel_height, 120));
+    const double head = 58, L = 72, R = W - 170;
+    const double H = head + ph * static_cast<double>(std::max<std::size_t>(groups.size(), 1)) + 34 + (skipped.empty() ? 0 : 16);
     double s0 = *std::min_element(log.steps.begin(), log.steps.end()), s1 = *std::max_element(log.steps.begin(), log.steps.end());
     if (!(s1 > s0)) s0 -= 0.5, s1 += 0.5;
     auto px = [&](double s) { return L + (s - s0) / (s1 - s0) * (R - L); };
+    const std::vector<double> xt = detail::nice_ticks(s0, s1, 8);
 
     std::string out = detail::svg_open(static_cast<std::size_t>(W), static_cast<std::size_t>(H));
-    detail::svg_text(out, (L + R) / 2, 26, opt.title, "middle", 16, "font-weight=\"bold\"");
-    out += "<rect x=\"" + detail::fmt_px(L) + "\" y=\"" + detail::fmt_px(T) + "\" width=\"" + detail::fmt_px(R - L) + "\" height=\"" +
-           detail::fmt_px(B - T) + "\" fill=\"none\" stroke=\"#444\"/>\n";
-    for (double t : yt) {
-        const double y = ay.pixel(t);
-        if (y < T - 0.5 || y > B + 0.5) continue;
-        detail::svg_line(out, L, y, R, y, "#e4e4e4");
-        detail::svg_line(out, L - 5, y, L, y, "#444");
-        detail::svg_text(out, L - 8, y + 4, detail::fmt_num(t), "end", 11);
-    }
-    for (double t : detail::nice_ticks(s0, s1, 8)) {
-        const double x = px(t);
-        detail::svg_line(out, x, B, x, B + 5, "#444");
-        detail::svg_text(out, x, B + 18, detail::fmt_num(t, 6), "middle", 11);
-    }
-    detail::svg_text(out, (L + R) / 2, H - 12, "step", "middle", 12);
-    const std::string ylabel = kind == axis_scale::log ? "loss (log scale)" : kind == axis_scale::symlog ? "loss (symmetric log scale)" : "loss";
-    detail::svg_text(out, 18, (T + B) / 2, ylabel, "middle", 12,
-                     "transform=\"rotate(-90 18 " + detail::fmt_px((T + B) / 2) + ")\"");
-
-    for (std::size_t t = 0; t < log.terms.size(); ++t) {
-        const std::string_view colour = detail::plot_palette[t % detail::plot_palette.size()];
-        // points, averaged in buckets of consecutive rows when there are more than max_points
-        std::vector<std::pair<double, double>> pts;
-        for (std::size_t i = 0; i < log.steps.size(); ++i) {
-            const double v = log.values[t][i];
-            if (std::isfinite(v) && (kind != axis_scale::log || v > 0)) pts.emplace_back(log.steps[i], v);
+    detail::svg_text(out, W / 2, 22, opt.title, "middle", 16, "font-weight=\"bold\"");
+    bool clipped_any = false;
+    std::string body;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        const double oy = head + ph * static_cast<double>(g), T = oy + 22, B = oy + ph - 24;
+        // y range: every average, and the 1st..99th percentile of the raw values
+        std::vector<std::vector<double>> emas;
+        std::vector<double> raw, range;
+        for (auto t : members[g]) {
+            emas.push_back(exponential_moving_average(log.values[t], alpha));
+            for (double v : emas.back())
+                if (std::isfinite(v)) range.push_back(v);
+            for (double v : log.values[t])
+                if (std::isfinite(v)) raw.push_back(v);
         }
-        const std::size_t maxp = std::max<std::size_t>(opt.max_points, 2);
-        if (pts.size() > maxp) {
-            std::vector<std::pair<double, double>> avg;
-            const std::size_t per = (pts.size() + maxp - 1) / maxp;
-            for (std::size_t i = 0; i < pts.size(); i += per) {
-                double sx = 0, sy = 0;
-                const std::size_t e = std::min(pts.size(), i + per);
-                for (std::size_t k = i; k < e; ++k) sx += pts[k].first, sy += pts[k].second;
-                avg.emplace_back(sx / static_cast<double>(e - i), sy / static_cast<double>(e - i));
+        std::sort(raw.begin(), raw.end());
+        const auto q = [&](double p) { return raw[static_cast<std::size_t>(std::llround(p * static_cast<double>(raw.size() - 1)))]; };
+        const double qlo = raw.size() >= 50 ? q(0.01) : raw.front(), qhi = raw.size() >= 50 ? q(0.99) : raw.back();
+        range.push_back(qlo);
+        range.push_back(qhi);
+        if (raw.front() < *std::min_element(range.begin(), range.end()) || raw.back() > *std::max_element(range.begin(), range.end()))
+            clipped_any = true;
+        std::vector<double> yt;
+        const detail::y_axis ay = detail::make_y_axis(axis_scale::linear, range, T, B, yt);
+        const std::string clip_id = "panel" + std::to_string(g);
+        body += "<clipPath id=\"" + clip_id + "\"><rect x=\"" + detail::fmt_px(L) + "\" y=\"" + detail::fmt_px(T) + "\" width=\"" +
+                detail::fmt_px(R - L) + "\" height=\"" + detail::fmt_px(B - T) + "\"/></clipPath>\n";
+        detail::svg_text(body, L, oy + 15, groups[g], "start", 13, "font-weight=\"bold\"");
+        for (double t : yt) {
+            const double y = ay.pixel(t);
+            if (y < T - 0.5 || y > B + 0.5) continue;
+            detail::svg_line(body, L, y, R, y, t == 0 ? "#b0b0b0" : "#ececec");
+            detail::svg_line(body, L - 4, y, L, y, "#444");
+            detail::svg_text(body, L - 7, y + 4, detail::fmt_num(t), "end", 10);
+        }
+        for (double t : xt) {
+            const double x = px(t);
+            detail::svg_line(body, x, B, x, B + 4, "#444");
+            detail::svg_text(body, x, B + 15, detail::fmt_num(t, 6), "middle", 10);
+        }
+        body += "<g clip-path=\"url(#" + clip_id + ")\">\n";
+        const std::size_t maxp = std::max<std::size_t>(opt.max_points, 2), per = (n + maxp - 1) / maxp;
+        for (std::size_t k = 0; k < members[g].size(); ++k) {
+            const std::size_t t = members[g][k];
+            const std::string colour(detail::plot_palette[k % detail::plot_palette.size()]);
+            std::string rp, ep;
+            // raw: averaged in buckets of `per` rows when longer than max_points; average: its value at
+            // the bucket's last finite row
+            for (std::size_t i = 0; i < n; i += per) {
+                double sx = 0, sy = 0, m = 0, ex = std::nan(""), ey = std::nan("");
+                for (std::size_t r = i; r < std::min(n, i + per); ++r) {
+                    if (!std::isfinite(log.values[t][r])) continue;
+                    sx += log.steps[r], sy += log.values[t][r], m += 1;
+                    ex = log.steps[r], ey = emas[k][r];
+                }
+                if (m == 0) continue;
+                rp += (rp.empty() ? "" : " ") + detail::fmt_px(px(sx / m)) + "," + detail::fmt_px(ay.pixel(sy / m));
+                ep += (ep.empty() ? "" : " ") + detail::fmt_px(px(ex)) + "," + detail::fmt_px(ay.pixel(ey));
             }
-            pts = std::move(avg);
+            const std::string name = detail::xml_escape(log.terms[t]);
+            body += "<polyline class=\"raw\" fill=\"none\" stroke=\"" + colour + "\" stroke-opacity=\"0.28\" stroke-width=\"1\" points=\"" +
+                    rp + "\"/>\n";
+            body += "<polyline class=\"ema\" data-series=\"" + name + "\" fill=\"none\" stroke=\"" + colour +
+                    "\" stroke-width=\"1.8\" stroke-linejoin=\"round\" points=\"" + ep + "\"><title>" + name +
+                    " (moving average)</title></polyline>\n";
+            const double ly = T + 8 + 18.0 * static_cast<double>(k);
+            detail::svg_line(body, R + 14, ly, R + 36, ly, colour, 2.5);
+            detail::svg_text(body, R + 42, ly + 4, log.terms[t], "start", 11, "class=\"legend\"");
         }
-        out += "<polyline fill=\"none\" stroke=\"" + std::string(colour) + "\" stroke-width=\"1.6\" stroke-linejoin=\"round\" points=\"";
-        for (std::size_t i = 0; i < pts.size(); ++i)
-            out += (i ? " " : "") + detail::fmt_px(px(pts[i].first)) + "," + detail::fmt_px(ay.pixel(pts[i].second));
-        out += "\"><title>" + detail::xml_escape(log.terms[t]) + "</title></polyline>\n";
-        const double ly = T + 8 + 20.0 * static_cast<double>(t);
-        detail::svg_line(out, R + 14, ly, R + 38, ly, colour, 2.5);
-        detail::svg_text(out, R + 44, ly + 4, log.terms[t], "start", 12);
+        body += "</g>\n";
+        body += "<rect class=\"panel\" data-group=\"" + detail::xml_escape(groups[g]) + "\" data-lo=\"" + detail::fmt_num(ay.lo, 15) +
+                "\" data-hi=\"" + detail::fmt_num(ay.hi, 15) + "\" data-x0=\"" + detail::fmt_num(s0, 15) + "\" data-x1=\"" +
+                detail::fmt_num(s1, 15) + "\" x=\"" + detail::fmt_px(L) + "\" y=\"" + detail::fmt_px(T) + "\" width=\"" +
+                detail::fmt_px(R - L) + "\" height=\"" + detail::fmt_px(B - T) + "\" fill=\"none\" stroke=\"#444\"/>\n";
+    }
+    char a[32];
+    std::snprintf(a, sizeof a, "%.3g", alpha);
+    std::string sub = std::string("lines: exponential moving average e = ") + a + " x + " + detail::fmt_num(1 - alpha, 3) +
+                      " e(previous row); faint: raw values";
+    if (clipped_any) sub += "; y axes cover the 1st-99th percentile";
+    detail::svg_text(out, W / 2, 40, sub, "middle", 11, "fill=\"#555\"");
+    out += body;
+    detail::svg_text(out, (L + R) / 2, H - 14 - (skipped.empty() ? 0 : 16), "step", "middle", 12);
+    if (!skipped.empty()) {
+        std::string s = "not plotted (every value 0 or missing): ";
+        for (std::size_t i = 0; i < skipped.size(); ++i) s += (i ? ", " : "") + skipped[i];
+        detail::svg_text(out, L, H - 10, s, "start", 10, "fill=\"#777\"");
+    }
+    out += "</svg>\n";
+    return out;
+}
+
+/// @brief One number of a per-fold plot: `value` of `series` (a method) on `fold`, drawn in `panel` (a metric).
+struct fold_point {
+    std::string panel, series, fold;
+    double value = 0;
+};
+
+/// @brief Options of plot_folds_svg.
+struct fold_plot_options {
+    std::size_t panel_width = 320, panel_height = 240;
+    std::size_t panels_per_row = 3;
+    std::string title = "per fold";
+};
+
+/// @brief Per-fold numbers as small multiples: one panel per `panel` (own linear y axis), the folds in
+/// order of first appearance along a shared categorical x axis, one line with dots per series in one colour
+/// across every panel (legend on top). Folds are not a time series, so nothing is smoothed. Non-finite
+/// values are gaps. Each line has `class="series"` and `data-series`, each legend label `class="legend"`.
+/// @throws value_error when `points` is empty.
+inline std::string plot_folds_svg(std::span<const fold_point> points, const fold_plot_options& opt = {})
+{
+    if (points.empty()) throw value_error("plot_folds_svg: no points to draw (expected at least one panel,series,fold,value)");
+    std::vector<std::string> panels, series, folds;
+    auto add = [](std::vector<std::string>& v, const std::string& s) {
+        if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
+    };
+    for (const auto& p : points) add(panels, p.panel), add(series, p.series), add(folds, p.fold);
+    const std::size_t per_row = std::max<std::size_t>(1, std::min(opt.panels_per_row, panels.size()));
+    const std::size_t prow = (panels.size() + per_row - 1) / per_row;
+    const double pw = static_cast<double>(std::max<std::size_t>(opt.panel_width, 160)),
+                 ph = static_cast<double>(std::max<std::size_t>(opt.panel_height, 140));
+    const double legend_h = 20.0 * static_cast<double>((series.size() + 3) / 4) + 8, top = 40 + legend_h;
+    const double W = pw * static_cast<double>(per_row) + 20, H = top + ph * static_cast<double>(prow) + 10;
+    std::string out = detail::svg_open(static_cast<std::size_t>(W), static_cast<std::size_t>(H));
+    detail::svg_text(out, W / 2, 24, opt.title, "middle", 16, "font-weight=\"bold\"");
+    for (std::size_t m = 0; m < series.size(); ++m) {
+        const double lx = 20 + static_cast<double>(m % 4) * (W - 40) / 4, ly = 44 + 20.0 * static_cast<double>(m / 4);
+        const std::string_view c = detail::plot_palette[m % detail::plot_palette.size()];
+        detail::svg_line(out, lx, ly - 3, lx + 22, ly - 3, c, 2.5);
+        out += "<circle cx=\"" + detail::fmt_px(lx + 11) + "\" cy=\"" + detail::fmt_px(ly - 3) + "\" r=\"3\" fill=\"" + std::string(c) + "\"/>\n";
+        detail::svg_text(out, lx + 28, ly + 1, series[m], "start", 12, "class=\"legend\"");
+    }
+    for (std::size_t k = 0; k < panels.size(); ++k) {
+        const double ox = 10 + pw * static_cast<double>(k % per_row), oy = top + ph * static_cast<double>(k / per_row);
+        const double L = ox + 56, R = ox + pw - 14, T = oy + 26, B = oy + ph - 56;
+        std::vector<double> vals;
+        for (const auto& p : points)
+            if (p.panel == panels[k] && std::isfinite(p.value)) vals.push_back(p.value);
+        std::vector<double> ticks;
+        const detail::y_axis ay = detail::make_y_axis(axis_scale::linear, vals, T, B, ticks);
+        auto fx = [&](std::size_t f) {
+            return folds.size() == 1 ? (L + R) / 2 : L + 10 + static_cast<double>(f) * (R - L - 20) / static_cast<double>(folds.size() - 1);
+        };
+        detail::svg_text(out, (L + R) / 2, oy + 16, panels[k], "middle", 13, "font-weight=\"bold\"");
+        for (double t : ticks) {
+            const double y = ay.pixel(t);
+            if (y < T - 0.5 || y > B + 0.5) continue;
+            detail::svg_line(out, L, y, R, y, t == 0 ? "#b0b0b0" : "#ececec");
+            detail::svg_text(out, L - 6, y + 4, detail::fmt_num(t), "end", 10);
+        }
+        for (std::size_t f = 0; f < folds.size(); ++f) {
+            const double x = fx(f);
+            detail::svg_line(out, x, B, x, B + 4, "#444");
+            detail::svg_text(out, x - 2, B + 12, folds[f], "end", 10,
+                             "transform=\"rotate(-35 " + detail::fmt_px(x - 2) + " " + detail::fmt_px(B + 12) + ")\"");
+        }
+        out += "<rect x=\"" + detail::fmt_px(L) + "\" y=\"" + detail::fmt_px(T) + "\" width=\"" + detail::fmt_px(R - L) + "\" height=\"" +
+               detail::fmt_px(B - T) + "\" fill=\"none\" stroke=\"#444\"/>\n";
+        for (std::size_t m = 0; m < series.size(); ++m) {
+            const std::string c(detail::plot_palette[m % detail::plot_palette.size()]);
+            std::vector<std::pair<double, double>> pts;
+            for (std::size_t f = 0; f < folds.size(); ++f)
+                for (const auto& p : points)
+                    if (p.panel == panels[k] && p.series == series[m] && p.fold == folds[f] && std::isfinite(p.value))
+                        pts.emplace_back(fx(f), ay.pixel(p.value));
+            if (pts.empty()) continue;
+            out += "<polyline class=\"series\" data-series=\"" + detail::xml_escape(series[m]) + "\" fill=\"none\" stroke=\"" + c +
+                   "\" stroke-width=\"1.6\" points=\"";
+            for (std::size_t i = 0; i < pts.size(); ++i) out += (i ? " " : "") + detail::fmt_px(pts[i].first) + "," + detail::fmt_px(pts[i].second);
+            out += "\"><title>" + detail::xml_escape(series[m]) + "</title></polyline>\n";
+            for (const auto& p : pts)
+                out += "<circle cx=\"" + detail::fmt_px(p.first) + "\" cy=\"" + detail::fmt_px(p.second) + "\" r=\"2.6\" fill=\"" + c + "\"/>\n";
+        }
     }
     out += "</svg>\n";
     return out;

@@ -1,0 +1,400 @@
+// A motion viewer as one self-contained HTML page: motion is judged by watching it move, and the filmstrips
+// of the hand paper's Figures 4-12 are still. handemo does the forward kinematics (motion/skeleton.hpp) and
+// embeds every frame's joint and end-site positions, the parent indices and the same per-finger / per-limb
+// colours as the PNG renderer (figure.hpp analyse_figure) as JSON; the page only draws them with Canvas 2D
+// (no library, no network, nothing fetched). Clips play side by side in sync at their own frame rates, or in
+// normalised time (a transferred clip and its input, which may differ in tempo, stay aligned); play/pause,
+// scrub, speed, orbit (drag), zoom (wheel) and joint names on hover. The page writes the pixel positions of
+// frame 0 of every clip at the initial camera into a hidden <pre id="check"> and sets its data-status
+// attribute to "ok" once it has drawn (or "error: ..." on a script error), so a headless browser can check it.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/motion/clip.hpp>
+#include <handemo/render/figure.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace handemo {
+
+/// @brief Options of render_viewer_html.
+struct viewer_options {
+    std::vector<std::string> titles;     ///< one per clip, or empty for "clip 1", "clip 2", ...
+    bool normalised_time = false;        ///< start with every clip stretched to the longest one's duration
+    std::size_t width = 960;             ///< canvas size in CSS pixels (all clips share it side by side)
+    std::size_t height = 540;
+    std::string page_title = "handemo view";
+    figure_options figure;               ///< kind (hand / body) and camera angles, as for filmstrips
+};
+
+/// @brief Layout constants of the page: a band of `viewer_title_height` CSS pixels above the cells for the
+/// titles; clip i's cell is [i W / n, (i + 1) W / n) x [title, H). A point p of clip i with view vectors
+/// (right, up), centre c and the shared radius R lands at
+///   x = i W / n + (W / n) / 2 + dot(p - c, right) s,  y = title + (H - title) / 2 - dot(p - c, up) s,
+///   s = zoom viewer_fill min(W / n, H - title) / (2 R)   (zoom 1 at the start).
+inline constexpr double viewer_title_height = 24.0;
+inline constexpr double viewer_fill = 0.9;
+
+namespace detail {
+
+inline void json_string(std::string& out, std::string_view s)
+{
+    out += '"';
+    for (char ch : s) {
+        const auto u = static_cast<unsigned char>(ch);
+        if (ch == '"') out += "\\\"";
+        else if (ch == '\\') out += "\\\\";
+        else if (ch == '\n') out += "\\n";
+        else if (ch == '<') out += "\\u003c";  // no "</script>" inside the embedded data
+        else if (ch == '>') out += "\\u003e";
+        else if (ch == '&') out += "\\u0026";
+        else if (u < 0x20) {
+            char b[8];
+            std::snprintf(b, sizeof b, "\\u%04x", u);
+            out += b;
+        } else out += ch;
+    }
+    out += '"';
+}
+
+inline void json_num(std::string& out, double v)
+{
+    if (!std::isfinite(v)) v = 0;
+    char b[32];
+    std::snprintf(b, sizeof b, "%.7g", v);
+    out += b;
+}
+
+inline void json_vec(std::string& out, vec3 v)
+{
+    out += '[';
+    for (int k = 0; k < 3; ++k) {
+        if (k) out += ',';
+        json_num(out, v[static_cast<std::size_t>(k)]);
+    }
+    out += ']';
+}
+
+inline std::string hex_color(color c)
+{
+    auto to8 = [](float x) { return static_cast<int>(std::lround(std::clamp(x, 0.0f, 1.0f) * 255.0f)); };
+    char b[8];
+    std::snprintf(b, sizeof b, "#%02x%02x%02x", to8(c.r), to8(c.g), to8(c.b));
+    return b;
+}
+
+/// Points of a pose as the viewer stores them: the J joints, then the end site of every joint that has
+/// one of nonzero length (parent: that joint).
+inline std::vector<vec3> viewer_points(const pose_positions& P, std::span<const std::size_t> ends)
+{
+    std::vector<vec3> pts(P.joints.begin(), P.joints.end());
+    for (auto j : ends) pts.push_back(P.end_sites[j]);
+    return pts;
+}
+
+}  // namespace detail
+
+/// @brief The data the page draws, as JSON:
+/// `{"format":"handemo-view/1","width","height","normalised","view":{"right","up","toward"},"radius",
+///   "clips":[{"title","fps","frames","joints","points","names","parents","colors","hidden","stub","center",
+///   "positions"}]}`. `points` = joints + end sites; `positions` is [frames, points, 3] flattened (world units,
+/// 7 significant digits) from forward_kinematics; `hidden` points get no ball and no bone to them from
+/// their children unless `stub`; a `stub` bone (a hand's forearm) is drawn over 30% of its length from the child.
+/// @throws value_error for no clips, a clip with zero frames or a title count other than 0 or the clip count;
+///         errors of clip::validate.
+inline std::string viewer_json(std::span<const clip> clips, const viewer_options& opt = {})
+{
+    const std::string fn = "render_viewer_html";
+    if (clips.empty()) throw value_error(fn + ": no clips to show (expected at least one)");
+    if (!opt.titles.empty() && opt.titles.size() != clips.size())
+        throw value_error(fn + ": " + std::to_string(opt.titles.size()) + " titles for " + std::to_string(clips.size()) +
+                          " clips (expected one title per clip, or none)");
+    if (opt.width < 64 || opt.height < 64 || opt.width > 16384 || opt.height > 16384)
+        throw value_error(fn + ": canvas " + std::to_string(opt.width) + "x" + std::to_string(opt.height) + " is not in 64..16384 per side");
+    std::vector<figure_layout> layouts;
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        const std::string what = fn + ": clip " + std::to_string(i + 1);
+        if (clips[i].frames == 0) throw value_error(what + " has 0 frames (expected at least 1)");
+        if (!(clips[i].fps > 0)) throw value_error(what + ": fps " + std::to_string(clips[i].fps) + " is not > 0");
+        clips[i].validate(what);
+        layouts.push_back(analyse_figure(clips[i].skel, opt.figure.kind, opt.figure.trunk_color));
+    }
+    const view_basis view = choose_view(clips, layouts.front(), opt.figure);
+
+    std::string clips_json;
+    double radius = 0;
+    for (std::size_t ci = 0; ci < clips.size(); ++ci) {
+        const clip& c = clips[ci];
+        const skeleton& s = c.skel;
+        const figure_layout& L = layouts[ci];
+        const std::size_t J = s.size();
+        const bool hand = L.kind == figure_kind::hand;
+        // end sites of nonzero length (from frame 0; an end-site offset does not change over time)
+        const pose_positions P0 = clip_pose(c, 0);
+        std::vector<std::size_t> ends;
+        for (std::size_t j = 0; j < J; ++j)
+            if (detail::v_norm(detail::v_sub(P0.end_sites[j], P0.joints[j])) > 1e-9) ends.push_back(j);
+        const std::size_t NP = J + ends.size();
+        std::vector<int> parents(NP), hidden(NP, 0), stub(NP, 0);
+        std::vector<std::string> names(NP), colors(NP);
+        for (std::size_t j = 0; j < J; ++j) {
+            parents[j] = s.joints[j].parent;
+            names[j] = s.joints[j].name;
+            colors[j] = detail::hex_color(L.color_of(j));
+            hidden[j] = L.hidden[j] || (hand && s.joints[j].parent < 0);  // no ball at a hand's cut forearm
+            stub[j] = hand && parents[j] >= 0 && s.joints[static_cast<std::size_t>(parents[j])].parent < 0 &&
+                      !L.hidden[static_cast<std::size_t>(parents[j])];
+        }
+        for (std::size_t e = 0; e < ends.size(); ++e) {
+            parents[J + e] = static_cast<int>(ends[e]);
+            names[J + e] = s.joints[ends[e]].name + " (end)";
+            colors[J + e] = detail::hex_color(L.color_of(ends[e]));
+        }
+
+        // positions, and the drawn extent (centre: middle of the bounding box over all frames)
+        std::string pos;
+        pos.reserve(c.frames * NP * 3 * 10);
+        vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+        std::vector<std::vector<vec3>> frames_pts;
+        frames_pts.reserve(c.frames);
+        for (std::size_t f = 0; f < c.frames; ++f) {
+            const auto pts = detail::viewer_points(clip_pose(c, f), ends);
+            for (std::size_t p = 0; p < NP; ++p) {
+                if (f || p) pos += ',';
+                detail::json_num(pos, pts[p][0]);
+                pos += ',';
+                detail::json_num(pos, pts[p][1]);
+                pos += ',';
+                detail::json_num(pos, pts[p][2]);
+                vec3 q = pts[p];
+                if (hidden[p]) continue;
+                for (std::size_t k = 0; k < 3; ++k) lo[k] = std::min(lo[k], q[k]), hi[k] = std::max(hi[k], q[k]);
+                if (stub[p]) {
+                    q = detail::v_add(pts[p], detail::v_mul(detail::v_sub(pts[static_cast<std::size_t>(parents[p])], pts[p]), 0.3));
+                    for (std::size_t k = 0; k < 3; ++k) lo[k] = std::min(lo[k], q[k]), hi[k] = std::max(hi[k], q[k]);
+                }
+            }
+            frames_pts.push_back(pts);
+        }
+        vec3 center{};
+        if (lo[0] <= hi[0]) center = detail::v_mul(detail::v_add(lo, hi), 0.5);
+        for (const auto& pts : frames_pts)
+            for (std::size_t p = 0; p < NP; ++p)
+                if (!hidden[p]) radius = std::max(radius, detail::v_norm(detail::v_sub(pts[p], center)));
+
+        std::string t = opt.titles.empty() ? "clip " + std::to_string(ci + 1) : opt.titles[ci];
+        std::string& o = clips_json;
+        o += ci ? ",\n{" : "{";
+        o += "\"title\":";
+        detail::json_string(o, t);
+        o += ",\"fps\":";
+        detail::json_num(o, c.fps);
+        o += ",\"frames\":" + std::to_string(c.frames) + ",\"joints\":" + std::to_string(J) + ",\"points\":" + std::to_string(NP);
+        o += ",\"names\":[";
+        for (std::size_t p = 0; p < NP; ++p) {
+            if (p) o += ',';
+            detail::json_string(o, names[p]);
+        }
+        o += "],\"parents\":[";
+        for (std::size_t p = 0; p < NP; ++p) o += (p ? "," : "") + std::to_string(parents[p]);
+        o += "],\"colors\":[";
+        for (std::size_t p = 0; p < NP; ++p) o += (p ? ",\"" : "\"") + colors[p] + "\"";
+        o += "],\"hidden\":[";
+        for (std::size_t p = 0; p < NP; ++p) o += (p ? "," : "") + std::to_string(hidden[p]);
+        o += "],\"stub\":[";
+        for (std::size_t p = 0; p < NP; ++p) o += (p ? "," : "") + std::to_string(stub[p]);
+        o += "],\"center\":";
+        detail::json_vec(o, center);
+        o += ",\"positions\":[" + pos + "]}";
+    }
+    if (!(radius > 1e-12)) radius = 1;
+
+    std::string j = "{\"format\":\"handemo-view/1\",\"width\":" + std::to_string(opt.width) + ",\"height\":" + std::to_string(opt.height) +
+                    ",\"normalised\":" + (opt.normalised_time ? "true" : "false") + ",\"view\":{\"right\":";
+    detail::json_vec(j, view.right);
+    j += ",\"up\":";
+    detail::json_vec(j, view.up);
+    j += ",\"toward\":";
+    detail::json_vec(j, view.toward);
+    j += "},\"radius\":";
+    detail::json_num(j, radius);
+    j += ",\n\"clips\":[\n" + clips_json + "]}";
+    return j;
+}
+
+/// @brief One self-contained HTML page (no network access, nothing fetched) that plays `clips` side by side.
+/// @param clips any skeletons; the camera comes from the first clip, as for filmstrips.
+/// @return the HTML text (write it with write_file_atomic).
+/// @throws as viewer_json.
+inline std::string render_viewer_html(std::span<const clip> clips, const viewer_options& opt = {})
+{
+    const std::string data = viewer_json(clips, opt);
+    std::string title;
+    for (char ch : opt.page_title) {
+        if (ch == '<') title += "&lt;";
+        else if (ch == '>') title += "&gt;";
+        else if (ch == '&') title += "&amp;";
+        else title += ch;
+    }
+    std::string h;
+    h.reserve(data.size() + 12000);
+    h += R"js(<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>)js" + title + R"js(</title>
+<style>
+body{font:14px sans-serif;margin:12px;color:#222;background:#fafafa}
+canvas{background:#fff;border:1px solid #ccc;cursor:grab;display:block}
+#bar{margin:8px 0;display:flex;gap:12px;align-items:center;flex-wrap:wrap}
+#scrub{width:360px}
+#check{display:none}
+</style></head><body>
+<div id="heading"></div>
+<canvas id="view"></canvas>
+<div id="bar"><button id="play">pause</button>
+<input id="scrub" type="range" min="0" max="1000" value="0">
+<span id="time"></span>
+<label>speed <select id="speed"><option>0.25</option><option>0.5</option><option selected>1</option><option>2</option></select></label>
+<label><input id="norm" type="checkbox"> normalised time</label>
+<button id="reset">reset view</button>
+<span style="color:#777">drag: orbit, wheel: zoom, space: play/pause, hover: joint names</span></div>
+<pre id="check" data-status="not run"></pre>
+<script type="application/json" id="data">
+)js";
+    h += data;
+    h += R"js(
+</script>
+<script>
+"use strict";
+(function () {
+const check = document.getElementById("check");
+window.onerror = function (msg) { check.textContent = "error: " + msg; check.setAttribute("data-status", "error: " + msg); };
+const D = JSON.parse(document.getElementById("data").textContent);
+const W = D.width, H = D.height, TITLE = )js" + std::to_string(viewer_title_height) + R"js(, FILL = )js" + std::to_string(viewer_fill) + R"js(;
+const cv = document.getElementById("view"), ctx = cv.getContext("2d");
+const dpr = window.devicePixelRatio || 1;
+cv.width = Math.round(W * dpr); cv.height = Math.round(H * dpr);
+cv.style.width = W + "px"; cv.style.height = H + "px";
+const n = D.clips.length, cw = W / n, ch = H - TITLE;
+const dur = D.clips.map(c => c.frames / c.fps), T = Math.max.apply(null, dur);
+let t = 0, playing = true, speed = 1, yaw = 0, pitch = 0, zoom = 1, mouse = null, drag = null, last = null;
+const norm = document.getElementById("norm"); norm.checked = D.normalised;
+document.getElementById("heading").textContent = n + " clip" + (n > 1 ? "s" : "") + ": " +
+  D.clips.map(c => c.title + " (" + c.frames + " frames, " + c.fps + " fps)").join(", ");
+function rot(v, k, a) {  // Rodrigues: v turned by a radians about the unit axis k
+  const c = Math.cos(a), s = Math.sin(a), d = k[0]*v[0] + k[1]*v[1] + k[2]*v[2];
+  const x = [k[1]*v[2] - k[2]*v[1], k[2]*v[0] - k[0]*v[2], k[0]*v[1] - k[1]*v[0]];
+  return [0, 1, 2].map(i => v[i]*c + x[i]*s + k[i]*d*(1 - c));
+}
+function camera() {  // the initial view turned by yaw about its up and pitch about the new right
+  const up0 = D.view.up;
+  const r = rot(D.view.right, up0, yaw), tw = rot(D.view.toward, up0, yaw);
+  return {right: r, up: rot(up0, r, pitch), toward: rot(tw, r, pitch)};
+}
+function frameOf(i) {
+  const c = D.clips[i];
+  if (norm.checked) return Math.min(c.frames - 1, Math.round(t / T * (c.frames - 1)));
+  return Math.min(c.frames - 1, Math.floor(t * c.fps + 1e-9));
+}
+function project(i, f, cam) {  // pixel positions of every point of clip i at frame f
+  const c = D.clips[i], P = c.positions, o = f * c.points * 3, s = zoom * FILL * Math.min(cw, ch) / (2 * D.radius);
+  const out = [];
+  for (let p = 0; p < c.points; ++p) {
+    const q = [P[o + 3*p] - c.center[0], P[o + 3*p + 1] - c.center[1], P[o + 3*p + 2] - c.center[2]];
+    const dot = v => q[0]*v[0] + q[1]*v[1] + q[2]*v[2];
+    out.push({x: i*cw + cw/2 + dot(cam.right)*s, y: TITLE + ch/2 - dot(cam.up)*s, z: dot(cam.toward)});
+  }
+  return out;
+}
+let hover = null;
+function draw() {
+  const cam = camera();
+  ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+  ctx.clearRect(0, 0, W, H);
+  ctx.font = "14px sans-serif"; ctx.textAlign = "center"; ctx.fillStyle = "#222";
+  const base = Math.max(1.5, 0.02 * Math.min(cw, ch) * zoom);
+  let best = null;
+  for (let i = 0; i < n; ++i) {
+    const c = D.clips[i], f = frameOf(i), px = project(i, f, cam);
+    ctx.fillStyle = "#222"; ctx.fillText(c.title, i*cw + cw/2, 17);
+    if (i) { ctx.strokeStyle = "#ddd"; ctx.lineWidth = 1; ctx.beginPath(); ctx.moveTo(i*cw, 0); ctx.lineTo(i*cw, H); ctx.stroke(); }
+    ctx.save(); ctx.beginPath(); ctx.rect(i*cw, TITLE, cw, ch); ctx.clip();
+    const items = [];
+    for (let p = 0; p < c.points; ++p) {
+      const q = c.parents[p];
+      if (q >= 0 && (!c.hidden[q] || c.stub[p])) {
+        let a = px[q];
+        if (c.stub[p]) a = {x: px[p].x + 0.3*(a.x - px[p].x), y: px[p].y + 0.3*(a.y - px[p].y), z: px[p].z + 0.3*(a.z - px[p].z)};
+        items.push({z: (a.z + px[p].z)/2, bone: true, a: a, b: px[p], col: c.colors[p]});
+      }
+      if (!c.hidden[p]) items.push({z: px[p].z + 1e-6, bone: false, b: px[p], col: c.colors[p]});
+    }
+    items.sort((u, v) => u.z - v.z);  // painter: far first
+    ctx.lineCap = "round";
+    for (const it of items) {
+      if (it.bone) { ctx.strokeStyle = it.col; ctx.lineWidth = 2*base; ctx.beginPath(); ctx.moveTo(it.a.x, it.a.y); ctx.lineTo(it.b.x, it.b.y); ctx.stroke(); }
+      else { ctx.fillStyle = it.col; ctx.strokeStyle = "rgba(0,0,0,0.35)"; ctx.lineWidth = 1; ctx.beginPath(); ctx.arc(it.b.x, it.b.y, 1.15*base, 0, 2*Math.PI); ctx.fill(); ctx.stroke(); }
+    }
+    ctx.restore();
+    ctx.fillStyle = "#888"; ctx.font = "11px sans-serif"; ctx.textAlign = "left";
+    ctx.fillText("frame " + f + " / " + (c.frames - 1), i*cw + 6, H - 6);
+    ctx.font = "14px sans-serif"; ctx.textAlign = "center";
+    if (mouse) for (let p = 0; p < c.points; ++p) {
+      if (c.hidden[p]) continue;
+      const d = Math.hypot(px[p].x - mouse.x, px[p].y - mouse.y);
+      if (d < 10 && (!best || d < best.d)) best = {d: d, x: px[p].x, y: px[p].y, text: c.title + ": " + c.names[p]};
+    }
+  }
+  hover = best;
+  if (best) {
+    ctx.font = "12px sans-serif"; ctx.textAlign = "left";
+    const w = ctx.measureText(best.text).width + 10, x = Math.min(best.x + 10, W - w - 2), y = Math.max(best.y - 26, 2);
+    ctx.fillStyle = "rgba(255,255,224,0.95)"; ctx.fillRect(x, y, w, 20);
+    ctx.strokeStyle = "#999"; ctx.strokeRect(x, y, w, 20);
+    ctx.fillStyle = "#222"; ctx.fillText(best.text, x + 5, y + 14);
+  }
+  document.getElementById("scrub").value = Math.round(t / T * 1000);
+  document.getElementById("time").textContent = t.toFixed(2) + " / " + T.toFixed(2) + " s";
+}
+function tick(now) {
+  if (last !== null && playing) { t += (now - last) / 1000 * speed; if (t >= T) t = t % T; }
+  last = now; draw(); requestAnimationFrame(tick);
+}
+const playBtn = document.getElementById("play");
+function toggle() { playing = !playing; playBtn.textContent = playing ? "pause" : "play"; }
+playBtn.onclick = toggle;
+document.addEventListener("keydown", e => { if (e.code === "Space") { e.preventDefault(); toggle(); } });
+document.getElementById("scrub").oninput = e => { t = e.target.value / 1000 * T; if (t >= T) t = Math.max(0, T - 1e-6); draw(); };
+document.getElementById("speed").onchange = e => { speed = parseFloat(e.target.value); };
+norm.onchange = draw;
+document.getElementById("reset").onclick = () => { yaw = 0; pitch = 0; zoom = 1; draw(); };
+function pos(e) { const r = cv.getBoundingClientRect(); return {x: e.clientX - r.left, y: e.clientY - r.top}; }
+cv.addEventListener("mousedown", e => { drag = pos(e); cv.style.cursor = "grabbing"; });
+window.addEventListener("mouseup", () => { drag = null; cv.style.cursor = "grab"; });
+cv.addEventListener("mousemove", e => {
+  const p = pos(e); mouse = p;
+  if (drag) { yaw -= (p.x - drag.x) * 0.01; pitch = Math.max(-1.55, Math.min(1.55, pitch + (p.y - drag.y) * 0.01)); drag = p; }
+  if (!playing) draw();
+});
+cv.addEventListener("mouseleave", () => { mouse = null; if (!playing) draw(); });
+cv.addEventListener("wheel", e => { e.preventDefault(); zoom = Math.max(0.1, Math.min(20, zoom * Math.exp(-e.deltaY * 0.001))); if (!playing) draw(); }, {passive: false});
+// frame 0 at the initial camera, for headless checks: "clip i: x,y x,y ..." (CSS pixels)
+const cam0 = camera(), lines = [];
+for (let i = 0; i < n; ++i) lines.push("clip " + i + ": " + project(i, 0, cam0).map(q => q.x.toFixed(2) + "," + q.y.toFixed(2)).join(" "));
+draw();
+check.textContent = lines.join("\n");
+check.setAttribute("data-status", "ok");
+requestAnimationFrame(tick);
+})();
+</script>
+</body></html>
+)js";
+    return h;
+}
+
+}  // namespace handemo

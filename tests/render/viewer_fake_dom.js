@@ -1,0 +1,29 @@
+// Runs the viewer page's script under Node with a minimal fake DOM (no drawing: the canvas context accepts
+// every call) and prints <pre id="check" data-status="...">...</pre> as a browser's --dump-dom would, so
+// test_viewer_browser can check the page's projection where no Chromium is installed.
+// Usage: node viewer_fake_dom.js view.html
+"use strict";
+const fs = require("fs");
+const html = fs.readFileSync(process.argv[2], "utf8");
+const data = html.match(/<script type="application\/json" id="data">([\s\S]*?)<\/script>/)[1];
+const code = html.match(/<script>([\s\S]*?)<\/script>/)[1];
+const ctx = new Proxy({}, {
+  get: (t, k) => (k === "measureText" ? () => ({width: 10}) : k in t ? t[k] : () => {}),
+  set: (t, k, v) => { t[k] = v; return true; },
+});
+const els = {};
+function el(id) {
+  if (!els[id]) els[id] = {id, textContent: id === "data" ? data : "", style: {}, value: 0, attrs: {},
+    setAttribute(k, v) { this.attrs[k] = v; }, addEventListener() {}, getContext() { return ctx; },
+    getBoundingClientRect() { return {left: 0, top: 0}; }};
+  return els[id];
+}
+global.document = {getElementById: el, addEventListener() {}, title: ""};
+global.window = {devicePixelRatio: 1, addEventListener() {}};
+let frames = 0;
+global.requestAnimationFrame = f => { if (frames++ < 3) setTimeout(() => f(frames * 100), 0); };
+try { new Function(code)(); } catch (e) { el("check").attrs["data-status"] = "error: " + e; }
+setTimeout(() => {
+  const c = el("check");
+  process.stdout.write('<pre id="check" data-status="' + c.attrs["data-status"] + '">' + c.textContent + "</pre>\n");
+}, 50);
