@@ -108,11 +108,23 @@ inline void run_demo(demo_cli& o)
     for (auto& t : fo.titles)
         if (t != "input (neutral)") t = "real " + t;
     write_png(outdir / "filmstrip_real.png", render_filmstrip(truth, fo));
+    {  // the transfers playing side by side, and the real clips under them, in one offline page
+        std::vector<clip> both = strip;
+        both.insert(both.end(), truth.begin(), truth.end());
+        viewer_options vo;
+        vo.titles = titles;
+        for (const auto& t : titles) vo.titles.push_back(t == "input (neutral)" ? t : "real " + t);
+        vo.normalised_time = true;
+        vo.width = 1400;
+        vo.page_title = "handemo demo: unseen '" + mname + "' transferred (top) and real (bottom)";
+        write_file_atomic(outdir / "view.html", render_viewer_html(both, vo));
+    }
     std::cout << "demo 4/4: wrote\n"
               << "  " << outdir.string() << "/" << mname << "_<emotion>.bvh   transferred motions (open in Blender or three.js)\n"
               << "  " << outdir.string() << "/" << mname << "_<emotion>.bmp   generated motion images (Eq. 3)\n"
               << "  " << (outdir / "filmstrip.png").string() << "   angry | happy | input (neutral) | sad | fearful\n"
               << "  " << (outdir / "filmstrip_real.png").string() << "   the real clips of those emotions, for comparison\n"
+              << "  " << (outdir / "view.html").string() << "   all of them playing (open in a browser; works offline)\n"
               << "  " << (model / "losses.svg").string() << ", log.csv, checkpoint.safetensors   the trained model\n";
 }
 
