@@ -82,10 +82,10 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(md.find("### held out: gripping") != std::string::npos);
     CHECK(md.find("## Closing note") != std::string::npos);
     const std::string csv = read_file(dir / "results.csv");
-    CHECK(std::count(csv.begin(), csv.end(), '\n') == 41);
+    CHECK(std::count(csv.begin(), csv.end(), '\n') == 57);  // header + 56 samples
     // comparisons exist for each baseline and metric with a direction, pooled and per target
     const auto cmp = compare_with_baselines(r);
-    CHECK(cmp.size() == 3 * 5 * 5);
+    CHECK(cmp.size() == 4 * 5 * 5);  // identity, mean-offset, amplitude-only, nearest-neighbour x 5 metrics x (pooled + 4 targets)
     for (const auto& f : r.folds) {
         CHECK(std::isfinite(f.seen_rmse_stargan));
         CHECK(f.seen_rmse_identity > 0);

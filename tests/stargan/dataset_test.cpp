@@ -1,6 +1,8 @@
 #include <doctest/doctest.h>
 #include <handemo/stargan/dataset.hpp>
 
+#include "helpers.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -50,27 +52,7 @@ TEST_CASE("manifest.csv labels clips and bad manifests are refused with the line
     fs::remove_all(dir);
 }
 
-namespace {
-
-/// A labelled clip of `seconds` at 10 fps (the tempo estimators read durations only).
-stargan::labelled_clip timed_clip(const std::string& content, const std::string& emotion, double seconds, const std::string& take = "0")
-{
-    stargan::labelled_clip c;
-    c.path = content + "_" + emotion + "_" + take;
-    c.content = content, c.emotion = emotion, c.take = take;
-    c.motion = clip::make(hand_skeleton(), static_cast<std::size_t>(std::lround(seconds * 10)), 10);
-    return c;
-}
-
-double cv_error_of(const stargan::tempo_fit_result& r, stargan::tempo_estimator e)
-{
-    for (const auto& c : r.candidates)
-        if (c.estimator == e) return c.cv_error;
-    FAIL("no candidate " << stargan::to_string(e));
-    return 0;
-}
-
-}  // namespace
+using namespace handemo::test;
 
 TEST_CASE("tempo_fit recovers consistent duration ratios and prefers the simplest exact estimator")
 {

@@ -6,6 +6,8 @@
 #include <handemo/motion/synth.hpp>
 #include <handemo/stargan.hpp>
 
+#include "helpers.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -16,57 +18,7 @@ namespace fs = std::filesystem;
 using namespace handemo;
 using namespace handemo::stargan;
 
-namespace {
-
-/// A toy set: 3 motion types x 5 emotions x 1 take of the synthetic hand data, as labelled clips.
-std::vector<labelled_clip> toy_set()
-{
-    std::vector<labelled_clip> out;
-    for (auto& it : synthesize_dataset(1, 7)) {
-        if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing)
-            continue;
-        labelled_clip c;
-        c.path = it.file_stem + ".bvh";
-        const auto n = parse_clip_name(it.file_stem);
-        c.content = n.content;
-        c.emotion = n.emotion;
-        c.take = n.take;
-        c.motion = it.c;
-        out.push_back(std::move(c));
-    }
-    return out;
-}
-
-config_info tiny_info() { return make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral"); }
-
-train_options quiet(long iters)
-{
-    train_options o;
-    o.iters = iters;
-    o.threads = 2;
-    o.checkpoint_every = 1000;
-    o.log_every = 1;
-    o.progress_out = nullptr;
-    o.seed = 11;
-    return o;
-}
-
-fs::path fresh_dir(const char* name)
-{
-    const fs::path d = fs::temp_directory_path() / name;
-    fs::remove_all(d);
-    return d;
-}
-
-double cv_error_of(const stargan::tempo_fit_result& r, stargan::tempo_estimator e)
-{
-    for (const auto& c : r.candidates)
-        if (c.estimator == e) return c.cv_error;
-    FAIL("no candidate " << stargan::to_string(e));
-    return 0;
-}
-
-}  // namespace
+using namespace handemo::test;
 
 TEST_CASE("transfer: shapes, durations from the tempo factors, skeleton and emotion checks")
 {

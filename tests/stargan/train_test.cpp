@@ -3,47 +3,17 @@
 #include <handemo/motion/synth.hpp>
 #include <handemo/stargan.hpp>
 
+#include "helpers.hpp"
+
 #include <cstring>
 #include <filesystem>
 
 namespace fs = std::filesystem;
 using namespace handemo;
 using namespace handemo::stargan;
+using namespace handemo::test;
 
 namespace {
-
-/// A toy set: 3 motion types x 5 emotions x 1 take of the synthetic hand data, as labelled clips.
-std::vector<labelled_clip> toy_set()
-{
-    std::vector<labelled_clip> out;
-    for (auto& it : synthesize_dataset(1, 7)) {
-        if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing)
-            continue;
-        labelled_clip c;
-        c.path = it.file_stem + ".bvh";
-        const auto n = parse_clip_name(it.file_stem);
-        c.content = n.content;
-        c.emotion = n.emotion;
-        c.take = n.take;
-        c.motion = it.c;
-        out.push_back(std::move(c));
-    }
-    return out;
-}
-
-config_info tiny_info() { return make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral"); }
-
-train_options quiet(long iters)
-{
-    train_options o;
-    o.iters = iters;
-    o.threads = 2;
-    o.checkpoint_every = 1000;
-    o.log_every = 1;
-    o.progress_out = nullptr;
-    o.seed = 11;
-    return o;
-}
 
 template <class M>
 std::vector<float> params_of(M& m)
@@ -53,13 +23,6 @@ std::vector<float> params_of(M& m)
         v.insert(v.end(), val.begin(), val.end());
     });
     return v;
-}
-
-fs::path fresh_dir(const char* name)
-{
-    const fs::path d = fs::temp_directory_path() / name;
-    fs::remove_all(d);
-    return d;
 }
 
 }  // namespace
