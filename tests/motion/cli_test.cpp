@@ -116,6 +116,26 @@ TEST_CASE("cli: synth -> encode -> decode round trip and failure cases")
     CHECK(full.frames == ref.frames);
     CHECK(full.fps == ref.fps);
 
+    // Position channels (the forearm's translation while pushing) come from the reference, stretched in time.
+    {
+        const std::string stem = file_stem(hand_motion::pushing, emotion::neutral, 0);
+        const clip push = read_bvh(w / "data" / (stem + ".bvh"));
+        const std::size_t n = 2 * push.frames - 1;
+        r = run("decode " + W + "/img/" + stem + ".bmp --like " + W + "/data/" + stem + ".bvh --range " + W +
+                "/img/range.json --out " + W + "/push2.bvh --frames " + std::to_string(n));
+        REQUIRE_MESSAGE(r.rc == 0, r.err);
+        const clip slow = read_bvh(w / "push2.bvh");
+        REQUIRE(slow.frames == n);
+        double spread = 0, worst_pos = 0;
+        for (std::size_t f = 0; f < push.frames; ++f)
+            for (std::size_t a = 0; a < 3; ++a) {
+                spread = std::max(spread, std::abs(push.position(f, 0, a) - push.position(0, 0, a)));
+                worst_pos = std::max(worst_pos, std::abs(slow.position(2 * f, 0, a) - push.position(f, 0, a)));
+            }
+        CHECK(spread > 0.01);        // the forearm really moves
+        CHECK(worst_pos < 1e-5);     // and the decoded clip follows it (BVH's 6 decimals)
+    }
+
     // Encoding with a supplied range reproduces the same images.
     r = run("encode " + W + "/data/hand_pointing_happy_0.bvh --out " + W + "/img2 --range " + W + "/img/range.json");
     REQUIRE_MESSAGE(r.rc == 0, r.err);

@@ -25,6 +25,13 @@ run_ok(transfer_img transfer --model ${M} --in ${WORK_DIR}/angry.bmp --emotion h
        --like ${D}/hand_pointing_neutral_0.bvh)
 run_ok(info_out info ${WORK_DIR}/sad.bvh)
 
+# the README's 10-line example (examples/transfer.cpp) on the same model
+execute_process(COMMAND ${EXAMPLE} ${M} ${D}/hand_pointing_neutral_0.bvh sad ${WORK_DIR}/example
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK_DIR}/example.bvh OR NOT EXISTS ${WORK_DIR}/example.png)
+  message(FATAL_ERROR "the README example failed (${rc}): ${out}${err}")
+endif()
+
 # bad input
 run_fail(unknown_emotion transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion bored --out ${WORK_DIR}/x.bvh)
 expect_error_matches("unknown emotion 'bored'")

@@ -47,14 +47,18 @@ void run_decode(const decode_options& o)
     const auto kf = handemo::decode(px, r);
     const std::size_t frames = o.frames ? o.frames : ref.frames;
     if (frames < 2) throw handemo::value_error("decode: --frames " + std::to_string(frames) + " is below 2");
-    const handemo::clip out = handemo::reconstruct(kf, ref.skel, frames, ref.fps, {}, method);
+    handemo::clip out = handemo::reconstruct(kf, ref.skel, frames, ref.fps, {}, method);
+    // the image holds rotations only: position channels (a body's root translation) come from the reference,
+    // stretched in time to the output length, as transfer does
+    out.positions = handemo::stretch_positions(ref, frames);
     handemo::write_bvh(o.out, out);
     std::cout << "wrote " << o.out << " (" << frames << " frames at " << ref.fps << " fps, " << kf.joints << " joints, "
               << kf.count() << " keyframes)\n";
     if (ref.frames >= 2) {
         const auto kr = handemo::extract_keyframes<handemo::dynamic_keyframes>(ref, kf.count());
         double worst = 0;
-        for (std::size_t i = 0; i < kr.angles.size(); ++i) worst = std::max(worst, std::abs(kr.angles[i] - kf.angles[i]));
+        for (std::size_t i = 0; i < kr.angles.size(); ++i)
+            worst = std::max(worst, std::abs(handemo::wrap_angle_deg(kr.angles[i] - kf.angles[i])));
         std::cout << "decode: max keyframe difference to " << o.like << ": " << worst
                   << " deg (codec bound (p_max-p_min)/510 = " << r.max_roundtrip_error() << " deg)\n";
     }

@@ -85,16 +85,7 @@ public:
         for (std::size_t i = 0; i < kf.angles.size(); ++i) kf.angles[i] += d.angles[i];
         const auto frames = static_cast<std::size_t>(std::max(2.0, std::round(static_cast<double>(in.frames) * tempo)));
         clip out = reconstruct(kf, in.skel, frames, in.fps);
-        // position channels (root translation) stretched linearly in time to the new length
-        const std::size_t J3 = in.skel.size() * 3;
-        for (std::size_t f = 0; f < frames; ++f) {
-            const double t = static_cast<double>(f) * static_cast<double>(in.frames - 1) / static_cast<double>(frames - 1);
-            const auto f0 = static_cast<std::size_t>(std::floor(t));
-            const std::size_t f1 = std::min(f0 + 1, in.frames - 1);
-            const double a = t - static_cast<double>(f0);
-            for (std::size_t i = 0; i < J3; ++i)
-                out.positions[f * J3 + i] = (1 - a) * in.positions[f0 * J3 + i] + a * in.positions[f1 * J3 + i];
-        }
+        out.positions = stretch_positions(in, frames);  // root translation stretched in time to the new length
         return out;
     }
 

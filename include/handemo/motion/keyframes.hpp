@@ -319,4 +319,20 @@ clip reconstruct(const keyframes<K>& kf, const skeleton& skel, std::size_t frame
     return out;
 }
 
+/// @brief Resamples every position channel of `c` to `frames` frames (linear in time).
+inline std::vector<double> stretch_positions(const clip& c, std::size_t frames)
+{
+    const std::size_t J3 = c.skel.size() * 3;
+    std::vector<double> out(frames * J3);
+    for (std::size_t f = 0; f < frames; ++f) {
+        const double t = frames > 1 ? static_cast<double>(f) * static_cast<double>(c.frames - 1) / static_cast<double>(frames - 1) : 0.0;
+        const auto f0 = static_cast<std::size_t>(std::floor(t));
+        const std::size_t f1 = std::min(f0 + 1, c.frames - 1);
+        const double a = t - static_cast<double>(f0);
+        for (std::size_t i = 0; i < J3; ++i)
+            out[f * J3 + i] = (1 - a) * c.positions[f0 * J3 + i] + a * c.positions[f1 * J3 + i];
+    }
+    return out;
+}
+
 }  // namespace handemo

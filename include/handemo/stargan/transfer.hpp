@@ -34,21 +34,7 @@ struct transfer_result {
     double amplitude = 1.0;           ///< excursion factor applied (1 unless the model learned amplitudes)
 };
 
-/// @brief Resamples every position channel of `c` to `frames` frames (linear in time).
-inline std::vector<double> stretch_positions(const clip& c, std::size_t frames)
-{
-    const std::size_t J3 = c.skel.size() * 3;
-    std::vector<double> out(frames * J3);
-    for (std::size_t f = 0; f < frames; ++f) {
-        const double t = frames > 1 ? static_cast<double>(f) * static_cast<double>(c.frames - 1) / static_cast<double>(frames - 1) : 0.0;
-        const auto f0 = static_cast<std::size_t>(std::floor(t));
-        const std::size_t f1 = std::min(f0 + 1, c.frames - 1);
-        const double a = t - static_cast<double>(f0);
-        for (std::size_t i = 0; i < J3; ++i)
-            out[f * J3 + i] = (1 - a) * c.positions[f0 * J3 + i] + a * c.positions[f1 * J3 + i];
-    }
-    return out;
-}
+using handemo::stretch_positions;
 
 /// @brief A trained emotion-transfer model loaded from a checkpoint, whatever its configuration.
 class emotion_model {
