@@ -10,32 +10,7 @@
 #include <new>
 #include <random>
 
-namespace {
-std::atomic<long> g_news{0};
-}
-void* operator new(std::size_t n)
-{
-    ++g_news;
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void* operator new(std::size_t n, std::align_val_t a)
-{
-    ++g_news;
-    const std::size_t al = static_cast<std::size_t>(a);
-    if (void* p = std::aligned_alloc(al, (n + al - 1) / al * al)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n, std::align_val_t a) { return operator new(n, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#include "../alloc_hook.hpp"
 
 using namespace handemo;
 using namespace handemo::autodiff;
@@ -113,12 +88,12 @@ TEST_CASE("autodiff: the second training step makes no heap allocation")
         s.trg[n * C + s.trg_lab[n]] = 1;
     }
     tape<float> t(1 << 16);  // small blocks: the first step must grow the arena
-    const long before_first = g_news.load();
+    const long before_first = handemo_test::alloc_count.load();
     auto l1 = train_step(t, g, d, s);
-    const long first = g_news.load() - before_first;
-    const long before_second = g_news.load();
+    const long first = handemo_test::alloc_count.load() - before_first;
+    const long before_second = handemo_test::alloc_count.load();
     auto l2 = train_step(t, g, d, s);
-    const long second = g_news.load() - before_second;
+    const long second = handemo_test::alloc_count.load() - before_second;
     MESSAGE("allocations: first step " << first << ", second step " << second << ", arena "
                                        << t.arena_bytes() / 1024 << " KiB, nodes " << t.node_count());
     CHECK(first > 0);
@@ -131,8 +106,8 @@ TEST_CASE("autodiff: the second training step makes no heap allocation")
     generator<float, hand_embedded>::workspace ws;  // allocates here, once
     generator<float, hand_embedded> g1;
     std::vector<float> out(3 * 12 * 24), lab1 = {0, 0, 1, 0, 0};
-    const long before_infer = g_news.load();
+    const long before_infer = handemo_test::alloc_count.load();
     g1.infer(s.x.data(), lab1.data(), out.data(), ws);
     g1.infer(s.x.data(), lab1.data(), out.data(), ws);
-    CHECK(g_news.load() - before_infer == 0);
+    CHECK(handemo_test::alloc_count.load() - before_infer == 0);
 }

@@ -11,32 +11,7 @@
 #include <new>
 #include <string>
 
-namespace {
-std::atomic<std::size_t> g_largest{0};
-}
-void* operator new(std::size_t n)
-{
-    if (n > g_largest) g_largest = n;
-    if (void* p = std::malloc(n ? n : 1)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void* operator new(std::size_t n, std::align_val_t a)
-{
-    if (n > g_largest) g_largest = n;
-    const std::size_t al = static_cast<std::size_t>(a);
-    if (void* p = std::aligned_alloc(al, (n + al - 1) / al * al)) return p;
-    throw std::bad_alloc();
-}
-void* operator new[](std::size_t n, std::align_val_t a) { return operator new(n, a); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+#include "../alloc_hook.hpp"
 
 using namespace handemo;
 
@@ -61,9 +36,9 @@ TEST_CASE("bvh: one-token rows under a large skeleton are refused without alloca
 {
     std::string text = many_joint_header();
     for (std::size_t r = 0; r < rows; ++r) text += "1\n";
-    g_largest = 0;
+    handemo_test::alloc_largest = 0;
     CHECK_THROWS_WITH_AS((void)parse_bvh(text, "big.bvh"), doctest::Contains("row has 1 values"), format_error);
-    CHECK(g_largest < clip_bytes / 100);
+    CHECK(handemo_test::alloc_largest < clip_bytes / 100);
 }
 
 TEST_CASE("csv: one-field rows under a large skeleton are refused without allocating the clip")
@@ -75,7 +50,7 @@ TEST_CASE("csv: one-field rows under a large skeleton are refused without alloca
     const std::string csv = to_csv_string(c);
     std::string text = csv.substr(0, csv.find('\n', csv.find("frame,")) + 1);  // fps comment and header
     for (std::size_t r = 0; r < rows; ++r) text += "0\n";
-    g_largest = 0;
+    handemo_test::alloc_largest = 0;
     CHECK_THROWS_WITH_AS((void)parse_csv(text, "big.csv", c.skel), doctest::Contains("row has 1 fields"), format_error);
-    CHECK(g_largest < clip_bytes / 100);
+    CHECK(handemo_test::alloc_largest < clip_bytes / 100);
 }
