@@ -13,23 +13,13 @@
 
 #include <unistd.h>
 
+#include "helpers.hpp"
+
 namespace fs = std::filesystem;
 using namespace handemo;
+using handemo::test::check_same_skeleton;
 
 namespace {
-
-void check_same_skeleton(const skeleton& a, const skeleton& b, double tol)
-{
-    REQUIRE(a.same_topology(b));
-    for (std::size_t j = 0; j < a.size(); ++j) {
-        CHECK(a.joints[j].channels == b.joints[j].channels);
-        for (std::size_t k = 0; k < 3; ++k) CHECK(std::abs(a.joints[j].offset[k] - b.joints[j].offset[k]) <= tol);
-        REQUIRE(a.joints[j].end_site.has_value() == b.joints[j].end_site.has_value());
-        if (a.joints[j].end_site)
-            for (std::size_t k = 0; k < 3; ++k)
-                CHECK(std::abs((*a.joints[j].end_site)[k] - (*b.joints[j].end_site)[k]) <= tol);
-    }
-}
 
 // A small file with CRLF line ends, tabs and runs of spaces, a 6-channel root in an unusual interleaved
 // order, a 3-channel joint in XYZ order, an End Site, a second branch and a joint name with a space.

@@ -15,8 +15,11 @@
 
 #include <unistd.h>
 
+#include "helpers.hpp"
+
 namespace fs = std::filesystem;
 using namespace handemo;
+using handemo::test::check_same_skeleton;
 
 namespace {
 
@@ -37,19 +40,6 @@ double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b)
     double m = 0;
     for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, std::abs(a[i] - b[i]));
     return m;
-}
-
-void check_same_skeleton(const skeleton& a, const skeleton& b, double tol)
-{
-    REQUIRE(a.same_topology(b));
-    for (std::size_t j = 0; j < a.size(); ++j) {
-        CHECK(a.joints[j].channels == b.joints[j].channels);
-        for (std::size_t k = 0; k < 3; ++k) CHECK(std::abs(a.joints[j].offset[k] - b.joints[j].offset[k]) <= tol);
-        REQUIRE(a.joints[j].end_site.has_value() == b.joints[j].end_site.has_value());
-        if (a.joints[j].end_site)
-            for (std::size_t k = 0; k < 3; ++k)
-                CHECK(std::abs((*a.joints[j].end_site)[k] - (*b.joints[j].end_site)[k]) <= tol);
-    }
 }
 
 }  // namespace
