@@ -173,15 +173,7 @@ TEST_CASE("residual G (handemo preset) is exactly the identity at initialisation
     typename generator<float, with_batch<hand_tiny, 1>>::workspace ws;
     generator<float, with_batch<hand_tiny, 1>> g1;
     g1.set_residual(true);
-    {
-        std::vector<std::span<float>> src;
-        g.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) { src.push_back(v); });
-        std::size_t i = 0;
-        g1.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
-            std::copy(src[i].begin(), src[i].end(), v.begin());
-            ++i;
-        });
-    }
+    zip_parameters(g, g1, [](std::span<const float> a, std::span<float> b) { std::copy(a.begin(), a.end(), b.begin()); });
     const std::size_t per = 3 * data.H * data.W;
     std::vector<float> label(5, 0.f), out(per);
     label[0] = 1.f;
@@ -199,7 +191,7 @@ TEST_CASE("residual G (handemo preset) is exactly the identity at initialisation
         // the output is the spline through the input's own keyframes (times the learned amplitude about each
         // channel's mean): no Eq. 3 quantisation or clamping reaches a residual model's output
         auto k = kin;
-        emotion_model::scale_excursions(k, r.amplitude);
+        scale_keyframe_excursions(k, r.amplitude);
         const clip expect = reconstruct(k, in.skel, r.motion.frames, in.fps);
         double worst = 0;
         for (std::size_t i = 0; i < expect.angles.size(); ++i) worst = std::max(worst, std::abs(expect.angles[i] - r.motion.angles[i]));

@@ -255,7 +255,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         auto [ckf, ckinfo] = stargan::read_checkpoint(fold_dir / "checkpoint.safetensors");
         const stargan::detail::emotion_model_impl<Config> model(ckf, ckinfo);
         // the same model without the learned amplitude stage: what G alone does (an ablation row)
-        const bool has_amp = ckinfo.options.is_object() && ckinfo.options.value("amplitude", false);
+        const bool has_amp = model.amplitude_stage();
         auto g_info = ckinfo;
         if (has_amp) g_info.options["amplitude"] = false;
         const stargan::detail::emotion_model_impl<Config> model_g(ckf, g_info);
@@ -309,7 +309,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 clip amp_only;
                 if (has_amp) {
                     auto k = extract_keyframes<dynamic_keyframes>(in->src->motion, K);
-                    stargan::emotion_model::scale_excursions(k, tr_res.amplitude);
+                    stargan::scale_keyframe_excursions(k, tr_res.amplitude);
                     amp_only = reconstruct(k, in->src->motion.skel, tr_res.motion.frames, in->src->motion.fps);
                     amp_only.positions = stargan::stretch_positions(in->src->motion, tr_res.motion.frames);
                 }

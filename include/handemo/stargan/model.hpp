@@ -185,6 +185,17 @@ void instance_norm_relu_inplace(T* x, const T* gamma, const T* beta, int N, int 
 
 }  // namespace detail
 
+/// @brief Calls f(a_values, b_values) with the value spans of each parameter of two models of the same
+/// layout (e.g. G and its moving average), in state_dict order.
+template <class T, class F>
+void zip_parameters(detail::parameter_owner<T>& a, detail::parameter_owner<T>& b, F&& f)
+{
+    std::vector<std::span<T>> src;
+    a.for_each_parameter([&](std::string_view, std::span<T> v, std::span<T>, auto) { src.push_back(v); });
+    std::size_t i = 0;
+    b.for_each_parameter([&](std::string_view, std::span<T> v, std::span<T>, auto) { f(std::span<const T>(src.at(i++)), v); });
+}
+
 // ------------------------------------------------------------------------------------------ generator
 /// @brief StarGAN generator G(x, c): [N, 3, H, W] image and one-hot target [N, C] -> [N, 3, H, W] in (-1, 1).
 /// @tparam T float or double

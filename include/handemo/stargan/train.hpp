@@ -270,13 +270,7 @@ std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, 
             const auto d = static_cast<std::size_t>(std::find(domains.begin(), domains.end(), clips[m].emotion) - domains.begin());
             if (d >= domains.size()) continue;
             auto scaled = *base;
-            const std::size_t C = scaled.joints * 3, kn = scaled.count();
-            for (std::size_t ch = 0; ch < C; ++ch) {
-                double mu = 0;
-                for (std::size_t i = 0; i < kn; ++i) mu += scaled.angles[i * C + ch];
-                mu /= static_cast<double>(kn);
-                for (std::size_t i = 0; i < kn; ++i) scaled.angles[i * C + ch] = mu + f[d] * (scaled.angles[i * C + ch] - mu);
-            }
+            scale_keyframe_excursions(scaled, f[d]);
             s_id += rmse(*base, kfs[m]);
             s_amp += rmse(scaled, kfs[m]);
             ++n;
@@ -539,7 +533,7 @@ public:
         if (opt_.ema > 0) {
             ema_.emplace();
             ema_->set_residual(opt_.residual);
-            copy_parameters(g_, *ema_);
+            zip_parameters(g_, *ema_, [](std::span<const float> g, std::span<float> v) { std::copy(g.begin(), g.end(), v.begin()); });
         }
         adam_options ao;
         ao.beta1 = opt_.beta1;
@@ -833,23 +827,8 @@ private:
     {
         const double u = static_cast<double>((step_ + 1) / opt_.n_critic);
         const float d = static_cast<float>(std::min(opt_.ema, (1.0 + u) / (10.0 + u)));
-        std::vector<std::span<float>> src;
-        g_.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) { src.push_back(v); });
-        std::size_t i = 0;
-        ema_->for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
-            const auto& g = src[i++];
+        zip_parameters(g_, *ema_, [d](std::span<const float> g, std::span<float> v) {
             for (std::size_t k = 0; k < v.size(); ++k) v[k] = d * v[k] + (1 - d) * g[k];
-        });
-    }
-
-    static void copy_parameters(generator<float, cfg>& from, generator<float, cfg>& to)
-    {
-        std::vector<std::span<float>> src;
-        from.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) { src.push_back(v); });
-        std::size_t i = 0;
-        to.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
-            std::copy(src[i].begin(), src[i].end(), v.begin());
-            ++i;
         });
     }
 

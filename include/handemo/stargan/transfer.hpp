@@ -65,8 +65,6 @@ public:
         return info_.amplitude[domain(target)] / info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
     }
 
-    /// @brief Scales every channel's excursion about its mean over the keyframes by `f`.
-    static void scale_excursions(handemo::keyframes<dynamic_keyframes>& kf, double f) noexcept { scale_keyframe_excursions(kf, f); }
 
     /// @brief Frame count of an output lasting `tempo` times an input of `frames` frames (at least 2).
     static std::size_t output_frames(std::size_t frames, double tempo) noexcept
@@ -85,6 +83,9 @@ public:
         if (target >= info_.domains.size()) throw value_error("transfer: target domain out of range");
         return from_network(generate(to_network(px), target));
     }
+
+    /// @brief Whether the model was trained with the amplitude stage (train_options::amplitude).
+    bool amplitude_stage() const { return info_.options.is_object() && info_.options.value("amplitude", false); }
 
     /// @brief Whether the model's G is residual (its output is x + change).
     bool residual() const { return info_.options.is_object() && info_.options.value("residual", false); }
@@ -111,10 +112,10 @@ public:
         check_skeleton(in.skel);
         in.validate("transfer: input");
         auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
-        const bool amp = info_.options.is_object() && info_.options.value("amplitude", false);
+        const bool amp = amplitude_stage();
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
         const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
-        if (amp) scale_excursions(kf, 1.0 / a_src);
+        if (amp) scale_keyframe_excursions(kf, 1.0 / a_src);
         transfer_result r;
         const std::size_t C = joints() * 3;
         for (std::size_t i = 0; i < kf.angles.size(); ++i) r.clamped_values += info_.range.contains(kf.angles[i], i % C) ? 0 : 1;
@@ -135,7 +136,7 @@ public:
         }
         // back from the normalised space: the target's excursions (net: amplitude[target] / amplitude[source])
         r.amplitude = amp ? amplitude(target, source) : 1.0;
-        if (amp) scale_excursions(out_kf, info_.amplitude[domain(target)]);
+        if (amp) scale_keyframe_excursions(out_kf, info_.amplitude[domain(target)]);
         r.tempo = tempo(target, source);
         const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(out_kf, in.skel, frames, in.fps);
