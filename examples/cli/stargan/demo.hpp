@@ -53,8 +53,8 @@ inline void run_demo(demo_cli& o)
     std::cout << "demo 2/4: training " << o.config << " on " << clips.size() << " clips (" << to_string(held)
               << " left out), " << o.opt.iters << " iterations, lr " << o.opt.g_lr << ", lambda_cls " << o.opt.lambda_cls << "\n";
     with_config(o.config, [&]<stargan_config Config>(const config_info& info) {
-        trainer<Config> tr(info, prepare_data<Config>(clips, info, o.opt), o.opt);
-        tr.run(model);
+        const auto trp = train_model<Config>(clips, info, o.opt, model);
+        auto& tr = *trp;
         write_file_atomic(model / "losses.svg", plot_losses_svg(loss_log_csv(tr.log()), {.title = "demo: training losses"}));
     });
 

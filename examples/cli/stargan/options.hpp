@@ -18,7 +18,7 @@ struct train_overrides {
     double lr = -1;
     std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
         lambda_delta, ema, augment;
-    std::optional<int> n_critic;
+    std::optional<int> n_critic, gate_folds;
     std::optional<bool> residual, amplitude;
     std::optional<std::string> range;
 };
@@ -51,6 +51,9 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "Scale the output's excursions by the learned amplitude ratio of the emotions, as the tempo (handemo true)");
     sub->add_option("--augment", o.augment,
                     "Per-channel offset jitter of training images and paired targets, std in network units (handemo 0.1, paper 0)");
+    sub->add_option("--gate-folds", o.gate_folds,
+                    "Change gate: train G this many more times, each without a group of the training contents, and blend "
+                    "G's change per target emotion by what helps those held-out contents; 0 = off (handemo 2, paper 0)");
     sub->add_option("--range", o.range, "Eq. 3 range: 'channel' (per channel, wrapped against a reference) or 'global' (the paper's)");
 }
 
@@ -77,6 +80,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.range = o.range.value_or(p.range);
     t.amplitude = o.amplitude.value_or(p.amplitude);
     t.augment = o.augment.value_or(p.augment);
+    t.gate_folds = o.gate_folds.value_or(p.gate_folds);
     t.validate();
 }
 

@@ -47,8 +47,9 @@ inline void run_train(train_cli& o)
             if (!fs::exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
             range = read_checkpoint(ck).second.range;  // a resumed run keeps its Eq. 3 range
         }
-        trainer<Config> tr(info, prepare_data<Config>(clips, info, o.opt, range), o.opt);
-        tr.run(o.out, o.resume);
+        gate_fit gate;
+        const auto trp = train_model<Config>(clips, info, o.opt, o.out, o.resume, range, &gate);
+        auto& tr = *trp;
         const std::string svg = plot_losses_svg(loss_log_csv(tr.log()), {.title = "handemo train " + info.name + " (" + o.data + ")"});
         write_file_atomic(fs::path(o.out) / "losses.svg", svg);
         std::cout << "train: " << tr.step() << " iterations done; wrote " << (fs::path(o.out) / "checkpoint.safetensors").string()
@@ -58,6 +59,12 @@ inline void run_train(train_cli& o)
             for (std::size_t k = 0; k < info.domains; ++k) std::cout << " " << info.domain_names[k] << " " << tr.data().amplitude[k];
             std::cout << " (leave-one-content-out on the training clips: RMSE " << tr.data().amplitude_check.second << " deg scaled vs "
                       << tr.data().amplitude_check.first << " unscaled" << (tr.data().amplitude_check.second < tr.data().amplitude_check.first ? ")" : "; not used)") << "\n";
+        }
+        if (!gate.rows.empty()) {
+            std::cout << "train: change gate (weight of G's posture / motion change per target, chosen on held-out training contents; "
+                      << (fs::path(o.out) / "gate" / "gate.csv").string() << "):";
+            for (const auto& r : gate.rows) std::cout << " " << r.target << " " << r.posture << "/" << r.motion;
+            std::cout << "\n";
         }
         std::cout << "train: tempo factors (duration relative to " << info.neutral << "):";
         for (std::size_t k = 0; k < info.domains; ++k) std::cout << " " << info.domain_names[k] << " " << tr.data().tempo[k];

@@ -19,6 +19,7 @@
 #include <handemo/render/svg.hpp>
 #include <handemo/stargan/configs.hpp>
 #include <handemo/stargan/dataset.hpp>
+#include <handemo/stargan/gate.hpp>
 #include <handemo/stargan/train.hpp>
 #include <handemo/stargan/transfer.hpp>
 
@@ -243,8 +244,8 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
             fsum.train_g_cls = detail::csv_tail_mean(log, "G/cls");
             fsum.reused_model = true;
         } else {
-            stargan::trainer<Config> tr(info, stargan::prepare_data<Config>(train, info, to), to);
-            tr.run(fold_dir);
+            const auto trp = stargan::train_model<Config>(train, info, to, fold_dir);
+            auto& tr = *trp;
             fsum.train_d_acc = detail::tail_mean(tr.log(), 5);
             fsum.train_g_cls = detail::tail_mean(tr.log(), 7);
             write_file_atomic(fold_dir / "losses.svg",
@@ -259,6 +260,13 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         auto g_info = ckinfo;
         if (has_amp) g_info.options["amplitude"] = false;
         const stargan::detail::emotion_model_impl<Config> model_g(ckf, g_info);
+        // the same model with G's whole change: what the change gate buys (an ablation row)
+        bool gated = false;
+        for (std::size_t d = 0; d < ckinfo.gate_posture.size(); ++d) gated |= ckinfo.gate_posture[d] != 1.0 || ckinfo.gate_motion[d] != 1.0;
+        auto u_info = ckinfo;
+        u_info.gate_posture.assign(u_info.gate_posture.size(), 1.0);
+        u_info.gate_motion.assign(u_info.gate_motion.size(), 1.0);
+        const stargan::detail::emotion_model_impl<Config> model_u(ckf, u_info);
 
         // ---- baselines and the independent emotion classifier, from the training clips only
         const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
@@ -305,6 +313,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 }
                 const auto tr_res = model.transfer(in->src->motion, target);
                 const clip g_only = has_amp ? model_g.transfer(in->src->motion, target).motion : clip{};
+                const clip ungated = gated ? model_u.transfer(in->src->motion, target).motion : clip{};
                 // identity with the same learned amplitude and tempo, no G: what the amplitude stage alone buys
                 clip amp_only;
                 if (has_amp) {
@@ -321,6 +330,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                                                                          {"nearest-neighbour", &train[nn].motion},
                                                                          {"real", &real->src->motion}};
                 if (has_amp) outs.push_back({"stargan-g", &g_only}), outs.push_back({"amplitude-only", &amp_only});
+                if (gated) outs.push_back({"stargan-ungated", &ungated});
                 clip oracle;
                 if (opt.synth_seed) {
                     const stem_labels& l = synth[static_cast<std::size_t>(in->src - clips.data())];

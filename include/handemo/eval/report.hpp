@@ -25,7 +25,7 @@ namespace handemo::eval {
 /// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed).
 inline const std::vector<std::string>& method_names()
 {
-    static const std::vector<std::string> m{"stargan", "stargan-g", "identity", "mean-offset", "amplitude-only",
+    static const std::vector<std::string> m{"stargan", "stargan-g", "stargan-ungated", "identity", "mean-offset", "amplitude-only",
                                             "nearest-neighbour", "real", "oracle"};
     return m;
 }
@@ -298,6 +298,9 @@ inline std::string markdown_report(const eval_result& r)
     if (has_method(r, "stargan-g"))
         s += "; **stargan-g** (the same trained G without the learned amplitude stage: what G alone does); "
              "**amplitude-only** (the input with the learned amplitude and tempo, no G: what the amplitude stage alone does)";
+    if (has_method(r, "stargan-ungated"))
+        s += "; **stargan-ungated** (the same model with G's whole change, without the change gate chosen on held-out "
+             "training contents: what the gate buys)";
     if (has_method(r, "oracle"))
         s += "; **oracle** (synthetic set only: the neutral input's take synthesised again with the target emotion's "
              "style parameters and the input take's own per-take variation, synthesize_as(); its distance to the real "

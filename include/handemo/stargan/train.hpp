@@ -68,6 +68,12 @@ struct train_options {
     /// per-channel offset jitter: every training image (and its paired target) gets the same random offset per
     /// channel, N(0, augment) in network units, so G's change cannot hinge on the absolute pose; 0: off
     double augment = 0.0;
+    /// change gate (gate.hpp): before training, G is trained gate_folds more times, each without one group of
+    /// the training contents, and on those held-out contents a blend of G's change is chosen per target
+    /// emotion (its keyframe mean, the posture, and the rest, the motion, each x 0, 0.25, ..., 1); transfer
+    /// applies it. Leave-content-out inside the training set: the held-out evaluation fold is never seen.
+    /// 0: off (G's whole change, as StarGAN); otherwise at least 2.
+    int gate_folds = 0;
 
     /// @throws value_error naming the option.
     void validate() const
@@ -84,6 +90,8 @@ struct train_options {
         if (!(augment >= 0 && augment < 1)) bad("augment " + std::to_string(augment) + " is not in [0, 1)");
         if (!(ema >= 0 && ema < 1)) bad("ema decay " + std::to_string(ema) + " is not in [0, 1)");
         if (range != "global" && range != "channel") bad("range '" + range + "' is not 'global' or 'channel'");
+        if (gate_folds != 0 && (gate_folds < 2 || gate_folds > 16)) bad("gate_folds " + std::to_string(gate_folds) + " is not 0 or in [2, 16]");
+        if (gate_folds != 0 && !residual) bad("gate_folds needs a residual G (the gate blends G's change)");
     }
     nlohmann::json to_json() const
     {
@@ -92,7 +100,7 @@ struct train_options {
                 {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed},
                 {"residual", residual}, {"lambda_id", lambda_id}, {"lambda_pair", lambda_pair},
                 {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}, {"amplitude", amplitude},
-                {"augment", augment}};
+                {"augment", augment}, {"gate_folds", gate_folds}};
     }
 };
 
@@ -124,6 +132,7 @@ inline train_options handemo_options()
     o.augment = 0.1;
     o.n_critic = 1;
     o.iters = 2000;
+    o.gate_folds = 2;
     return o;
 }
 
@@ -166,6 +175,9 @@ struct prepared_data {
     /// mean (1 for a global range), so the loss counts degrees as the evaluation does; 0 in the padding
     std::vector<float> pair_weight;
     std::size_t domains = 0;               ///< C
+    /// [C] change gate per target domain (fit_change_gate()): the weight of G's change averaged over the
+    /// keyframes (posture) and of the rest (motion); empty: 1 (G's whole change)
+    std::vector<double> gate_posture, gate_motion;
     std::size_t size() const noexcept { return labels.size(); }
 };
 
@@ -425,6 +437,9 @@ struct checkpoint_info {
     angle_range range;
     std::vector<double> tempo;
     std::vector<double> amplitude;  ///< [C] (all 1 for checkpoints written before it existed)
+    /// [C] change gate per target domain (prepared_data::gate_posture/gate_motion; all 1 for checkpoints
+    /// written before it existed or trained without it)
+    std::vector<double> gate_posture, gate_motion;
     std::vector<std::string> joint_names;
     long step = 0;
     nlohmann::json options;
@@ -467,6 +482,11 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
         }
         info.tempo = detail::json_doubles(j.at("tempo"));
         info.amplitude = j.contains("amplitude") ? detail::json_doubles(j.at("amplitude")) : std::vector<double>(info.tempo.size(), 1.0);
+        info.gate_posture = info.gate_motion = std::vector<double>(info.tempo.size(), 1.0);
+        if (j.contains("gate")) {
+            info.gate_posture = detail::json_doubles(j.at("gate").at("posture"));
+            info.gate_motion = detail::json_doubles(j.at("gate").at("motion"));
+        }
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = j.at("step").get<long>();
         info.options = j.at("options");
@@ -480,6 +500,12 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
     for (std::size_t d = 0; d < info.domains.size(); ++d)
         if (!(info.tempo[d] > 0.01 && info.tempo[d] < 100) || !(info.amplitude[d] > 0.01 && info.amplitude[d] < 100))
             throw fail("tempo or amplitude of domain '" + info.domains[d] + "' is not in (0.01, 100)");
+    if (info.gate_posture.size() != info.domains.size() || info.gate_motion.size() != info.domains.size())
+        throw fail("gate has " + std::to_string(info.gate_posture.size()) + " posture and " + std::to_string(info.gate_motion.size()) +
+                   " motion entries for " + std::to_string(info.domains.size()) + " domains");
+    for (std::size_t d = 0; d < info.domains.size(); ++d)
+        if (!(info.gate_posture[d] >= 0 && info.gate_posture[d] <= 1) || !(info.gate_motion[d] >= 0 && info.gate_motion[d] <= 1))
+            throw fail("gate of domain '" + info.domains[d] + "' is not in [0, 1]");
     return {std::move(f), std::move(info)};
 }
 
@@ -530,6 +556,9 @@ public:
         if (opt_.residual) g_.zero_last_conv();
         if ((opt_.lambda_pair > 0) && (data_.partner.size() != data_.size() * C || data_.pair_weight.size() != 3 * H * W))
             throw value_error("train: lambda_pair needs the prepared data's partner table (prepare_data)");
+        if ((!data_.gate_posture.empty() || !data_.gate_motion.empty()) && (data_.gate_posture.size() != C || data_.gate_motion.size() != C))
+            throw value_error("train: the prepared data's change gate has " + std::to_string(data_.gate_posture.size()) + " posture and " +
+                              std::to_string(data_.gate_motion.size()) + " motion entries for " + std::to_string(C) + " domains");
         if (opt_.ema > 0) {
             ema_.emplace();
             ema_->set_residual(opt_.residual);
@@ -699,6 +728,8 @@ public:
                             {"joints", Base::joints},
                             {"tempo", data_.tempo},
                             {"amplitude", data_.amplitude},
+                            {"gate", {{"posture", data_.gate_posture.empty() ? std::vector<double>(C, 1.0) : data_.gate_posture},
+                                      {"motion", data_.gate_motion.empty() ? std::vector<double>(C, 1.0) : data_.gate_motion}}},
                             {"joint_names", data_.joint_names},
                             {"step", step_},
                             {"options", opt_.to_json()}};
@@ -749,6 +780,8 @@ public:
             log_.push_back({static_cast<long>(lg[i]), std::move(v)});
         }
         data_.range = info.range;
+        data_.gate_posture = info.gate_posture;
+        data_.gate_motion = info.gate_motion;
         step_ = info.step;
     }
 

@@ -90,6 +90,24 @@ public:
     /// @brief Whether the model's G is residual (its output is x + change).
     bool residual() const { return info_.options.is_object() && info_.options.value("residual", false); }
 
+    /// @brief Sets the change gate of every target domain (train_options::gate_folds): the weight of G's change
+    /// averaged over the keyframes (posture) and of the rest (motion), each in [0, 1]; (1, 1) is G's whole
+    /// change, (0, 0) no change (a residual model then returns its input, amplitude stage and tempo aside).
+    /// Only a residual model has a change to gate.
+    /// @throws value_error for a wrong size, a value outside [0, 1], or a model that is not residual.
+    void set_gate(std::vector<double> posture, std::vector<double> motion)
+    {
+        if (!residual()) throw value_error("transfer: the change gate needs a residual model (" + info_.config + " is not)");
+        if (posture.size() != info_.domains.size() || motion.size() != info_.domains.size())
+            throw value_error("transfer: a change gate needs one posture and one motion weight per domain (" +
+                              std::to_string(info_.domains.size()) + ")");
+        for (std::size_t d = 0; d < posture.size(); ++d)
+            if (!(posture[d] >= 0 && posture[d] <= 1) || !(motion[d] >= 0 && motion[d] <= 1))
+                throw value_error("transfer: change gate of domain '" + info_.domains[d] + "' is not in [0, 1]");
+        info_.gate_posture = std::move(posture);
+        info_.gate_motion = std::move(motion);
+    }
+
     /// @brief G on a network image [3, K, J] in [-1, 1] (float output, not quantised).
     /// @throws value_error when G produces a non-finite value.
     network_image<dynamic_keyframes> generate(const network_image<dynamic_keyframes>& net, std::size_t target) const
@@ -125,12 +143,23 @@ public:
         auto out_kf = kf;
         if (residual()) {
             // angle-space residual: input angles + G's change (network units x degrees per unit of the channel)
-            const std::size_t plane = keyframes() * joints();
+            const std::size_t plane = keyframes() * joints(), t = domain(target);
+            std::vector<double> change(kf.angles.size());
             for (std::size_t p = 0; p < plane; ++p)
                 for (std::size_t c = 0; c < 3; ++c) {
                     const std::size_t ch = (p % joints()) * 3 + c;
-                    out_kf.angles[p * 3 + c] += double(gen.data[c * plane + p] - net.data[c * plane + p]) * info_.range.half_span(ch);
+                    change[p * 3 + c] = double(gen.data[c * plane + p] - net.data[c * plane + p]) * info_.range.half_span(ch);
                 }
+            // the change gate: posture (the change's mean over the keyframes) and motion (the rest) weighted apart
+            const double gp = info_.gate_posture[t], gm = info_.gate_motion[t];
+            if (gp != 1.0 || gm != 1.0)
+                for (std::size_t ch = 0; ch < C; ++ch) {
+                    double mean = 0;
+                    for (std::size_t k = 0; k < keyframes(); ++k) mean += change[k * C + ch];
+                    mean /= static_cast<double>(keyframes());
+                    for (std::size_t k = 0; k < keyframes(); ++k) change[k * C + ch] = gp * mean + gm * (change[k * C + ch] - mean);
+                }
+            for (std::size_t i = 0; i < change.size(); ++i) out_kf.angles[i] += change[i];
         } else {
             out_kf = decode(r.image, info_.range);
         }

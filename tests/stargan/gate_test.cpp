@@ -1,0 +1,174 @@
+// The change gate (gate.hpp): fitted on held-out training contents, stored in the checkpoint, applied by
+// transfer as posture (the change's keyframe mean) and motion (the rest) weights.
+#include <doctest/doctest.h>
+#include <handemo/eval/metrics.hpp>
+#include <handemo/stargan.hpp>
+
+#include "helpers.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+using namespace handemo;
+using namespace handemo::stargan;
+using namespace handemo::test;
+
+namespace {
+
+train_options gate_options(long iters)
+{
+    auto o = handemo_options();
+    o.iters = iters;
+    o.threads = 2;
+    o.progress_out = nullptr;
+    o.checkpoint_every = 1000;
+    return o;
+}
+
+/// Rewrites the checkpoint's `handemo` metadata with `edit` and a recomputed checksum.
+template <class F>
+void edit_metadata(const fs::path& ck, F edit)
+{
+    auto f = read_safetensors(ck);
+    auto j = nlohmann::json::parse(f.metadata.at("handemo"));
+    edit(j);
+    f.metadata["handemo"] = j.dump();
+    f.metadata["checksum"] = stargan::detail::checkpoint_checksum(f);
+    write_safetensors(ck, f);
+}
+
+double max_abs_diff(const clip& a, const clip& b)
+{
+    REQUIRE(a.angles.size() == b.angles.size());
+    double w = 0;
+    for (std::size_t i = 0; i < a.angles.size(); ++i) w = std::max(w, std::abs(a.angles[i] - b.angles[i]));
+    return w;
+}
+
+}  // namespace
+
+TEST_CASE("change gate: (1, 1) is G's whole change, (0, 0) no change, and posture + motion add up")
+{
+    const auto clips = toy_set();
+    const fs::path d = fresh_dir("handemo_gate_apply");
+    auto o = gate_options(40);
+    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(clips, tiny_info(), o), o);
+    tr.run(d);
+    auto model = load_model(d);
+    const std::vector<double> one(5, 1.0), zero(5, 0.0);
+    CHECK(model->info().gate_posture == one);  // trained without a gate: G's whole change
+    const clip& in = clips[1].motion;
+    for (const char* e : {"angry", "sad"}) {
+        const clip full = model->transfer(in, e).motion;
+        model->set_gate(zero, zero);
+        const auto r0 = model->transfer(in, e);
+        // no change: the input's keyframes with the amplitude stage, as an untrained residual G gives
+        auto k = extract_keyframes<dynamic_keyframes>(in, 9);
+        scale_keyframe_excursions(k, r0.amplitude);
+        CHECK(max_abs_diff(r0.motion, reconstruct(k, in.skel, r0.motion.frames, in.fps)) < 1e-9);
+        CHECK(max_abs_diff(full, r0.motion) > 1e-3);  // G changed something in 40 steps
+        model->set_gate(one, zero);
+        const clip posture = model->transfer(in, e).motion;
+        model->set_gate(zero, one);
+        const clip motion = model->transfer(in, e).motion;
+        model->set_gate(one, one);
+        CHECK(max_abs_diff(model->transfer(in, e).motion, full) == 0.0);
+        // interpolation is linear in the keyframes: posture + motion - none = whole
+        clip sum = posture;
+        for (std::size_t i = 0; i < sum.angles.size(); ++i) sum.angles[i] += motion.angles[i] - r0.motion.angles[i];
+        CHECK(max_abs_diff(sum, full) < 1e-9);
+        // the posture part is one offset per channel: the same at every keyframe
+        const auto kp = extract_keyframes<9>(posture), k0 = extract_keyframes<9>(r0.motion);
+        const std::size_t C = kp.joints * 3;
+        double spread = 0, size = 0;
+        for (std::size_t ch = 0; ch < C; ++ch)
+            for (std::size_t i = 1; i < 9; ++i) {
+                spread = std::max(spread, std::abs((kp.angles[i * C + ch] - k0.angles[i * C + ch]) - (kp.angles[ch] - k0.angles[ch])));
+                size = std::max(size, std::abs(kp.angles[ch] - k0.angles[ch]));
+            }
+        CHECK(spread < 1e-9);
+        CHECK(size > 1e-4);
+    }
+    CHECK_THROWS_WITH_AS(model->set_gate(std::vector<double>(4, 1.0), one), doctest::Contains("per domain"), value_error);
+    CHECK_THROWS_WITH_AS(model->set_gate(std::vector<double>{1, 1, 1.5, 1, 1}, one), doctest::Contains("neutral"), value_error);
+    CHECK_THROWS_WITH_AS(model->set_gate(one, std::vector<double>{1, std::nan(""), 1, 1, 1}), doctest::Contains("happy"), value_error);
+}
+
+TEST_CASE("change gate: fitted on held-out training contents, stored in the checkpoint, validated on load")
+{
+    const auto clips = toy_set();  // gripping, patting, pointing: groups {gripping, pointing} and {patting}
+    const fs::path d = fresh_dir("handemo_gate_fit");
+    auto o = gate_options(40);
+    gate_fit g;
+    const auto tr = train_model<hand_tiny>(clips, tiny_info(), o, d, false, {}, &g);
+    CHECK(g.folds == 2);
+    REQUIRE(g.rows.size() == 4);  // every emotion but neutral
+    for (const auto& r : g.rows) {
+        CHECK(r.pairs == 3);      // 3 held-out neutral takes (one per content) with a real target, over both groups
+        CHECK(std::find(gate_grid.begin(), gate_grid.end(), r.posture) != gate_grid.end());
+        CHECK(std::find(gate_grid.begin(), gate_grid.end(), r.motion) != gate_grid.end());
+        // the chosen pair is the lowest of the grid, so never above G's whole change or no change
+        CHECK(r.rmse_gated <= r.rmse_full);
+        CHECK(r.rmse_gated <= r.rmse_none);
+    }
+    CHECK(fs::exists(d / "gate" / "gate.csv"));
+    CHECK(fs::exists(d / "gate" / "inner1" / "checkpoint.safetensors"));
+    CHECK(fs::exists(d / "gate" / "inner2" / "checkpoint.safetensors"));
+    CHECK(g.posture[2] == 1.0);  // neutral keeps G's change (no pairs to choose from)
+    const auto model = load_model(d);
+    CHECK(model->info().gate_posture == g.posture);
+    CHECK(model->info().gate_motion == g.motion);
+    // the table is reproducible from the inner models: gripping and pointing were held out of inner1,
+    // patting out of inner2; each row is the mean over the three held-out neutral takes with the chosen gate
+    for (const auto& row : g.rows) {
+        double sum = 0;
+        for (const auto& [content, inner_dir] : {std::pair{"gripping", "inner1"}, {"pointing", "inner1"}, {"patting", "inner2"}}) {
+            auto inner = load_model(d / "gate" / inner_dir);
+            inner->set_gate(std::vector<double>(5, row.posture), std::vector<double>(5, row.motion));
+            const labelled_clip *in = nullptr, *real = nullptr;
+            for (const auto& c : clips) {
+                if (c.content != content) continue;
+                if (c.emotion == "neutral") in = &c;
+                if (c.emotion == row.target) real = &c;
+            }
+            REQUIRE(in);
+            REQUIRE(real);
+            sum += eval::keyframe_rmse(extract_keyframes<9>(inner->transfer(in->motion, row.target).motion), extract_keyframes<9>(real->motion));
+        }
+        CHECK(sum / 3 == doctest::Approx(row.rmse_gated).epsilon(1e-12));
+    }
+
+    // older checkpoints (no gate) load with G's whole change
+    const fs::path ck = d / "checkpoint.safetensors";
+    edit_metadata(ck, [](nlohmann::json& j) { j.erase("gate"); });
+    CHECK(read_checkpoint(ck).second.gate_motion == std::vector<double>(5, 1.0));
+    // a gate outside [0, 1] or of the wrong size is refused, naming the file and the field
+    edit_metadata(ck, [](nlohmann::json& j) { j["gate"] = {{"posture", {1, 1, 1, 1, 1}}, {"motion", {1, 2, 1, 1, 1}}}; });
+    CHECK_THROWS_WITH_AS(read_checkpoint(ck), doctest::Contains("gate of domain 'happy'"), format_error);
+    edit_metadata(ck, [](nlohmann::json& j) { j["gate"] = {{"posture", {1, 1, 1, 1}}, {"motion", {1, 1, 1, 1, 1}}}; });
+    CHECK_THROWS_WITH_AS(read_checkpoint(ck), doctest::Contains("checkpoint.safetensors: gate has 4 posture"), format_error);
+}
+
+TEST_CASE("change gate options: at least 2 groups, and only for a residual G")
+{
+    auto o = handemo_options();
+    CHECK(o.gate_folds == 2);
+    o.gate_folds = 1;
+    CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("gate_folds 1"), value_error);
+    o.gate_folds = 2;
+    o.residual = false;
+    CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("residual"), value_error);
+    CHECK(paper_options().gate_folds == 0);
+    CHECK_NOTHROW(paper_options().validate());
+    // fewer contents than groups: G's whole change, no inner training
+    auto few = toy_set();
+    std::erase_if(few, [](const labelled_clip& c) { return c.content != "patting"; });
+    auto g = fit_change_gate<hand_tiny>(few, tiny_info(), gate_options(5), fresh_dir("handemo_gate_few"));
+    CHECK(g.folds == 0);
+    CHECK(g.rows.empty());
+    CHECK(g.posture == std::vector<double>(5, 1.0));
+}
