@@ -1,5 +1,5 @@
 // The colour table of an animated GIF: GIF frames hold at most 256 colours and handemo's renderer draws lit,
-// anti-aliased figures (thousands of shades per frame), so the colours are quantised. One global palette
+// anti-aliased figures (far more than 256 shades per frame), so the colours are quantised. One global palette
 // serves every frame (no colour flicker between frames): a few colours given by the caller are kept exact
 // (the renderer's flat colours: background, grid, text), the rest of the table is fitted by median cut
 // (Heckbert 1982) to the histogram of every frame's pixels: the box of colours with the largest
