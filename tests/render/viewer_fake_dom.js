@@ -8,7 +8,8 @@ const html = fs.readFileSync(process.argv[2], "utf8");
 const data = html.match(/<script type="application\/json" id="data">([\s\S]*?)<\/script>/)[1];
 const code = html.match(/<script>([\s\S]*?)<\/script>/)[1];
 const ctx = new Proxy({}, {
-  get: (t, k) => (k === "measureText" ? () => ({width: 10}) : k in t ? t[k] : () => {}),
+  get: (t, k) => (k === "measureText" ? () => ({width: 10}) : k === "getImageData" ? (x, y, w, h) => ({data: new Uint8Array(4 * w * h).fill(255)})
+                  : k in t ? t[k] : () => {}),
   set: (t, k, v) => { t[k] = v; return true; },
 });
 const els = {};

@@ -21,16 +21,17 @@ inline nlohmann::json viewer_data(const std::string& html)
     return nlohmann::json::parse(html.substr(a + open.size(), b - a - open.size()));
 }
 
-/// Frame-0 pixel positions of clip `ci` at the initial camera, computed from handemo's forward kinematics
-/// with the projection the page documents (viewer.hpp): [points] of (x, y).
-inline std::vector<std::array<double, 2>> viewer_expected_pixels(const clip& c, std::size_t ci, const nlohmann::json& d)
+/// Pixel positions of frame `frame` of clip `ci` at the initial camera, computed from handemo's forward
+/// kinematics with the projection the page documents (viewer.hpp): [points] of (x, y), joints then end sites.
+inline std::vector<std::array<double, 2>> viewer_expected_pixels(const clip& c, std::size_t ci, const nlohmann::json& d,
+                                                                 std::size_t frame = 0)
 {
     const auto& cj = d["clips"][ci];
     const double W = d["width"], H = d["height"], n = static_cast<double>(d["clips"].size());
     const double cw = W / n, ch = H - viewer_title_height;
     const double s = viewer_fill * std::min(cw, ch) / (2.0 * d["radius"].get<double>());
     const vec3 right = d["view"]["right"].get<vec3>(), up = d["view"]["up"].get<vec3>(), center = cj["center"].get<vec3>();
-    const pose_positions P = clip_pose(c, 0);
+    const pose_positions P = clip_pose(c, frame);
     std::vector<vec3> pts(P.joints.begin(), P.joints.end());
     for (std::size_t j = 0; j < P.joints.size(); ++j)
         if (detail::v_norm(detail::v_sub(P.end_sites[j], P.joints[j])) > 1e-9) pts.push_back(P.end_sites[j]);

@@ -13,6 +13,9 @@
 #include <handemo/motion/codec_image.hpp>
 #include <handemo/render.hpp>
 #include <handemo/stargan.hpp>
+#ifdef HANDEMO_HAVE_GIF
+#include <handemo/gif.hpp>
+#endif
 
 #include <cstdio>
 #include <filesystem>
@@ -108,6 +111,15 @@ inline void run_demo(demo_cli& o)
     for (auto& t : fo.titles)
         if (t != "input (neutral)") t = "real " + t;
     write_png(outdir / "filmstrip_real.png", render_filmstrip(truth, fo));
+#ifdef HANDEMO_HAVE_GIF
+    {  // the input and every transfer playing side by side in real time (tempo shows as speed), looping
+        animation_options ao;
+        ao.strip = fo;
+        ao.strip.titles = titles;
+        ao.strip.cell_width = ao.strip.cell_height = 140;
+        write_gif(outdir / "filmstrip.gif", filmstrip_animation(strip, ao));
+    }
+#endif
     {  // the transfers playing side by side, and the real clips under them, in one offline page
         std::vector<clip> both = strip;
         both.insert(both.end(), truth.begin(), truth.end());
@@ -124,6 +136,9 @@ inline void run_demo(demo_cli& o)
               << "  " << outdir.string() << "/" << mname << "_<emotion>.bmp   generated motion images (Eq. 3)\n"
               << "  " << (outdir / "filmstrip.png").string() << "   angry | happy | input (neutral) | sad | fearful\n"
               << "  " << (outdir / "filmstrip_real.png").string() << "   the real clips of those emotions, for comparison\n"
+#ifdef HANDEMO_HAVE_GIF
+              << "  " << (outdir / "filmstrip.gif").string() << "   the input and the transfers moving (animated GIF)\n"
+#endif
               << "  " << (outdir / "view.html").string() << "   all of them playing (open in a browser; works offline)\n"
               << "  " << (model / "losses.svg").string() << ", log.csv, checkpoint.safetensors   the trained model\n";
 }

@@ -166,23 +166,22 @@ inline filmstrip_plan plan_filmstrip(std::span<const clip> clips, const filmstri
     return plan;
 }
 
-/// @brief Renders clips side by side, one sampled frame per row (the paper's Figures 4-12).
-/// @param clips one column each; any skeletons (the camera comes from the first clip).
-/// @param opt rows, cell size, column titles, figure options.
-/// @return an RGB image of cols x rows cells plus a title band.
-/// @throws value_error for no clips, a clip with zero frames, a title count that is neither 0 nor the
-///         clip count, rows or cell sizes out of range; shape_error / value_error from clip::validate.
-inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_options& opt = {})
+namespace detail {
+
+/// Draws a filmstrip of `rows` rows whose cell (row r, column c) shows frame `frame_of(r, c)` of clip c.
+/// render_filmstrip and filmstrip_animation both draw through this, so an animation frame is pixel for
+/// pixel a one-row filmstrip of the same frames.
+template <class FrameOf>
+rgb_image draw_filmstrip(std::span<const clip> clips, const filmstrip_options& opt, const filmstrip_plan& plan,
+                         std::size_t rows_n, FrameOf&& frame_of)
 {
-    const filmstrip_plan plan = plan_filmstrip(clips, opt);
     const figure_projection& pr = plan.projection;
-    // Pass 2: layout and drawing.
     const long gap = filmstrip_gap;
     int ts = std::max(1, opt.title_scale);  // one scale for every title: the largest at which all fit
     for (const auto& t : opt.titles)
         while (ts > 1 && text_width(t, ts) > static_cast<long>(opt.cell_width) - 4) --ts;
     const long title_h = opt.titles.empty() ? 0 : text_height(ts) + 12;
-    const auto cols = static_cast<long>(clips.size()), rows = static_cast<long>(opt.rows);
+    const auto cols = static_cast<long>(clips.size()), rows = static_cast<long>(rows_n);
     const long W = cols * static_cast<long>(opt.cell_width) + (cols + 1) * gap;
     const long H = title_h + rows * static_cast<long>(opt.cell_height) + (rows + 1) * gap;
     canvas out(static_cast<std::size_t>(W), static_cast<std::size_t>(H), opt.grid_color);
@@ -197,7 +196,7 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
         }
         const clip& cl = clips[static_cast<std::size_t>(c)];
         for (long r = 0; r < rows; ++r) {
-            const std::size_t f = detail::filmstrip_frame(static_cast<std::size_t>(r), opt.rows, cl.frames);
+            const std::size_t f = frame_of(static_cast<std::size_t>(r), static_cast<std::size_t>(c));
             canvas cell(opt.cell_width, opt.cell_height, opt.figure.background);
             const pose_positions P = clip_pose(cl, f);
             const auto prims = figure_primitives(cl.skel, plan.layouts[static_cast<std::size_t>(c)], P,
@@ -209,6 +208,22 @@ inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_o
         }
     }
     return out.to_image();
+}
+
+}  // namespace detail
+
+/// @brief Renders clips side by side, one sampled frame per row (the paper's Figures 4-12).
+/// @param clips one column each; any skeletons (the camera comes from the first clip).
+/// @param opt rows, cell size, column titles, figure options.
+/// @return an RGB image of cols x rows cells plus a title band.
+/// @throws value_error for no clips, a clip with zero frames, a title count that is neither 0 nor the
+///         clip count, rows or cell sizes out of range; shape_error / value_error from clip::validate.
+inline rgb_image render_filmstrip(std::span<const clip> clips, const filmstrip_options& opt = {})
+{
+    const filmstrip_plan plan = plan_filmstrip(clips, opt);
+    return detail::draw_filmstrip(clips, opt, plan, opt.rows, [&](std::size_t r, std::size_t c) {
+        return detail::filmstrip_frame(r, opt.rows, clips[c].frames);
+    });
 }
 
 }  // namespace handemo

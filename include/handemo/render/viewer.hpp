@@ -4,9 +4,12 @@
 // colours as the PNG renderer (figure.hpp analyse_figure) as JSON; the page only draws them with Canvas 2D
 // (no library, no network, nothing fetched). Clips play side by side in sync at their own frame rates, or in
 // normalised time (a transferred clip and its input, which may differ in tempo, stay aligned); play/pause,
-// scrub, speed, orbit (drag), zoom (wheel) and joint names on hover. The page writes the pixel positions of
-// frame 0 of every clip at the initial camera into a hidden <pre id="check"> and sets its data-status
-// attribute to "ok" once it has drawn (or "error: ..." on a script error), so a headless browser can check it.
+// scrub, speed, orbit (drag), zoom (wheel) and joint names on hover. For headless checks the page writes,
+// into a hidden <pre id="check">, the frame it drew for every clip and the pixel centres of the joints it
+// drew (recorded from the drawing calls themselves) at the initial camera, at time 0 or at the time given
+// as `view.html?t=SECONDS` (which also starts paused there), and the canvas pixel read back at each centre;
+// data-status becomes "ok" once it has drawn with ink at every joint centre and nothing on the console,
+// "error: ..." on a script error, console.error/console.warn call or a joint drawn without ink.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -273,7 +276,14 @@ canvas{background:#fff;border:1px solid #ccc;cursor:grab;display:block}
 "use strict";
 (function () {
 const check = document.getElementById("check");
-window.onerror = function (msg) { check.textContent = "error: " + msg; check.setAttribute("data-status", "error: " + msg); };
+const problems = [];  // script errors and console errors/warnings, reported by the check
+function fail(msg) { problems.push(String(msg)); check.textContent = "error: " + problems.join("; "); check.setAttribute("data-status", "error: " + msg); }
+window.onerror = function (msg) { fail(msg); };
+if (window.addEventListener) window.addEventListener("unhandledrejection", e => fail("unhandled rejection: " + e.reason));
+for (const level of ["error", "warn"]) {
+  const orig = console[level];
+  console[level] = function () { fail("console." + level + ": " + Array.prototype.join.call(arguments, " ")); return orig.apply(console, arguments); };
+}
 const D = JSON.parse(document.getElementById("data").textContent);
 const W = D.width, H = D.height, TITLE = )js" + std::to_string(viewer_title_height) + R"js(, FILL = )js" + std::to_string(viewer_fill) + R"js(;
 const cv = document.getElementById("view"), ctx = cv.getContext("2d");
@@ -311,7 +321,7 @@ function project(i, f, cam) {  // pixel positions of every point of clip i at fr
   }
   return out;
 }
-let hover = null;
+let hover = null, trace = null;  // trace: when an array, draw() records [clip, frame, point, x, y] of every joint it draws
 function draw() {
   const cam = camera();
   ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
@@ -336,6 +346,7 @@ function draw() {
     }
     items.sort((u, v) => u.z - v.z);  // painter: far first
     ctx.lineCap = "round";
+    if (trace) for (let p = 0; p < c.points; ++p) if (!c.hidden[p]) trace.push([i, f, p, px[p].x, px[p].y]);
     for (const it of items) {
       if (it.bone) { ctx.strokeStyle = it.col; ctx.lineWidth = 2*base; ctx.beginPath(); ctx.moveTo(it.a.x, it.a.y); ctx.lineTo(it.b.x, it.b.y); ctx.stroke(); }
       else { ctx.fillStyle = it.col; ctx.strokeStyle = "rgba(0,0,0,0.35)"; ctx.lineWidth = 1; ctx.beginPath(); ctx.arc(it.b.x, it.b.y, 1.15*base, 0, 2*Math.PI); ctx.fill(); ctx.stroke(); }
@@ -383,12 +394,31 @@ cv.addEventListener("mousemove", e => {
 });
 cv.addEventListener("mouseleave", () => { mouse = null; if (!playing) draw(); });
 cv.addEventListener("wheel", e => { e.preventDefault(); zoom = Math.max(0.1, Math.min(20, zoom * Math.exp(-e.deltaY * 0.001))); if (!playing) draw(); }, {passive: false});
-// frame 0 at the initial camera, for headless checks: "clip i: x,y x,y ..." (CSS pixels)
-const cam0 = camera(), lines = [];
-for (let i = 0; i < n; ++i) lines.push("clip " + i + ": " + project(i, 0, cam0).map(q => q.x.toFixed(2) + "," + q.y.toFixed(2)).join(" "));
+// Headless check: draw once at time ?t= (default 0) at the initial camera, recording the joints drawn, then
+// read the canvas back at each joint centre. Lines "clip i frame f: p:x,y p:x,y ..." (CSS pixels), then
+// "ink k/m" (joint centres whose canvas pixel is opaque).
+const query = typeof location !== "undefined" ? new URLSearchParams(location.search) : null;
+if (query && query.has("t")) { t = Math.max(0, Math.min(parseFloat(query.get("t")) || 0, T)); playing = false; playBtn.textContent = "play"; }
+trace = [];
 draw();
-check.textContent = lines.join("\n");
-check.setAttribute("data-status", "ok");
+const lines = [];
+let inked = 0;
+for (let i = 0; i < n; ++i) {
+  const mine = trace.filter(r => r[0] === i);
+  lines.push("clip " + i + " frame " + (mine.length ? mine[0][1] : frameOf(i)) + ": " + mine.map(r => r[2] + ":" + r[3].toFixed(2) + "," + r[4].toFixed(2)).join(" "));
+}
+const img = ctx.getImageData(0, 0, cv.width, cv.height);  // one readback (several would warn on the console)
+for (const r of trace) {
+  const x = Math.floor(r[3] * dpr), y = Math.floor(r[4] * dpr);
+  if (img && img.data && x >= 0 && y >= 0 && x < cv.width && y < cv.height && img.data[4 * (y * cv.width + x) + 3] === 255) ++inked;
+}
+lines.push("ink " + inked + "/" + trace.length);
+const drawn = trace.length;
+trace = null;
+if (!problems.length) {
+  check.textContent = lines.join("\n");
+  check.setAttribute("data-status", inked === drawn ? "ok" : "error: " + (drawn - inked) + " of " + drawn + " joints drawn without ink");
+}
 requestAnimationFrame(tick);
 })();
 </script>

@@ -1,9 +1,14 @@
-// Consumer smoke test: builds a clip, round-trips it through BVH text, writes and reads back a BMP.
+// Consumer smoke test: builds a clip, round-trips it through BVH text, writes and reads back a BMP, and
+// (when handemo::gif exists) writes the clip as an animated GIF.
 #include <handemo.hpp>
 #include <handemo/image.hpp>
+#ifdef HANDEMO_CONSUMER_GIF
+#include <handemo/gif.hpp>
+#endif
 
 #include <cstdio>
 #include <filesystem>
+#include <vector>
 
 int main(int argc, char** argv)
 {
@@ -30,6 +35,15 @@ int main(int argc, char** argv)
         std::puts("consumer: BMP round trip failed");
         return 1;
     }
+#ifdef HANDEMO_CONSUMER_GIF
+    handemo::animation_options ao;
+    ao.strip.cell_width = ao.strip.cell_height = 32;
+    const std::vector<handemo::clip> clips{c};
+    if (handemo::write_gif(std::filesystem::path(argc > 1 ? argv[1] : ".") / "consumer.gif", handemo::filmstrip_animation(clips, ao)) == 0) {
+        std::puts("consumer: GIF write failed");
+        return 1;
+    }
+#endif
     std::puts("consumer: ok");
     return 0;
 }
