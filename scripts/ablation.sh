@@ -3,7 +3,8 @@
 # content-out evaluation once per variant, then one Markdown table of keyframe RMSE to the real clip (mean +- std
 # over the 7 folds) and the share of (fold, target) pairs where the variant beats mean-offset.
 # Usage: scripts/ablation.sh [OUT_DIR] [VARIANT ...]   (default OUT_DIR /tmp/handemo_ablation, all variants)
-# Needs build/examples/handemo (the README's first command builds it). Each variant takes ~15-25 min on one core;
+# Needs build/examples/handemo (the README's first command builds it). Each variant takes ~25 min (no-gate) to
+# ~75 min (the change gate's three trainings per fold) on one core;
 # two run at a time (one thread each).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -13,14 +14,15 @@ declare -A args=(
   [handemo]=""
   [paper]="--preset paper --iters 4000"
   [no-pair]="--lambda-pair 0"
-  [no-residual]="--residual false"
+  [no-residual]="--residual false --gate-folds 0"
+  [no-gate]="--gate-folds 0"
   [no-augment]="--augment 0"
   [global-range]="--range global"
   [no-ema]="--ema 0"
   [no-id]="--lambda-id 0"
 )
 variants=("$@")
-if ((${#variants[@]} == 0)); then variants=(handemo paper no-pair no-residual no-augment global-range no-ema no-id); fi
+if ((${#variants[@]} == 0)); then variants=(handemo paper no-gate no-pair no-residual no-augment global-range no-ema no-id); fi
 mkdir -p "$out"
 [[ -d "$out/data" ]] || "$bin" synth --out "$out/data" --takes 3 --seed 1 >/dev/null
 run() {  # variant
