@@ -7,3 +7,8 @@
 
 #include <handemo/rcm/roles.hpp>
 #include <handemo/rcm/lma.hpp>
+#include <handemo/rcm/selection.hpp>
+#include <handemo/rcm/maps.hpp>
+#include <handemo/rcm/cluster.hpp>
+#include <handemo/rcm/circumplex.hpp>
+#include <handemo/rcm/model.hpp>
