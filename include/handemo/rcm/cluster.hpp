@@ -106,7 +106,8 @@ inline std::vector<pose> clip_poses(const clip& c, const role_map& r, int up_axi
 {
     const std::size_t J = c.skel.size(), root = pose_root(c.skel, r);
     const axis up = static_cast<axis>(up_axis);
-    const std::size_t fwd_i = static_cast<std::size_t>((up_axis + 2) % 3), side_i = static_cast<std::size_t>((up_axis + 1) % 3);
+    // a rotation about the up axis by phi turns axis a toward axis b (y up: z toward x)
+    const std::size_t a_i = static_cast<std::size_t>((up_axis + 1) % 3), b_i = static_cast<std::size_t>((up_axis + 2) % 3);
     std::vector<pose> out(c.frames);
     for (std::size_t f = 0; f < c.frames; ++f) {
         const auto fk = forward_kinematics(c.skel, c.frame_angles(f), c.frame_positions(f));
@@ -118,9 +119,9 @@ inline std::vector<pose> clip_poses(const clip& c, const role_map& r, int up_axi
                 // facing: heading of the root's forward axis projected on the ground plane
                 const mat3& g = fk.rotations[root];
                 vec3 e{0, 0, 0};
-                e[fwd_i] = 1;
+                e[a_i] = 1;
                 const vec3 d = matvec(g, e);
-                const double heading = std::atan2(d[side_i], d[fwd_i]) * 180.0 / std::numbers::pi;
+                const double heading = std::atan2(d[b_i], d[a_i]) * 180.0 / std::numbers::pi;
                 p.q[j] = to_quaternion(matmul(axis_rotation(up, -heading), g));
             } else {
                 p.q[j] = to_quaternion(local_rotation(c.skel.joints[j], c.frame_angles(f) + j * 3));
