@@ -34,8 +34,12 @@ inline void print_selection(const handemo::rcm::rcm_model& m, std::ostream& os)
     os << "rcm fit: PCA keeps " << m.pca.dims() << " of " << m.selected.size() << " dimensions\n";
     if (m.has_clusters)
         for (std::size_t c = 0; c < m.clusters.count(); ++c)
-            os << "rcm fit: pose cluster " << c << ": " << m.clusters.sizes[c] << " poses, " << m.cluster_survivors[c]
-               << " features pass both tests, " << m.cluster_selected[c].size() << " selected\n";
+            os << "rcm fit: pose cluster " << c << ": " << m.clusters.sizes[c] << " poses, "
+               << (m.cluster_selected[c].empty() ? std::string("no selection (fewer than two emotions or ") + m.performer_kind +
+                                                       "s have windows centred in it)"
+                                                 : std::to_string(m.cluster_survivors[c]) + " features pass both tests, " +
+                                                       std::to_string(m.cluster_selected[c].size()) + " selected")
+               << "\n";
 }
 
 inline void run_fit(fit_run& o)
