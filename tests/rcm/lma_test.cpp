@@ -1,6 +1,8 @@
 // The LMA features (Table 1 and the hand variant) on hand-made motions with known answers.
 #include "helpers.hpp"
 
+#include <handemo/motion.hpp>
+
 #include <doctest/doctest.h>
 
 #include <cmath>

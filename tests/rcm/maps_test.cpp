@@ -20,7 +20,7 @@ TEST_CASE("pca: recovers a known orthonormal basis and variances, keeps 95%")
     for (std::size_t i = 0; i < 8; ++i)
         for (std::size_t k = 0; k < 3; ++k) {
             const double score = ((i >> k) & 1 ? 1.0 : -1.0) * sd[k];
-            for (std::size_t d = 0; d < 3; ++d) x(i, d) += score * v[k][d] + (d == 0 ? 5.0 : 0.0);
+            for (std::size_t d = 0; d < 3; ++d) x(i, d) += score * v[k][d] + (d == 0 && k == 0 ? 5.0 : 0.0);
         }
     const auto p = rcm::fit_pca(x, 0.95);
     REQUIRE(p.dims() == 2);  // 13 / 13.01 of the variance

@@ -140,7 +140,8 @@ TEST_CASE("model: malformed files are errors naming the file and the field")
     auto expect = [&](nlohmann::json j, const std::string& field) {
         const auto p = dir / "bad.json";
         std::ofstream(p) << j.dump();
-        CHECK_THROWS_WITH_AS(rcm::load_model(p), doctest::Contains("bad.json: field '" + field + "'"), format_error);
+        const std::string want = "bad.json: field '" + field + "'";
+        CHECK_THROWS_WITH_AS(rcm::load_model(p), doctest::Contains(want.c_str()), format_error);
     };
     auto j = good;
     j.erase("pca");

@@ -108,8 +108,9 @@ struct circumplex_svg_options {
     std::size_t size = 480;
 };
 
-/// @brief SVG of the circumplex: axes, unit circle, the labels (`class="label"`), optional extra training
-/// points (`class="train"`), the analysed point (`class="input"`) and a target (`class="target"`).
+/// @brief SVG of the circumplex: axes, unit circle, the labels (`class="label"`), optional extra points
+/// (`class="train"`, e.g. held-out predictions, coloured as the label of the same name), the analysed point
+/// (`class="input"`) and a target (`class="target"`).
 inline std::string circumplex_svg(const std::vector<label_point>& labels, const std::optional<label_point>& input,
                                   const std::optional<label_point>& target = std::nullopt,
                                   const std::vector<label_point>& training_points = {}, const circumplex_svg_options& opt = {})
@@ -138,13 +139,22 @@ inline std::string circumplex_svg(const std::vector<label_point>& labels, const 
     o += "<text x=\"" + num(X(-1.05)) + "\" y=\"" + num(cy - 6) + "\">valence -</text>\n";
     o += "<text x=\"" + num(cx + 6) + "\" y=\"" + num(Y(1.05) + 4) + "\">arousal +</text>\n";
     o += "<text x=\"" + num(cx + 6) + "\" y=\"" + num(Y(-1.05)) + "\">arousal -</text>\n";
+    // one colour per label name, shared by the label point and the training points of that name
+    static constexpr const char* palette[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
+                                              "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"};
+    auto colour = [&](const std::string& name) -> std::string {
+        for (std::size_t i = 0; i < labels.size(); ++i)
+            if (labels[i].name == name) return palette[i % 10];
+        return "#9ecae1";
+    };
     for (const auto& p : training_points)
         o += "<circle class=\"train\" data-label=\"" + esc(p.name) + "\" cx=\"" + num(X(p.valence)) + "\" cy=\"" + num(Y(p.arousal)) +
-             "\" r=\"2.5\" fill=\"#9ecae1\"/>\n";
+             "\" r=\"3\" fill=\"" + colour(p.name) + "\" fill-opacity=\"0.45\"/>\n";
     for (const auto& p : labels) {
+        const std::string c = colour(p.name);
         o += "<circle class=\"label\" data-label=\"" + esc(p.name) + "\" cx=\"" + num(X(p.valence)) + "\" cy=\"" + num(Y(p.arousal)) +
-             "\" r=\"4\" fill=\"#1f77b4\"/>\n";
-        o += "<text x=\"" + num(X(p.valence) + 6) + "\" y=\"" + num(Y(p.arousal) - 5) + "\" fill=\"#1f77b4\">" + esc(p.name) + "</text>\n";
+             "\" r=\"5\" fill=\"" + c + "\" stroke=\"black\"/>\n";
+        o += "<text x=\"" + num(X(p.valence) + 7) + "\" y=\"" + num(Y(p.arousal) - 6) + "\" fill=\"" + c + "\">" + esc(p.name) + "</text>\n";
     }
     if (input) {
         o += "<circle class=\"input\" cx=\"" + num(X(input->valence)) + "\" cy=\"" + num(Y(input->arousal)) +

@@ -283,6 +283,15 @@ inline rcm_model fit_model(const std::vector<training_clip>& clips, const circum
     const std::size_t C = m.clusters.count(), D = derived_count(fs);
     m.cluster_selected.assign(C, {});
     m.cluster_survivors.assign(C, 0);
+    // cluster of each window: the cluster of its centre frame
+    std::vector<std::vector<std::size_t>> window_cluster(clips.size());
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        const auto starts = window_starts(clips[i].motion->frames, feats[i].window_length);
+        for (std::size_t k = 0; k < feats[i].windows.shape()[0]; ++k) {
+            const std::size_t centre = std::min(clips[i].motion->frames - 1, starts[k] + feats[i].window_length / 2);
+            window_cluster[i].push_back(m.clusters.assign(per_clip[i][centre]));
+        }
+    }
     for (std::size_t c = 0; c < C; ++c) {
         std::vector<vector> rows;
         std::vector<std::string> emo, perf;
@@ -290,10 +299,8 @@ inline rcm_model fit_model(const std::vector<training_clip>& clips, const circum
             const auto& w = feats[i].windows;
             vector acc = xt::zeros<double>({D});
             double n = 0;
-            const auto starts = window_starts(clips[i].motion->frames, feats[i].window_length);
             for (std::size_t k = 0; k < w.shape()[0]; ++k) {
-                const std::size_t centre = std::min(clips[i].motion->frames - 1, starts[k] + feats[i].window_length / 2);
-                if (m.clusters.assign(per_clip[i][centre]) != c) continue;
+                if (window_cluster[i][k] != c) continue;
                 const vector row = xt::view(w, k, xt::all());
                 acc += m.normaliser.apply(row);
                 n += 1;
@@ -621,6 +628,7 @@ struct eval_report {
 inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const std::vector<std::string>& group,
                                 const circumplex_table& table, const std::string& table_name, const fit_options& opt)
 {
+    if (clips.empty()) throw value_error("rcm eval: no clips");
     if (group.size() != clips.size()) throw shape_error("rcm eval: one group per clip needed");
     feature_set fs{};
     const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);

@@ -16,6 +16,7 @@
 #include <array>
 #include <cctype>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -198,7 +199,6 @@ inline const std::vector<role_rule>& role_rules()
         }
         v.push_back({role::wrist, side::none, {"wrist", "hand"}});
         v.push_back({role::palm, side::none, {"palm"}});
-        constexpr std::string_view fingers[] = {"thumb", "index", "middle", "ring", "pinky"};
         static const std::array<std::array<std::string, 4>, 5> base_names = [] {
             std::array<std::array<std::string, 4>, 5> b;
             const char* f[] = {"thumb", "index", "middle", "ring", "pinky"};
@@ -213,7 +213,6 @@ inline const std::vector<role_rule>& role_rules()
             return b;
         }();
         for (int f = 0; f < 5; ++f) {
-            (void)fingers;
             role_rule base{static_cast<role>(static_cast<int>(role::thumb_base) + f), side::none, {}};
             for (const auto& n : base_names[static_cast<std::size_t>(f)])
                 if (!n.empty()) base.bases.push_back(n);
