@@ -52,6 +52,12 @@ inline loaded_set load_set(const std::string& dir)
     return s;
 }
 
+/// Every label of the set must have circumplex coordinates; checked before any feature is computed.
+inline void check_labels(const loaded_set& s, const handemo::rcm::circumplex_table& t, const std::string& table_file)
+{
+    for (const auto& c : s.clips) (void)t.at(c.emotion, table_file);
+}
+
 inline void finish_options(fit_cli& o)
 {
     if (!o.roles.empty()) {

@@ -24,6 +24,7 @@ inline void run_eval(eval_run& o)
     o.f.opt.cluster = false;
     const auto table = handemo::rcm::load_circumplex(o.f.labels);
     const auto set = load_set(o.f.data);
+    check_labels(set, table, o.f.labels);
     std::vector<std::string> group;
     for (const auto& it : set.items) {
         if (o.by == "content") group.push_back(it.content);

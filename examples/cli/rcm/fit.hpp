@@ -49,6 +49,7 @@ inline void run_fit(fit_run& o)
     o.f.opt.clustering.clusters = o.clusters;
     const auto table = handemo::rcm::load_circumplex(o.f.labels);
     const auto set = load_set(o.f.data);
+    check_labels(set, table, o.f.labels);
     std::cout << "rcm fit: " << set.clips.size() << " clips from " << o.f.data << "; contents play the performers' role\n";
     auto m = handemo::rcm::fit_model(set.clips, table, o.f.labels, o.f.opt);
     // the selection counts are not stored per feature in the file; print them now
