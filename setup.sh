@@ -10,7 +10,8 @@
 set -euo pipefail
 # libgif-dev: giflib, the animated GIFs of `handemo render --animate` and the demo (target handemo::gif).
 pkgs=(g++ cmake make pkg-config libxtensor-dev libxsimd-dev xtl-dev nlohmann-json3-dev libstb-dev libgif-dev
-      libhidapi-dev doctest-dev libbenchmark-dev libcli11-dev)
+      libhidapi-dev doctest-dev libbenchmark-dev libcli11-dev
+      libxtensor-blas-dev)  # libxtensor-blas-dev: LAPACK-backed solves of the circumplex maps (target handemo::rcm)
 browser=1
 for arg in "$@"; do
   case "$arg" in

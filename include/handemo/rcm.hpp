@@ -1,0 +1,14 @@
+// The circumplex (RCM) module: continuous emotion control of Aristidou et al. 2017, "Emotion control of
+// unstructured dance movements". Analysis (Section 3): joint roles, LMA features (Table 1), effective and
+// consistent feature selection, PCA, RBF maps features <-> (valence, arousal) (Eq. 1-4), pose clustering
+// (Eq. 5), label coordinates on the circumplex, the model file. Needs the target handemo::rcm
+// (xtensor-blas, LAPACK); the core umbrella <handemo.hpp> does not include it.
+#pragma once
+
+#include <handemo/rcm/roles.hpp>
+#include <handemo/rcm/lma.hpp>
+#include <handemo/rcm/selection.hpp>
+#include <handemo/rcm/maps.hpp>
+#include <handemo/rcm/cluster.hpp>
+#include <handemo/rcm/circumplex.hpp>
+#include <handemo/rcm/model.hpp>
