@@ -5,7 +5,7 @@
 #                              the side-by-side benchmark (bench/compare.sh)
 set -euo pipefail
 pkgs=(g++ cmake make pkg-config libxtensor-dev libxsimd-dev xtl-dev nlohmann-json3-dev libstb-dev
-      libhidapi-dev doctest-dev libbenchmark-dev libcli11-dev)
+      libhidapi-dev doctest-dev libbenchmark-dev libcli11-dev libxtensor-blas-dev)
 if [[ "${1:-}" == "--golden" ]]; then pkgs+=(python3 python3-torch python3-numpy); fi
 missing=()
 for p in "${pkgs[@]}"; do

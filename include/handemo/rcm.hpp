@@ -1,9 +1,14 @@
-// The circumplex module (Aristidou et al. 2017, "Emotion control of unstructured dance movements"):
-// synthesis by the rules of Table 2 with all coefficients optimised jointly through the autodiff tape, a
-// damped least-squares IK and spline interpolation back to full rate (Section 4). Target handemo::rcm.
+// The circumplex (RCM) module: continuous emotion control of Aristidou et al. 2017, "Emotion control of
+// unstructured dance movements". Analysis (Section 3): joint roles, LMA features (Table 1), effective and
+// consistent feature selection, PCA, RBF maps features <-> (valence, arousal) (Eq. 1-4), pose clustering
+// (Eq. 5), label coordinates on the circumplex, the model file. Needs the target handemo::rcm
+// (xtensor-blas, LAPACK); the core umbrella <handemo.hpp> does not include it.
 #pragma once
 
-#include <handemo/rcm/detail/ops.hpp>
+#include <handemo/rcm/roles.hpp>
+#include <handemo/rcm/lma.hpp>
+// Synthesis (Section 4): the rules of Table 2 on the autodiff tape, differentiable features, the Eq. 6
+// objective optimised jointly, damped least-squares IK, spline back to full rate.
 #include <handemo/rcm/ik.hpp>
 #include <handemo/rcm/rules.hpp>
 #include <handemo/rcm/features_ad.hpp>

@@ -48,6 +48,26 @@ TEST_CASE("rcm ops: gather, stencil, exp, bbox_volume, g1_height match finite di
     {
         gradcheck(ps, [&](auto& t) { return weighted_sum(t, rd::bbox_volume(t, param(t, ps[0]), 2)); });
     }
+    SUBCASE("rotate_rows")
+    {
+        const std::vector<double> M{0.2, -1, 0.5, 1, 0.3, 0, -0.4, 0.1, 2, 1, 0, 0, 0, 0, 1, 0, -1, 0,
+                                    0.5, 0.5, 0.5, -1, 2, 0, 0.1, 0.2, 0.3, 3, 0, 1, 0, 1, 1, 1, 0, -2};
+        gradcheck(ps, [&](auto& t) { return weighted_sum(t, rd::rotate_rows<double>(t, param(t, ps[0]), M)); });
+    }
+    SUBCASE("row_angle")
+    {
+        std::vector<gc_param> two{random_param(12, rng), random_param(12, rng)};
+        gradcheck(two, [&](auto& t) { return weighted_sum(t, rd::row_angle(t, param(t, two[0]), param(t, two[1]))); });
+    }
+    SUBCASE("window_max and window_min")
+    {
+        const std::vector<std::size_t> starts{0, 2, 5, 8};
+        gradcheck(ps, [&](auto& t) {
+            const int x = param(t, ps[0]);
+            return ad::add_raw(t, weighted_sum(t, rd::window_extreme<double>(t, x, starts, 4, 1)),
+                               weighted_sum(t, rd::window_extreme<double>(t, x, starts, 4, -1), 9));
+        });
+    }
     SUBCASE("g1_height, all three branches")
     {
         const std::vector<double> h{50, 120, 80, 30}, hT{100, 100, 100, 100};
@@ -90,10 +110,17 @@ void check_features(const clip& c, double spread)
     std::mt19937 rng(11);
     std::vector<gc_param> ps{random_param(r.coefficients(), rng, spread, 0.02)};
     std::vector<std::string> names;
+    std::vector<double> unit;  // 1 / (1 + mean |feature|): every checked sum is O(1), so rounding stays below h
     {
         autodiff::tape<double> t;
         const int a = t.leaf_copy(ps[0].value.data(), ps[0].value.size(), false);
-        names = rcm::differentiable_features(t, r, kp.times, kp.ground, rcm::apply_rules(t, r, kp, a)).names;
+        const auto f = rcm::differentiable_features(t, r, kp.times, kp.ground, rcm::apply_rules(t, r, kp, a));
+        names = f.names;
+        for (int id : f.ids) {
+            double m = 0;
+            for (std::size_t k = 0; k < t.at(id).size; ++k) m += std::abs(t.at(id).value[k]) / static_cast<double>(t.at(id).size);
+            unit.push_back(1.0 / (1.0 + m));
+        }
     }
     REQUIRE(names.size() >= 12);
     for (std::size_t i = 0; i < names.size(); ++i) {
@@ -101,7 +128,7 @@ void check_features(const clip& c, double spread)
         gradcheck(ps, [&](auto& t) {
             const int a = param(t, ps[0]);
             const auto f = rcm::differentiable_features(t, r, kp.times, kp.ground, rcm::apply_rules(t, r, kp, a));
-            return weighted_sum(t, f.ids[i], static_cast<unsigned>(i));
+            return weighted_sum(t, ad::affine_raw(t, f.ids[i], unit[i], 0.0), static_cast<unsigned>(i));
         }, 1e-5, 1e-8);
     }
 }
@@ -128,7 +155,11 @@ TEST_CASE("rcm objective: Eq. 6 gradient in z matches finite differences (window
                                               {"l_hand_velocity", rcm::statistic::mean, 80, 2, 50},
                                               {"hands_distance", rcm::statistic::std, 5, 1, 10},
                                               {"torso_height", rcm::statistic::windowed_mean, 60, 1, 10},
-                                              {"r_hand_chest", rcm::statistic::windowed_mean, 40, 1, 10}};
+                                              {"r_hand_chest", rcm::statistic::windowed_mean, 40, 1, 10},
+                                              {"f27", rcm::statistic::window_max, 2e5, 1, 1e5},
+                                              {"f3", rcm::statistic::window_min, 30, 1, 10},
+                                              {"f22", rcm::statistic::window_std, 50, 1, 100},
+                                              {"f26", rcm::statistic::window_mean, 500, 1, 1000}};
     rcm::objective obj(r, kp, tg);
     std::mt19937 rng(2);
     std::uniform_real_distribution<double> u01(-0.5, 0.5);

@@ -18,25 +18,29 @@ rcm::keyframe_points points_of(const clip& c, rcm::rig& r)
 
 }  // namespace
 
-TEST_CASE("rcm rules: roles are found by name on the humanoid, Bandai-style and Xia-style names")
+TEST_CASE("rcm rules: the rig takes its control points from the role map (body: Bandai names; hand: tips are End Sites)")
 {
     const skeleton s = test::humanoid();
-    const rcm::body_roles b = rcm::find_body_roles(s);
-    CHECK(s.joints[static_cast<std::size_t>(b.pelvis)].name == "Hips");
-    CHECK(s.joints[static_cast<std::size_t>(b.chest)].name == "Chest");
-    CHECK(s.joints[static_cast<std::size_t>(b.l_hand)].name == "Hand_L");
-    CHECK(s.joints[static_cast<std::size_t>(b.r_foot)].name == "Foot_R");
-    skeleton x = s;
-    for (auto& j : x.joints) {
-        if (j.name == "Hand_L") j.name = "LeftHand";
-        if (j.name == "Hand_R") j.name = "RightHand";
-    }
-    const rcm::body_roles bx = rcm::find_body_roles(x);
-    CHECK(x.joints[static_cast<std::size_t>(bx.l_hand)].name == "LeftHand");
-    CHECK(x.joints[static_cast<std::size_t>(bx.r_hand)].name == "RightHand");
+    const rcm::rig r = rcm::make_rig(s);
+    REQUIRE(r.kind == rcm::rig_kind::body);
+    auto name = [&](int q) { return s.joints[static_cast<std::size_t>(r.points[static_cast<std::size_t>(q)].joint)].name; };
+    CHECK(name(rcm::body_point::pelvis) == "Hips");
+    CHECK(name(rcm::body_point::chest) == "Chest");
+    CHECK(name(rcm::body_point::head) == "Head");
+    CHECK(name(rcm::body_point::l_hand) == "Hand_L");
+    CHECK(name(rcm::body_point::r_foot) == "Foot_R");
+    CHECK(s.joints[static_cast<std::size_t>(r.translation_joint)].name == "Hips");
+    CHECK(r.torso_length == doctest::Approx(12 + 18 + 20 + 10));
+    CHECK(r.leg_length == doctest::Approx(std::hypot(9.0, 5.0) + 42 + 40));
+    const skeleton h = hand_skeleton();
+    const rcm::rig rh = rcm::make_rig(h);
+    REQUIRE(rh.kind == rcm::rig_kind::hand);
+    CHECK(rh.points[rcm::hand_point::index_tip].end_site);
+    CHECK(rh.points[rcm::hand_point::index_tip].joint == static_cast<int>(hand_index::finger_joint(1, 3)));
+    CHECK(rh.translation_joint == static_cast<int>(hand_index::forearm));
     skeleton bad = s;
     bad.joints[4].name = "Skull";
-    CHECK_THROWS_WITH_AS(rcm::find_body_roles(bad), doctest::Contains("head"), value_error);
+    CHECK_THROWS_WITH_AS(rcm::make_rig(bad), doctest::Contains("head"), value_error);
 }
 
 TEST_CASE("rcm rules: zero coefficients are the identity (body and hand)")

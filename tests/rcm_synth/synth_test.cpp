@@ -44,7 +44,7 @@ TEST_CASE("rcm synth: the joint optimisation reaches a reachable body target bet
     const std::vector<double> truth{std::log(0.8), std::log(0.7), 0.3, 0, -0.2, 0, 0, 0.25, 0, -0.2, std::log(1.3)};
     const problem p = make_problem(test::humanoid_dance(120), truth,
                                    {"hip_ground", "torso_height", "l_hand_head", "r_hand_chest", "hands_distance",
-                                    "l_hand_hip", "r_hand_hip", "l_hand_velocity", "pelvis_velocity", "hands_level", "volume_5"});
+                                    "l_hand_hip", "r_hand_hip", "l_hand_velocity", "pelvis_velocity", "hands_height", "volume_5"});
     rcm::synth_options opt;
     opt.max_iterations = 200;
     const auto joint = rcm::fit_coefficients(p.r, p.kp, p.targets, opt);

@@ -33,6 +33,7 @@
 #include <handemo/motion/skeleton.hpp>
 #include <handemo/rcm/detail/ops.hpp>
 #include <handemo/rcm/ik.hpp>
+#include <handemo/rcm/roles.hpp>
 
 #include <algorithm>
 #include <array>
@@ -52,9 +53,11 @@ enum class rig_kind { body, hand };
 namespace body_point {
 enum : int { pelvis, chest, head, l_shoulder, r_shoulder, l_hand, r_hand, l_foot, r_foot, count };
 }
-/// Control points of the 23-joint hand, in this order (tips are the distal joints' End Sites).
+/// Control points of a hand, in this order (tips are the fingertip End Sites, bases the finger roles'
+/// base joints of roles.hpp).
 namespace hand_point {
-enum : int { wrist, palm, thumb_tip, index_tip, middle_tip, ring_tip, pinky_tip, count };
+enum : int { wrist, palm, thumb_tip, index_tip, middle_tip, ring_tip, pinky_tip, thumb_base, index_base, middle_base,
+              ring_base, pinky_base, count };
 }
 
 inline constexpr std::size_t body_coefficient_count = 11;
@@ -86,48 +89,8 @@ inline std::vector<std::string> coefficient_names(rig_kind k)
 /// @brief Frame-rate factor c4 of coefficients `a` (the last one): c4 = exp(a.back()).
 inline double time_scale(std::span<const double> a) noexcept { return a.empty() ? 1.0 : std::exp(a.back()); }
 
-/// @brief Joint indices of a body's control joints (-1: not found).
-struct body_roles {
-    int pelvis = -1, chest = -1, head = -1, l_shoulder = -1, r_shoulder = -1, l_hand = -1, r_hand = -1, l_foot = -1,
-        r_foot = -1;
-};
-
 namespace detail {
 
-inline std::string lower(std::string_view s)
-{
-    std::string r(s);
-    for (auto& ch : r) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    return r;
-}
-/// -1 left, +1 right, 0 neither, from "Left"/"_L"/"L_"/"LThumb"-style names.
-inline int side_of(std::string_view name)
-{
-    const std::string l = lower(name);
-    if (l.find("left") != std::string::npos) return -1;
-    if (l.find("right") != std::string::npos) return 1;
-    if (l.size() >= 2 && (l.ends_with("_l") || l.ends_with(".l") || l.starts_with("l_"))) return -1;
-    if (l.size() >= 2 && (l.ends_with("_r") || l.ends_with(".r") || l.starts_with("r_"))) return 1;
-    if (name.size() >= 2 && (name[0] == 'L' || name[0] == 'R') && std::isupper(static_cast<unsigned char>(name[1])))
-        return name[0] == 'L' ? -1 : 1;
-    return 0;
-}
-/// First joint whose lower-cased name contains one of `keys` (in order of preference), on `side`, and
-/// none of `exclude`.
-inline int find_joint(const skeleton& s, std::initializer_list<std::string_view> keys, int side,
-                      std::initializer_list<std::string_view> exclude = {})
-{
-    for (auto key : keys)
-        for (std::size_t j = 0; j < s.size(); ++j) {
-            const std::string l = lower(s.joints[j].name);
-            if (l.find(key) == std::string::npos) continue;
-            if (side != 2 && side_of(s.joints[j].name) != side) continue;
-            bool bad = false;
-            for (auto x : exclude) bad = bad || l.find(x) != std::string::npos;
-            if (!bad) return static_cast<int>(j);
-        }
-    return -1;
-}
 /// Sum of bone lengths (rest offsets) from joint `from` up to its ancestor `to`.
 inline double chain_length(const skeleton& s, int from, int to)
 {
@@ -141,50 +104,22 @@ inline double chain_length(const skeleton& s, int from, int to)
 
 }  // namespace detail
 
-/// @brief Finds the body's control joints from their names (Hips/Pelvis, Chest/Spine1, Head, *Shoulder*,
-/// *Hand*, *Foot*, with Left/Right, _L/_R or an L/R prefix), or takes them from `overrides` where set.
-/// @throws value_error naming the roles that were not found.
-inline body_roles find_body_roles(const skeleton& s, const body_roles& overrides = {})
+/// @brief The skeleton point of a point index of point_names() (joints, then End Sites).
+/// @throws shape_error when the index is outside the skeleton's points.
+inline skeleton_point to_skeleton_point(const skeleton& s, std::size_t point)
 {
-    using detail::find_joint;
-    body_roles r;
-    r.pelvis = find_joint(s, {"hips", "pelvis", "hip"}, 2, {"joint", "left", "right", "_l", "_r"});
-    if (r.pelvis < 0) r.pelvis = 0;
-    r.chest = find_joint(s, {"chest", "spine2", "spine1", "spine"}, 2);
-    r.head = find_joint(s, {"head"}, 2, {"end", "top"});
-    r.l_shoulder = find_joint(s, {"shoulder", "clavicle", "upperarm", "arm"}, -1, {"fore", "lower"});
-    r.r_shoulder = find_joint(s, {"shoulder", "clavicle", "upperarm", "arm"}, 1, {"fore", "lower"});
-    r.l_hand = find_joint(s, {"hand", "wrist"}, -1, {"index", "thumb", "finger", "middle", "ring", "pinky"});
-    r.r_hand = find_joint(s, {"hand", "wrist"}, 1, {"index", "thumb", "finger", "middle", "ring", "pinky"});
-    r.l_foot = find_joint(s, {"foot", "ankle"}, -1);
-    r.r_foot = find_joint(s, {"foot", "ankle"}, 1);
-    auto take = [](int& field, int o) { if (o >= 0) field = o; };
-    take(r.pelvis, overrides.pelvis);
-    take(r.chest, overrides.chest);
-    take(r.head, overrides.head);
-    take(r.l_shoulder, overrides.l_shoulder);
-    take(r.r_shoulder, overrides.r_shoulder);
-    take(r.l_hand, overrides.l_hand);
-    take(r.r_hand, overrides.r_hand);
-    take(r.l_foot, overrides.l_foot);
-    take(r.r_foot, overrides.r_foot);
-    std::string missing;
-    const std::pair<const char*, int> all[] = {{"chest", r.chest},         {"head", r.head},
-                                               {"l_shoulder", r.l_shoulder}, {"r_shoulder", r.r_shoulder},
-                                               {"l_hand", r.l_hand},       {"r_hand", r.r_hand},
-                                               {"l_foot", r.l_foot},       {"r_foot", r.r_foot}};
-    for (const auto& [n, v] : all)
-        if (v < 0 || static_cast<std::size_t>(v) >= s.size()) missing += (missing.empty() ? "" : ", ") + std::string(n);
-    if (!missing.empty())
-        throw value_error("rcm::find_body_roles: skeleton '" + s.name + "' has no joint for " + missing +
-                          " (pass them as overrides)");
-    return r;
+    if (point < s.size()) return {static_cast<int>(point), false};
+    std::size_t e = s.size();
+    for (std::size_t j = 0; j < s.size(); ++j)
+        if (s.joints[j].end_site && e++ == point) return {static_cast<int>(j), true};
+    throw shape_error("rcm: point " + std::to_string(point) + " is outside the skeleton's " + std::to_string(e) + " points");
 }
 
 /// @brief The control points of a skeleton and the constants its rules need.
 struct rig {
     rig_kind kind = rig_kind::body;
     std::vector<skeleton_point> points;  ///< body_point / hand_point order
+    std::vector<std::size_t> point_index;  ///< the same points as indices of point_names() (lma.hpp's positions)
     std::vector<double> ik_weights;      ///< weight of each control point in the IK
     int translation_joint = -1;          ///< joint whose position channels the IK moves
     int up = 1;                          ///< up axis (0 x, 1 y, 2 z) of a body; the ground is its minimum
@@ -199,52 +134,73 @@ struct rig {
     std::size_t coefficients() const noexcept { return coefficient_count(kind); }
 };
 
-/// @brief The rig of a skeleton: the 23-joint hand if it has the hand's topology, otherwise a body found
-/// by find_body_roles (with `overrides`), `up` the up axis (BVH: y).
-/// @throws value_error as find_body_roles, or when a body has no joint with position channels.
-inline rig make_rig(const skeleton& s, const body_roles& overrides = {}, int up = 1)
+/// @brief The rig of a skeleton from its role map (roles.hpp): the hand rig when the map has the hand roles
+/// (detect_feature_set), else the body rig; `up` is the up axis of a body (BVH: y).
+/// @throws value_error naming a missing role, or when a body has no position channels at or above the pelvis.
+inline rig make_rig(const skeleton& s, const role_map& roles, int up = 1)
 {
     rig r;
-    if (is_hand_skeleton(s)) {
+    r.up = up;
+    auto add = [&](role x, double w) {
+        const std::size_t i = roles.at(x);
+        r.point_index.push_back(i);
+        r.points.push_back(to_skeleton_point(s, i));
+        r.ik_weights.push_back(w);
+    };
+    if (detect_feature_set(roles) == feature_set::hand) {
         r.kind = rig_kind::hand;
-        r.points = {{static_cast<int>(hand_index::wrist), false}, {static_cast<int>(hand_index::palm), false}};
-        for (std::size_t f = 0; f < hand_finger_count; ++f)
-            r.points.push_back({static_cast<int>(hand_index::finger_joint(f, 3)), true});
-        r.ik_weights = {4.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0};
-        r.translation_joint = static_cast<int>(hand_index::forearm);
+        add(role::wrist, 4.0);
+        add(role::palm, 1.0);
+        for (role x : {role::thumb_tip, role::index_tip, role::middle_tip, role::ring_tip, role::pinky_tip}) add(x, 1.0);
+        // finger bases: moved by h1 only, not IK goals (they span the hand frame of the hand volume)
+        for (role x : {role::thumb_base, role::index_base, role::middle_base, role::ring_base, role::pinky_base}) add(x, 0.0);
+        for (std::size_t j = 0; j < s.size() && r.translation_joint < 0; ++j)
+            if (s.joints[j].has_position()) r.translation_joint = static_cast<int>(j);
+        // The hand's T-pose is its zero-angle pose (the open, flat hand of hand_skeleton()).
         std::vector<double> zero(s.size() * 3, 0.0);
         const pose_positions fk = forward_kinematics(s, zero.data());
-        const vec3 palm = fk.joints[hand_index::palm];
+        const auto pj = static_cast<std::size_t>(r.points[hand_point::palm].joint);
+        const vec3 palm = fk.joints[pj];
+        const mat3& R = fk.rotations[pj];
         for (std::size_t f = 0; f < 5; ++f) {
-            const vec3 tip = fk.end_sites[hand_index::finger_joint(f, 3)];
-            r.tip_rest[f] = {tip[0] - palm[0], tip[1] - palm[1], tip[2] - palm[2]};  // rest palm frame = world
+            const auto& tp = r.points[hand_point::thumb_tip + f];
+            const vec3 tip = tp.end_site ? fk.end_sites[static_cast<std::size_t>(tp.joint)] : fk.joints[static_cast<std::size_t>(tp.joint)];
+            const vec3 d{tip[0] - palm[0], tip[1] - palm[1], tip[2] - palm[2]};
+            r.tip_rest[f] = {R[0] * d[0] + R[3] * d[1] + R[6] * d[2], R[1] * d[0] + R[4] * d[1] + R[7] * d[2],
+                             R[2] * d[0] + R[5] * d[1] + R[8] * d[2]};  // R^T d: in the palm's frame
         }
         return r;
     }
     r.kind = rig_kind::body;
-    r.up = up;
-    const body_roles b = find_body_roles(s, overrides);
-    r.points = {{b.pelvis, false},  {b.chest, false},  {b.head, false},   {b.l_shoulder, false}, {b.r_shoulder, false},
-                {b.l_hand, false},  {b.r_hand, false}, {b.l_foot, false}, {b.r_foot, false}};
-    r.ik_weights = {4.0, 0.25, 1.0, 0.0, 0.0, 1.0, 1.0, 4.0, 4.0};
-    if (s.joints[static_cast<std::size_t>(b.pelvis)].has_position())
-        r.translation_joint = b.pelvis;
-    else
-        for (std::size_t j = 0; j < s.size() && r.translation_joint < 0; ++j)
-            if (s.joints[j].has_position() && detail::is_ancestor_or_self(s, static_cast<int>(j), b.pelvis))
-                r.translation_joint = static_cast<int>(j);
+    add(role::pelvis, 4.0);
+    add(role::chest, 0.25);
+    add(role::head, 1.0);
+    add(role::left_shoulder, 0.0);
+    add(role::right_shoulder, 0.0);
+    add(role::left_hand, 1.0);
+    add(role::right_hand, 1.0);
+    add(role::left_foot, 4.0);
+    add(role::right_foot, 4.0);
+    using namespace body_point;
+    const int pel = r.points[pelvis].joint;
+    for (int j = pel; j >= 0 && r.translation_joint < 0; j = s.joints[static_cast<std::size_t>(j)].parent)
+        if (s.joints[static_cast<std::size_t>(j)].has_position()) r.translation_joint = j;
     if (r.translation_joint < 0)
-        throw value_error("rcm::make_rig: skeleton '" + s.name + "' has no position channels above the pelvis");
-    r.torso_length = detail::chain_length(s, b.head, b.pelvis);
-    r.leg_length = 0.5 * (detail::chain_length(s, b.l_foot, b.pelvis) + detail::chain_length(s, b.r_foot, b.pelvis));
-    const double chest = detail::chain_length(s, b.chest, b.pelvis);
-    const double shoulder = 0.5 * (detail::chain_length(s, b.l_shoulder, b.pelvis) + detail::chain_length(s, b.r_shoulder, b.pelvis));
+        throw value_error("rcm::make_rig: skeleton '" + s.name + "' has no position channels at or above the pelvis");
+    r.torso_length = detail::chain_length(s, r.points[head].joint, pel);
+    r.leg_length = 0.5 * (detail::chain_length(s, r.points[l_foot].joint, pel) + detail::chain_length(s, r.points[r_foot].joint, pel));
+    const double chest_len = detail::chain_length(s, r.points[chest].joint, pel);
+    const double shoulder_len =
+        0.5 * (detail::chain_length(s, r.points[l_shoulder].joint, pel) + detail::chain_length(s, r.points[r_shoulder].joint, pel));
     if (r.torso_length > 0) {
-        r.chest_share = std::clamp(chest / r.torso_length, 0.0, 1.0);
-        r.shoulder_share = std::clamp(shoulder / r.torso_length, 0.0, 1.0);
+        r.chest_share = std::clamp(chest_len / r.torso_length, 0.0, 1.0);
+        r.shoulder_share = std::clamp(shoulder_len / r.torso_length, 0.0, 1.0);
     }
     return r;
 }
+
+/// @brief make_rig() with the roles found from the skeleton's joint names (find_roles).
+inline rig make_rig(const skeleton& s, int up = 1) { return make_rig(s, find_roles(s), up); }
 
 /// @brief Control points of the keyframes of one clip and the per-keyframe constants of the rules.
 struct keyframe_points {
@@ -293,7 +249,7 @@ inline keyframe_points sample_control_points(const rig& r, const clip& c, std::s
             for (int a = 0; a < 3; ++a) kp.p[q][k * 3 + a] = v[a];
         }
         for (std::size_t j = 0; j < J; ++j) ground = std::min({ground, fk.joints[j][r.up], fk.end_sites[j][r.up]});
-        if (r.kind == rig_kind::hand) palm_rot[k] = fk.rotations[hand_index::palm];
+        if (r.kind == rig_kind::hand) palm_rot[k] = fk.rotations[static_cast<std::size_t>(r.points[hand_point::palm].joint)];
     }
     if (r.kind == rig_kind::body) {
         kp.ground = ground;

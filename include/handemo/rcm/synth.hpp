@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -32,6 +33,10 @@ enum class statistic {
     windowed_mean,  ///< every keyframe's mean over a sliding window (the paper's f_t, 35 frames = 7 keyframes)
     mean,           ///< the mean over all keyframes
     std,            ///< the standard deviation over all keyframes
+    window_max,     ///< max over a sliding window of keyframes, averaged over the windows (lma.hpp's derived
+    window_min,     ///< features: a statistic over each 35-frame window, averaged over the clip's windows)
+    window_std,
+    window_mean,
 };
 
 /// @brief One desired feature value f* (Eq. 6). The residual is (statistic - value) / scale, squared and
@@ -68,7 +73,7 @@ struct synth_options {
     bool interpolate_offsets = true;    ///< spline the keyframes' IK changes onto the original frames
                                         ///< (keeps detail between keyframes); false: spline the keyframes
     ik_options ik{};
-    body_roles roles{};                 ///< overrides of the body's control joints
+    std::optional<role_map> roles;      ///< control joints (default: find_roles from the joint names)
     int up = 1;                         ///< up axis of a body
 };
 
@@ -93,6 +98,17 @@ public:
             std::size_t lo = k >= W / 2 ? k - W / 2 : 0;
             if (lo + W > K) lo = K - W;
             for (std::size_t i = lo; i < lo + W; ++i) window_[k].push_back({static_cast<int>(i), 1.0 / static_cast<double>(W)});
+        }
+        if (K <= W) {
+            starts_ = {0};
+            wlen_ = K;
+        } else {
+            for (std::size_t k = 0; k + W <= K; ++k) starts_.push_back(k);
+            wlen_ = W;
+        }
+        for (std::size_t s : starts_) {
+            windows_.emplace_back();
+            for (std::size_t i = s; i < s + wlen_; ++i) windows_.back().push_back({static_cast<int>(i), 1.0 / static_cast<double>(wlen_)});
         }
         mask_.assign(r.coefficients(), 1.0);
         fixed_.assign(r.coefficients(), 0.0);
@@ -167,6 +183,17 @@ private:
             switch (tg.stat) {
             case statistic::windowed_mean: s = detail::stencil(t, x, 1, window_); break;
             case statistic::mean: s = detail::mean_all(t, x); break;
+            case statistic::window_max: s = detail::mean_all(t, detail::window_extreme<double>(t, x, starts_, wlen_, 1)); break;
+            case statistic::window_min: s = detail::mean_all(t, detail::window_extreme<double>(t, x, starts_, wlen_, -1)); break;
+            case statistic::window_mean: s = detail::mean_all(t, detail::stencil(t, x, 1, windows_)); break;
+            case statistic::window_std: {
+                // per window sqrt(E[x^2] - E[x]^2) (population std, as lma.hpp), then the mean over windows
+                const int m = detail::stencil(t, x, 1, windows_);
+                const int m2 = detail::stencil(t, ad::unary_raw(t, x, ad::unary::square_), 1, windows_);
+                const int var = ad::sub_raw(t, m2, ad::unary_raw(t, m, ad::unary::square_));
+                s = detail::mean_all(t, ad::unary_raw(t, ad::affine_raw(t, ad::leaky_relu_raw(t, var, 0.0), 1.0, 1e-12), ad::unary::sqrt_));
+                break;
+            }
             case statistic::std: {
                 const int m = detail::mean_all(t, x);
                 const int d = ad::sub_raw(t, x, ad::row_broadcast_raw(t, m, static_cast<int>(t.at(x).size), 1.0));
@@ -189,7 +216,9 @@ private:
     std::vector<feature_target> targets_;
     double bound_;
     autodiff::tape<double> tape_;
-    std::vector<std::vector<detail::stencil_entry>> window_;
+    std::vector<std::vector<detail::stencil_entry>> window_, windows_;
+    std::vector<std::size_t> starts_;
+    std::size_t wlen_ = 1;
     std::vector<double> mask_, fixed_;
 };
 
@@ -351,7 +380,7 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
     input.validate("rcm::stylise");
     clip u = input;
     unwrap_angles(u);
-    const rig r = make_rig(u.skel, opt.roles, opt.up);
+    const rig r = opt.roles ? make_rig(u.skel, *opt.roles, opt.up) : make_rig(u.skel, opt.up);
     synth_result out;
     out.keyframes = keyframe_indices(u.frames, opt.keyframe_step);
     const keyframe_points kp = sample_control_points(r, u, out.keyframes);

@@ -243,6 +243,115 @@ int g1_height(tape<T>& t, int c, std::span<const T> h, std::span<const T> h_tpos
     return id;
 }
 
+// ---------------------------------------------------------------- per-row constant rotation
+// x is [R, 3], M [R, 3, 3] constants (aux, row-major): y[r] = M_r x[r].  d/dx[r] = M_r^T g[r].
+template <class T>
+void rotate_rows_backward(tape<T>& t, int self)
+{
+    const auto& n = t.at(self);
+    T* gx = t.adj(n.in[0]);
+    if (!gx) return;
+    for (std::size_t r = 0; r < n.size / 3; ++r) {
+        const T* M = n.aux + r * 9;
+        const T* g = n.adjoint + r * 3;
+        for (std::size_t c = 0; c < 3; ++c) gx[r * 3 + c] += M[c] * g[0] + M[3 + c] * g[1] + M[6 + c] * g[2];
+    }
+}
+/// @brief y[r] = M_r x[r] for constant 3x3 matrices `mats` ([R, 3, 3], row-major).
+template <class T>
+int rotate_rows(tape<T>& t, int x, std::span<const T> mats)
+{
+    const std::size_t R = t.at(x).size / 3;
+    if (mats.size() != R * 9)
+        throw shape_error("rcm::rotate_rows: " + std::to_string(mats.size()) + " matrix values for " + std::to_string(R) + " rows");
+    T* aux = t.alloc(R * 9);
+    const int id = t.make("rotate_rows", R * 3, {x}, &rotate_rows_backward<T>, nullptr);
+    auto& n = t.at(id);
+    n.aux = aux;
+    std::copy(mats.begin(), mats.end(), aux);
+    const T* xv = t.at(x).value;
+    for (std::size_t r = 0; r < R; ++r)
+        for (std::size_t i = 0; i < 3; ++i)
+            n.value[r * 3 + i] = aux[r * 9 + i * 3] * xv[r * 3] + aux[r * 9 + i * 3 + 1] * xv[r * 3 + 1] + aux[r * 9 + i * 3 + 2] * xv[r * 3 + 2];
+    return id;
+}
+
+// ---------------------------------------------------------------- angle between row vectors
+// a, b [R, 3]: y[r] = acos(clamp(a.b / (|a| |b|), -1, 1)) (radians). With u = a/|a|, v = b/|b|, c = u.v,
+// s = sqrt(1 - c^2): d/da = -g (v - c u) / (|a| s), d/db = -g (u - c v) / (|b| s) (0 where s or a norm is 0).
+template <class T>
+void row_angle_backward(tape<T>& t, int self)
+{
+    const auto& n = t.at(self);
+    T* ga = t.adj(n.in[0]);
+    T* gb = t.adj(n.in[1]);
+    const T *a = t.at(n.in[0]).value, *b = t.at(n.in[1]).value;
+    for (std::size_t r = 0; r < n.size; ++r) {
+        const T* x = a + r * 3;
+        const T* y = b + r * 3;
+        const T na = std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]), nb = std::sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+        if (!(na > 0) || !(nb > 0)) continue;
+        const T c = std::clamp((x[0] * y[0] + x[1] * y[1] + x[2] * y[2]) / (na * nb), T(-1), T(1));
+        const T s = std::sqrt(T(1) - c * c);
+        if (!(s > T(1e-12))) continue;
+        for (std::size_t k = 0; k < 3; ++k) {
+            const T u = x[k] / na, v = y[k] / nb;
+            if (ga) ga[r * 3 + k] -= n.adjoint[r] * (v - c * u) / (na * s);
+            if (gb) gb[r * 3 + k] -= n.adjoint[r] * (u - c * v) / (nb * s);
+        }
+    }
+}
+/// @brief Angle (radians) between the rows of two [R, 3] nodes -> [R].
+template <class T>
+int row_angle(tape<T>& t, int a, int b)
+{
+    const std::size_t R = t.at(a).size / 3;
+    const int id = t.make("row_angle", R, {a, b}, &row_angle_backward<T>, nullptr);
+    const T *x = t.at(a).value, *y = t.at(b).value;
+    for (std::size_t r = 0; r < R; ++r) {
+        const T* p = x + r * 3;
+        const T* q = y + r * 3;
+        const T na = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]), nb = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        const T c = na > 0 && nb > 0 ? (p[0] * q[0] + p[1] * q[1] + p[2] * q[2]) / (na * nb) : T(1);
+        t.at(id).value[r] = std::acos(std::clamp(c, T(-1), T(1)));
+    }
+    return id;
+}
+
+// ---------------------------------------------------------------- max / min over windows
+// x [R]; windows w = [start_w, start_w + len): y[w] = max (sign = +1) or min (sign = -1) of x over w.
+// d/dx[i*_w] = g[w] at the window's arg max / arg min (first on ties), stored in aux.
+template <class T>
+void window_extreme_backward(tape<T>& t, int self)
+{
+    const auto& n = t.at(self);
+    if (T* gx = t.adj(n.in[0]))
+        for (std::size_t w = 0; w < n.size; ++w) gx[static_cast<std::size_t>(n.aux[w])] += n.adjoint[w];
+}
+/// @brief Max (sign > 0) or min (sign < 0) of x over each window [starts[w], starts[w] + length).
+template <class T>
+int window_extreme(tape<T>& t, int x, std::span<const std::size_t> starts, std::size_t length, int sign)
+{
+    const std::size_t R = t.at(x).size;
+    for (std::size_t s : starts)
+        if (s + length > R || length == 0)
+            throw shape_error("rcm::window_extreme: window [" + std::to_string(s) + ", " + std::to_string(s + length) +
+                              ") outside [0, " + std::to_string(R) + ")");
+    T* aux = t.alloc(starts.size());
+    const int id = t.make(sign > 0 ? "window_max" : "window_min", starts.size(), {x}, &window_extreme_backward<T>, nullptr);
+    auto& n = t.at(id);
+    n.aux = aux;
+    const T* xv = t.at(x).value;
+    for (std::size_t w = 0; w < starts.size(); ++w) {
+        std::size_t best = starts[w];
+        for (std::size_t i = starts[w] + 1; i < starts[w] + length; ++i)
+            if (sign > 0 ? xv[i] > xv[best] : xv[i] < xv[best]) best = i;
+        aux[w] = static_cast<T>(best);
+        n.value[w] = xv[best];
+    }
+    return id;
+}
+
 // ---------------------------------------------------------------- small compositions
 /// Constant leaf holding a copy of `v`.
 template <class T>
