@@ -7,6 +7,11 @@
 
 #include <handemo/rcm/roles.hpp>
 #include <handemo/rcm/lma.hpp>
+#include <handemo/rcm/selection.hpp>
+#include <handemo/rcm/maps.hpp>
+#include <handemo/rcm/cluster.hpp>
+#include <handemo/rcm/circumplex.hpp>
+#include <handemo/rcm/model.hpp>
 // Synthesis (Section 4): the rules of Table 2 on the autodiff tape, differentiable features, the Eq. 6
 // objective optimised jointly, damped least-squares IK, spline back to full rate.
 #include <handemo/rcm/ik.hpp>

@@ -1,0 +1,17 @@
+// The circumplex subcommands `handemo rcm fit | analyse | eval` (Aristidou et al. 2017, Section 3) in one
+// translation unit; built only with xtensor-blas (target handemo::rcm). The synthesis side adds `rcm
+// stylise` in rcm/stylise.hpp.
+#include "registry.hpp"
+
+#include "rcm/common.hpp"
+#include "rcm/fit.hpp"
+#include "rcm/analyse.hpp"
+#include "rcm/eval.hpp"
+
+static handemo::cli::add_command reg_rcm{70, [](CLI::App& app) {
+    auto* rcm = app.add_subcommand("rcm", "Continuous emotion on the circumplex (Aristidou et al. 2017): fit, analyse, eval");
+    rcm->require_subcommand(1);
+    handemo::cli::rcm_cmd::add_fit(*rcm);
+    handemo::cli::rcm_cmd::add_analyse(*rcm);
+    handemo::cli::rcm_cmd::add_eval(*rcm);
+}};

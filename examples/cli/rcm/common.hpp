@@ -1,0 +1,67 @@
+// Shared parts of the `handemo rcm` subcommands: loading a labelled folder (labels from file names
+// `<prefix>_<content>_<emotion>_<take>` or a manifest.csv, as stargan::load_folder reads them), the label
+// table, and the fit options every subcommand takes.
+#pragma once
+
+#include <handemo/rcm.hpp>
+#include <handemo/stargan/dataset.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#ifndef HANDEMO_RCM_CIRCUMPLEX
+#define HANDEMO_RCM_CIRCUMPLEX "data/rcm/circumplex.json"
+#endif
+
+namespace handemo::cli::rcm_cmd {
+
+/// Options shared by fit and eval.
+struct fit_cli {
+    std::string data, labels = HANDEMO_RCM_CIRCUMPLEX, roles;
+    handemo::rcm::fit_options opt;
+};
+
+inline void add_fit_options(CLI::App* sub, fit_cli& o)
+{
+    sub->add_option("--data", o.data, "Folder of <prefix>_<content>_<emotion>_<take>.bvh|csv clips (or with a manifest.csv)")->required();
+    sub->add_option("--labels", o.labels, "Circumplex coordinates of the labels (JSON with its citation)")->capture_default_str();
+    sub->add_option("--roles", o.roles, "JSON file {\"roles\": {\"left_hand\": \"Hand_L\", ...}} overriding the joint roles found from names");
+    sub->add_option("--min-features", o.opt.selection.min_features,
+                    "Features kept when fewer pass the effective/consistent tests (filled with the closest to passing)")
+        ->capture_default_str();
+    sub->add_option("--window", o.opt.lma.window_frames_at_30, "Sliding window in frames at 30 fps (scaled with the frame rate)")
+        ->capture_default_str();
+    sub->add_option("--pca-variance", o.opt.pca_keep, "Share of the variance the PCA keeps")->capture_default_str();
+}
+
+/// The labelled clips of a folder, with contents as performers.
+struct loaded_set {
+    std::vector<handemo::stargan::labelled_clip> items;
+    std::vector<handemo::rcm::training_clip> clips;
+};
+
+inline loaded_set load_set(const std::string& dir)
+{
+    loaded_set s;
+    s.items = handemo::stargan::load_folder(dir);
+    for (const auto& it : s.items) s.clips.push_back({&it.motion, it.emotion, it.content, it.path.filename().string()});
+    return s;
+}
+
+inline void finish_options(fit_cli& o)
+{
+    if (!o.roles.empty()) {
+        const auto j = nlohmann::json::parse(handemo::read_file(o.roles), nullptr, false);
+        if (j.is_discarded() || !j.is_object() || !j.contains("roles"))
+            throw handemo::format_error("rcm: " + o.roles + ": not a JSON object with a field 'roles'");
+        o.opt.role_overrides = j["roles"];
+    }
+    o.opt.performer_kind = "content";
+    o.opt.show_progress = true;
+}
+
+}  // namespace handemo::cli::rcm_cmd

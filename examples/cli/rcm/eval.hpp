@@ -1,0 +1,86 @@
+// `handemo rcm eval --data DIR [--by content|take] [--csv OUT.csv] [--svg OUT.svg]`: leave-one-content-out
+// (or leave-one-take-out) accuracy of the analysis: mean circumplex distance between the predicted point and
+// the label's coordinates, share of predictions in the label's quadrant, next to a constant predictor (the
+// training labels' mean point).
+#pragma once
+
+#include "common.hpp"
+
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+
+namespace handemo::cli::rcm_cmd {
+
+struct eval_run {
+    fit_cli f;
+    std::string by = "content", csv, svg;
+};
+
+inline void run_eval(eval_run& o)
+{
+    finish_options(o.f);
+    o.f.opt.cluster = false;
+    const auto table = handemo::rcm::load_circumplex(o.f.labels);
+    const auto set = load_set(o.f.data);
+    std::vector<std::string> group;
+    for (const auto& it : set.items) {
+        if (o.by == "content") group.push_back(it.content);
+        else if (o.by == "take") group.push_back(it.take);
+        else throw handemo::value_error("rcm eval: --by " + o.by + " is not 'content' or 'take'");
+    }
+    const auto r = handemo::rcm::evaluate_loo(set.clips, group, table, o.f.labels, o.f.opt);
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "rcm eval: leave-one-%s-out on %s: %zu folds, %zu clips, %zu folds failed\n"
+                  "rcm eval: mean distance %.3f, right quadrant %.1f%% (constant mean-label predictor: %.3f, %.1f%%)\n"
+                  "rcm eval: mean features kept %.1f, PCA dimensions %.1f\n",
+                  o.by.c_str(), o.f.data.c_str(), r.folds.size(), r.samples.size(), r.failed_folds.size(), r.mean_distance,
+                  100 * r.quadrant_accuracy, r.baseline_distance, 100 * r.baseline_quadrant_accuracy, r.mean_selected, r.mean_pca_dims);
+    std::cout << buf;
+    for (const auto& f : r.failed_folds) std::cout << "rcm eval: fold " << f << "\n";
+    std::map<std::string, std::pair<double, double>> per;  // label -> (distance sum, quadrant hits)
+    std::map<std::string, int> cnt;
+    for (const auto& s : r.samples) per[s.emotion].first += s.distance, per[s.emotion].second += s.quadrant_ok, ++cnt[s.emotion];
+    for (const auto& [e, v] : per) {
+        std::snprintf(buf, sizeof buf, "rcm eval:   %-14s distance %.3f  right quadrant %.0f%%\n", e.c_str(), v.first / cnt[e],
+                      100 * v.second / cnt[e]);
+        std::cout << buf;
+    }
+    if (!o.csv.empty()) {
+        std::string t = "clip,held_out,emotion,valence,arousal,true_valence,true_arousal,distance,quadrant_ok\n";
+        for (const auto& s : r.samples) {
+            std::snprintf(buf, sizeof buf, "%s,%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%d\n", s.name.c_str(), s.held_out.c_str(), s.emotion.c_str(),
+                          s.valence, s.arousal, s.true_valence, s.true_arousal, s.distance, s.quadrant_ok ? 1 : 0);
+            t += buf;
+        }
+        handemo::write_file_atomic(o.csv, t);
+        std::cout << "rcm eval: wrote " << o.csv << "\n";
+    }
+    if (!o.svg.empty()) {
+        std::vector<handemo::rcm::label_point> labels, preds;
+        std::map<std::string, bool> seen;
+        for (const auto& s : r.samples) {
+            if (!seen[s.emotion]) labels.push_back({s.emotion, s.true_valence, s.true_arousal}), seen[s.emotion] = true;
+            preds.push_back({s.emotion, s.valence, s.arousal});
+        }
+        handemo::rcm::circumplex_svg_options so;
+        so.title = "leave-one-" + o.by + "-out predictions (light) and label points";
+        handemo::write_file_atomic(o.svg, handemo::rcm::circumplex_svg(labels, std::nullopt, std::nullopt, preds, so));
+        std::cout << "rcm eval: wrote " << o.svg << "\n";
+    }
+}
+
+inline void add_eval(CLI::App& rcm)
+{
+    auto* sub = rcm.add_subcommand("eval", "Leave-one-content-out accuracy of the circumplex analysis");
+    auto o = std::make_shared<eval_run>();
+    add_fit_options(sub, o->f);
+    sub->add_option("--by", o->by, "Hold out one 'content' or one 'take' per fold")->capture_default_str();
+    sub->add_option("--csv", o->csv, "Per-clip predictions (CSV)");
+    sub->add_option("--svg", o->svg, "Circumplex with every held-out prediction");
+    sub->callback([o] { run_eval(*o); });
+}
+
+}  // namespace handemo::cli::rcm_cmd

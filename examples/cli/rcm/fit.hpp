@@ -1,0 +1,73 @@
+// `handemo rcm fit --data DIR --out MODEL.json`: fits the circumplex analysis model (features, selection,
+// PCA, RBF maps both ways, pose clusters) on a labelled folder and prints which features survive.
+#pragma once
+
+#include "common.hpp"
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+namespace handemo::cli::rcm_cmd {
+
+struct fit_run {
+    fit_cli f;
+    std::string out;
+    std::size_t clusters = 5;
+    bool no_clusters = false;
+};
+
+inline void print_selection(const handemo::rcm::rcm_model& m, std::ostream& os)
+{
+    const auto& s = m.selection;
+    os << "rcm fit: effective = std across emotions >= 0.21 for " << s.need_effective << " of " << s.performers << " "
+       << m.performer_kind << "s (the paper's performers); consistent = std across " << m.performer_kind << "s <= 0.2 for "
+       << s.need_consistent << " of " << s.emotions << " emotions\n";
+    os << "rcm fit: " << s.survivors << " of " << handemo::rcm::derived_count(m.features) << " features pass both tests";
+    if (s.fallback) os << "; filled up to " << m.selected.size() << " with the features closest to passing";
+    os << "\n";
+    const auto& defs = handemo::rcm::derived_features(m.features);
+    for (std::size_t i : m.selected) {
+        os << "  " << defs[i].name << "  (effective for " << s.effective_count[i] << ", consistent for " << s.consistent_count[i]
+           << (s.effective_count[i] >= s.need_effective && s.consistent_count[i] >= s.need_consistent ? ", survives)" : ")") << "\n";
+    }
+    os << "rcm fit: PCA keeps " << m.pca.dims() << " of " << m.selected.size() << " dimensions\n";
+    if (m.has_clusters)
+        for (std::size_t c = 0; c < m.clusters.count(); ++c)
+            os << "rcm fit: pose cluster " << c << ": " << m.clusters.sizes[c] << " poses, "
+               << (m.cluster_selected[c].empty() ? std::string("no selection (fewer than two emotions or ") + m.performer_kind +
+                                                       "s have windows centred in it)"
+                                                 : std::to_string(m.cluster_survivors[c]) + " features pass both tests, " +
+                                                       std::to_string(m.cluster_selected[c].size()) + " selected")
+               << "\n";
+}
+
+inline void run_fit(fit_run& o)
+{
+    finish_options(o.f);
+    o.f.opt.cluster = !o.no_clusters;
+    o.f.opt.clustering.clusters = o.clusters;
+    const auto table = handemo::rcm::load_circumplex(o.f.labels);
+    const auto set = load_set(o.f.data);
+    std::cout << "rcm fit: " << set.clips.size() << " clips from " << o.f.data << "; contents play the performers' role\n";
+    auto m = handemo::rcm::fit_model(set.clips, table, o.f.labels, o.f.opt);
+    // the selection counts are not stored per feature in the file; print them now
+    print_selection(m, std::cout);
+    handemo::rcm::save_model(m, o.out);
+    std::cout << "rcm fit: wrote " << o.out << " (" << handemo::rcm::to_string(m.features) << " features, labels:";
+    for (const auto& l : m.labels) std::cout << " " << l.name;
+    std::cout << ")\n";
+}
+
+inline void add_fit(CLI::App& rcm)
+{
+    auto* sub = rcm.add_subcommand("fit", "Fit the circumplex analysis model on a labelled folder");
+    auto o = std::make_shared<fit_run>();
+    add_fit_options(sub, o->f);
+    sub->add_option("--out", o->out, "Model file to write (JSON)")->required();
+    sub->add_option("--clusters", o->clusters, "Pose clusters (Section 3.5)")->capture_default_str();
+    sub->add_flag("--no-clusters", o->no_clusters, "Skip the pose clustering");
+    sub->callback([o] { run_fit(*o); });
+}
+
+}  // namespace handemo::cli::rcm_cmd

@@ -1,0 +1,170 @@
+// Russell's circumplex (valence x arousal, both in [-1, 1]) as used by Aristidou et al. 2017: the
+// coordinates of the emotion labels of the data sets, read from a JSON data file with its citation
+// (data/rcm/circumplex.json: Warriner, Kuperman & Brysbaert 2013 word norms rescaled from 1..9 to
+// [-1, 1]), the quadrant of a point, and an SVG picture of the circumplex with the training labels, an
+// analysed motion and an optional target.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/core/io.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace handemo::rcm {
+
+/// @brief A named point of the circumplex.
+struct label_point {
+    std::string name;
+    double valence = 0, arousal = 0;  ///< both in [-1, 1]
+};
+
+/// @brief Quadrant of a point: 1 (valence >= 0, arousal >= 0, e.g. happy), 2 (negative valence, high
+/// arousal: angry), 3 (negative, low: sad), 4 (positive valence, low arousal: relaxed).
+constexpr int quadrant(double valence, double arousal) noexcept
+{
+    return valence >= 0 ? (arousal >= 0 ? 1 : 4) : (arousal >= 0 ? 2 : 3);
+}
+
+/// @brief Label coordinates of a circumplex file, plus its citation.
+struct circumplex_table {
+    std::string source;
+    std::vector<label_point> labels;
+
+    /// @brief The point of a label.
+    /// @throws value_error naming the label, the file and the known labels.
+    const label_point& at(const std::string& name, const std::string& what = "circumplex table") const
+    {
+        for (const auto& l : labels)
+            if (l.name == name) return l;
+        std::string known;
+        for (const auto& l : labels) known += (known.empty() ? "" : ", ") + l.name;
+        throw value_error("rcm: label '" + name + "' has no circumplex coordinates in " + what + " (known: " + known + ")");
+    }
+};
+
+/// @brief Parses a circumplex file: `{"format": "handemo-rcm-circumplex", "version": 1, "source": "...",
+/// "labels": {"happy": {"valence_1_9": 8.47, "arousal_1_9": 6.05}, ...}}` (or `valence`/`arousal` in [-1, 1]).
+/// @throws format_error naming `what` and the field.
+inline circumplex_table parse_circumplex(const std::string& text, const std::string& what)
+{
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw format_error("rcm circumplex: " + what + ": not JSON: " + e.what());
+    }
+    auto need = [&](const nlohmann::json& o, const char* key, const std::string& where) -> const nlohmann::json& {
+        if (!o.is_object() || !o.contains(key)) throw format_error("rcm circumplex: " + what + ": missing field '" + where + key + "'");
+        return o.at(key);
+    };
+    if (need(j, "format", "") != "handemo-rcm-circumplex")
+        throw format_error("rcm circumplex: " + what + ": field 'format' is not \"handemo-rcm-circumplex\"");
+    if (need(j, "version", "") != 1) throw format_error("rcm circumplex: " + what + ": field 'version' is not 1");
+    circumplex_table t;
+    const auto& src = need(j, "source", "");
+    if (!src.is_string() || src.get<std::string>().empty()) throw format_error("rcm circumplex: " + what + ": field 'source' (the citation) is empty");
+    t.source = src.get<std::string>();
+    const auto& labels = need(j, "labels", "");
+    if (!labels.is_object() || labels.empty()) throw format_error("rcm circumplex: " + what + ": field 'labels' is not a non-empty object");
+    for (const auto& [name, v] : labels.items()) {
+        label_point p;
+        p.name = name;
+        const std::string w = "labels." + name + ".";
+        auto num = [&](const char* key) {
+            const auto& x = need(v, key, w);
+            if (!x.is_number()) throw format_error("rcm circumplex: " + what + ": field '" + w + key + "' is not a number");
+            return x.get<double>();
+        };
+        if (v.is_object() && v.contains("valence_1_9")) {
+            const double va = num("valence_1_9"), ar = num("arousal_1_9");
+            if (va < 1 || va > 9 || ar < 1 || ar > 9) throw format_error("rcm circumplex: " + what + ": field '" + w + "' rating outside 1..9");
+            p.valence = (va - 5) / 4;
+            p.arousal = (ar - 5) / 4;
+        } else {
+            p.valence = num("valence");
+            p.arousal = num("arousal");
+            if (std::abs(p.valence) > 1 || std::abs(p.arousal) > 1)
+                throw format_error("rcm circumplex: " + what + ": field '" + w + "' outside [-1, 1]");
+        }
+        t.labels.push_back(p);
+    }
+    return t;
+}
+
+/// @brief Reads a circumplex file (parse_circumplex()).
+inline circumplex_table load_circumplex(const std::filesystem::path& path) { return parse_circumplex(read_file(path), path.string()); }
+
+/// @brief Options of circumplex_svg().
+struct circumplex_svg_options {
+    std::string title = "Circumplex (valence x arousal)";
+    std::size_t size = 480;
+};
+
+/// @brief SVG of the circumplex: axes, unit circle, the labels (`class="label"`), optional extra training
+/// points (`class="train"`), the analysed point (`class="input"`) and a target (`class="target"`).
+inline std::string circumplex_svg(const std::vector<label_point>& labels, const std::optional<label_point>& input,
+                                  const std::optional<label_point>& target = std::nullopt,
+                                  const std::vector<label_point>& training_points = {}, const circumplex_svg_options& opt = {})
+{
+    const double S = static_cast<double>(opt.size), m = 50, R = (S - 2 * m) / 2, cx = S / 2, cy = S / 2 + 10;
+    auto X = [&](double v) { return cx + std::clamp(v, -1.1, 1.1) * R; };
+    auto Y = [&](double a) { return cy - std::clamp(a, -1.1, 1.1) * R; };
+    auto num = [](double v) {
+        char b[32];
+        std::snprintf(b, sizeof b, "%.2f", v);
+        return std::string(b);
+    };
+    auto esc = [](const std::string& s) {
+        std::string o;
+        for (char c : s) o += c == '<' ? "&lt;" : c == '>' ? "&gt;" : c == '&' ? "&amp;" : c == '"' ? "&quot;" : std::string(1, c);
+        return o;
+    };
+    std::string o = "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + std::to_string(opt.size) + "\" height=\"" +
+                    std::to_string(opt.size + 20) + "\" font-family=\"sans-serif\" font-size=\"12\">\n";
+    o += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+    o += "<text x=\"" + num(cx) + "\" y=\"20\" text-anchor=\"middle\" font-size=\"14\">" + esc(opt.title) + "</text>\n";
+    o += "<circle cx=\"" + num(cx) + "\" cy=\"" + num(cy) + "\" r=\"" + num(R) + "\" fill=\"none\" stroke=\"#bbb\"/>\n";
+    o += "<line x1=\"" + num(X(-1.05)) + "\" y1=\"" + num(cy) + "\" x2=\"" + num(X(1.05)) + "\" y2=\"" + num(cy) + "\" stroke=\"#888\"/>\n";
+    o += "<line x1=\"" + num(cx) + "\" y1=\"" + num(Y(-1.05)) + "\" x2=\"" + num(cx) + "\" y2=\"" + num(Y(1.05)) + "\" stroke=\"#888\"/>\n";
+    o += "<text x=\"" + num(X(1.05)) + "\" y=\"" + num(cy - 6) + "\" text-anchor=\"end\">valence +</text>\n";
+    o += "<text x=\"" + num(X(-1.05)) + "\" y=\"" + num(cy - 6) + "\">valence -</text>\n";
+    o += "<text x=\"" + num(cx + 6) + "\" y=\"" + num(Y(1.05) + 4) + "\">arousal +</text>\n";
+    o += "<text x=\"" + num(cx + 6) + "\" y=\"" + num(Y(-1.05)) + "\">arousal -</text>\n";
+    for (const auto& p : training_points)
+        o += "<circle class=\"train\" data-label=\"" + esc(p.name) + "\" cx=\"" + num(X(p.valence)) + "\" cy=\"" + num(Y(p.arousal)) +
+             "\" r=\"2.5\" fill=\"#9ecae1\"/>\n";
+    for (const auto& p : labels) {
+        o += "<circle class=\"label\" data-label=\"" + esc(p.name) + "\" cx=\"" + num(X(p.valence)) + "\" cy=\"" + num(Y(p.arousal)) +
+             "\" r=\"4\" fill=\"#1f77b4\"/>\n";
+        o += "<text x=\"" + num(X(p.valence) + 6) + "\" y=\"" + num(Y(p.arousal) - 5) + "\" fill=\"#1f77b4\">" + esc(p.name) + "</text>\n";
+    }
+    if (input) {
+        o += "<circle class=\"input\" cx=\"" + num(X(input->valence)) + "\" cy=\"" + num(Y(input->arousal)) +
+             "\" r=\"6\" fill=\"#d62728\" data-valence=\"" + num(input->valence) + "\" data-arousal=\"" + num(input->arousal) + "\"/>\n";
+        o += "<text x=\"" + num(X(input->valence) + 8) + "\" y=\"" + num(Y(input->arousal) + 14) + "\" fill=\"#d62728\">" +
+             esc(input->name.empty() ? "input" : input->name) + "</text>\n";
+    }
+    if (target) {
+        const double tx = X(target->valence), ty = Y(target->arousal);
+        o += "<path class=\"target\" d=\"M" + num(tx - 6) + " " + num(ty - 6) + " L" + num(tx + 6) + " " + num(ty + 6) + " M" + num(tx - 6) +
+             " " + num(ty + 6) + " L" + num(tx + 6) + " " + num(ty - 6) + "\" stroke=\"#2ca02c\" stroke-width=\"3\" data-valence=\"" +
+             num(target->valence) + "\" data-arousal=\"" + num(target->arousal) + "\"/>\n";
+        o += "<text x=\"" + num(tx + 8) + "\" y=\"" + num(ty + 14) + "\" fill=\"#2ca02c\">" + esc(target->name.empty() ? "target" : target->name) +
+             "</text>\n";
+        if (input)
+            o += "<line x1=\"" + num(X(input->valence)) + "\" y1=\"" + num(Y(input->arousal)) + "\" x2=\"" + num(tx) + "\" y2=\"" + num(ty) +
+                 "\" stroke=\"#2ca02c\" stroke-dasharray=\"4 3\"/>\n";
+    }
+    o += "</svg>\n";
+    return o;
+}
+
+}  // namespace handemo::rcm

@@ -1,0 +1,683 @@
+// The circumplex analysis model of Aristidou et al. 2017, Section 3, end to end: fit (features of every
+// training clip -> [0, 1] normalisation -> effective and consistent selection -> PCA to 95% -> Gaussian RBF
+// features -> (valence, arousal), Eq. 1-2, and multiquadric RBF (valence, arousal) -> selected features,
+// Eq. 3-4 -> pose clusters with their own selections, Section 3.5), analysis of a new clip (its predicted
+// circumplex point, clamped to [-1, 1]^2 as the paper clamps to the diagram, and quadrant), the model file
+// (JSON with format and version, written atomically, validated on load with errors naming file and field),
+// and the leave-one-content-out evaluation of the analysis.
+//
+// Analysis uses the global selection (all poses); the per-cluster selections are fitted, stored and
+// printed for the synthesis, which applies features per pose cluster as the paper does.
+#pragma once
+
+#include <handemo/core/error.hpp>
+#include <handemo/core/io.hpp>
+#include <handemo/core/progress.hpp>
+#include <handemo/motion/clip.hpp>
+#include <handemo/rcm/circumplex.hpp>
+#include <handemo/rcm/cluster.hpp>
+#include <handemo/rcm/lma.hpp>
+#include <handemo/rcm/maps.hpp>
+#include <handemo/rcm/roles.hpp>
+#include <handemo/rcm/selection.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace handemo::rcm {
+
+/// @brief Version of the model file this code writes and reads.
+inline constexpr int model_version = 1;
+
+/// @brief One labelled training clip. `performer` is the performer, or the content (motion type) for
+/// data sets without performers (Bandai, the synthetic hand set).
+struct training_clip {
+    const clip* motion = nullptr;
+    std::string emotion;
+    std::string performer;
+    std::string name;  ///< for messages (usually the file)
+};
+
+/// @brief Options of fit_model().
+struct fit_options {
+    lma_options lma;
+    selection_options selection;
+    double pca_keep = 0.95;
+    bool cluster = true;  ///< fit the pose clusters and their selections (Section 3.5)
+    pose_cluster_options clustering;
+    nlohmann::json role_overrides = nlohmann::json::object();  ///< `{"left_hand": "Hand_L"}`
+    std::string performer_kind = "content";  ///< what plays the performers' role, for the report
+    bool show_progress = false;
+};
+
+/// @brief The analysed emotion of a clip.
+struct analysis {
+    double valence = 0, arousal = 0;          ///< clamped to [-1, 1]
+    double raw_valence = 0, raw_arousal = 0;  ///< before clamping
+    int quadrant = 1;
+};
+
+/// @brief A fitted circumplex analysis model.
+struct rcm_model {
+    feature_set features = feature_set::body;
+    lma_options lma;
+    nlohmann::json roles = nlohmann::json::object();  ///< role -> joint name on the training skeleton
+    feature_normaliser normaliser;
+    std::vector<std::size_t> selected;  ///< indices into derived_features()
+    selection_result selection;         ///< counts of the global selection
+    std::string performer_kind = "content";
+    pca_model pca;
+    rbf_map to_emotion;   ///< Eq. 1-2: PCA scores -> (valence, arousal)
+    rbf_map to_features;  ///< Eq. 3-4: (valence, arousal) -> selected normalised features
+    std::vector<label_point> labels;  ///< labels of the training set with their coordinates
+    std::string label_source;         ///< citation of the coordinates
+    bool has_clusters = false;
+    pose_clustering clusters;
+    std::vector<std::vector<std::size_t>> cluster_selected;  ///< [C] selected features per pose cluster
+    std::vector<std::size_t> cluster_survivors;              ///< [C] how many of those passed both tests
+    std::size_t training_clips = 0;
+
+    /// @brief Roles of a skeleton: the model's role names where that skeleton has them, name rules otherwise.
+    role_map roles_for(const skeleton& s) const
+    {
+        role_map m = find_roles(s);
+        for (const auto& [k, v] : roles.items()) {
+            const std::string name = v.get<std::string>();
+            for (std::size_t i = 0; i < m.points.size(); ++i)
+                if (m.points[i] == name) m.index[static_cast<std::size_t>(role_from_string(k))] = static_cast<int>(i);
+        }
+        m.require(features);
+        return m;
+    }
+    /// @brief The selected, normalised features `[S]` of given world positions (the same ones the model was fitted on).
+    vector selected_features(const positions_type& p, double fps, const role_map& r) const
+    {
+        const vector all = normaliser.apply(clip_features(p, fps, r, features, lma));
+        vector s = xt::zeros<double>({selected.size()});
+        for (std::size_t i = 0; i < selected.size(); ++i) s(i) = all(selected[i]);
+        return s;
+    }
+    /// @brief Eq. 1 on selected normalised features: the circumplex point, clamped to [-1, 1].
+    analysis analyse_features(const vector& selected_normalised) const
+    {
+        const vector e = to_emotion(pca.project(selected_normalised));
+        analysis a;
+        a.raw_valence = e(0), a.raw_arousal = e(1);
+        a.valence = std::clamp(e(0), -1.0, 1.0);
+        a.arousal = std::clamp(e(1), -1.0, 1.0);
+        a.quadrant = quadrant(a.valence, a.arousal);
+        return a;
+    }
+    /// @brief The emotion of a clip (Section 3.3).
+    /// @throws value_error when the clip's skeleton lacks a role the features need.
+    analysis analyse(const clip& c) const
+    {
+        const role_map r = roles_for(c.skel);
+        return analyse_features(selected_features(world_positions(c), c.fps, r));
+    }
+    /// @brief Eq. 3: the selected normalised features `[S]` expected at a circumplex point.
+    vector desired_features(double valence, double arousal) const
+    {
+        vector e = {valence, arousal};
+        return to_features(e);
+    }
+    /// @brief Names of the selected features.
+    std::vector<std::string> selected_names() const
+    {
+        std::vector<std::string> n;
+        for (std::size_t i : selected) n.push_back(derived_features(features)[i].name);
+        return n;
+    }
+};
+
+/// @brief Raw derived features of one training clip: per window and their mean.
+struct clip_feature_data {
+    xt::xtensor<double, 2> windows;  ///< [W, D]
+    vector mean;                     ///< [D]
+    std::size_t window_length = 0;
+};
+
+/// @brief Roles of the training skeleton: name rules plus overrides.
+inline role_map training_roles(const skeleton& s, const nlohmann::json& overrides, feature_set* fs_out = nullptr)
+{
+    role_map r = find_roles(s);
+    if (!overrides.empty()) apply_role_overrides(r, overrides, "rcm roles");
+    const feature_set fs = detect_feature_set(r);
+    r.require(fs);
+    if (fs_out) *fs_out = fs;
+    return r;
+}
+
+/// @brief Computes the raw features of every clip (the slow part of a fit; done once for all folds).
+inline std::vector<clip_feature_data> compute_features(const std::vector<training_clip>& clips, const role_map& r, feature_set fs,
+                                                       const lma_options& lma, bool show_progress)
+{
+    std::vector<clip_feature_data> out;
+    out.reserve(clips.size());
+    progress bar("rcm features", static_cast<long>(clips.size()), show_progress ? stderr : nullptr);
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        const clip& c = *clips[i].motion;
+        clip_feature_data d;
+        try {
+            d.windows = window_features(world_positions(c), c.fps, r, fs, lma);
+        } catch (const error& e) {
+            throw value_error("rcm fit: " + clips[i].name + ": " + e.what());
+        }
+        d.mean = xt::mean(d.windows, {0});
+        d.window_length = std::min(c.frames, window_length(c.fps, lma));
+        out.push_back(std::move(d));
+        bar.update(static_cast<long>(i + 1));
+    }
+    return out;
+}
+
+namespace detail {
+
+inline std::vector<std::string> sorted_unique(const std::vector<std::string>& v)
+{
+    std::set<std::string> s(v.begin(), v.end());
+    return {s.begin(), s.end()};
+}
+
+inline matrix rows_of(const std::vector<vector>& rows, std::size_t D)
+{
+    matrix m = xt::zeros<double>({rows.size(), D});
+    for (std::size_t i = 0; i < rows.size(); ++i) xt::view(m, i, xt::all()) = rows[i];
+    return m;
+}
+
+}  // namespace detail
+
+/// @brief Fits the analysis part (normaliser, selection, PCA, Eq. 1 and Eq. 3 maps) from precomputed features
+/// of the clips `use` (indices into clips/features).
+/// @throws value_error for a label without coordinates, fewer than 2 emotions or performers, or a singular fit.
+inline rcm_model fit_from_features(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
+                                   const std::vector<std::size_t>& use, feature_set fs, const circumplex_table& table,
+                                   const std::string& table_name, const fit_options& opt)
+{
+    rcm_model m;
+    m.features = fs;
+    m.lma = opt.lma;
+    m.performer_kind = opt.performer_kind;
+    m.label_source = table.source;
+    m.training_clips = use.size();
+    const std::size_t D = derived_count(fs);
+    std::vector<vector> raw;
+    std::vector<std::string> emo, perf;
+    for (std::size_t i : use) raw.push_back(feats[i].mean), emo.push_back(clips[i].emotion), perf.push_back(clips[i].performer);
+    m.normaliser = feature_normaliser::fit(detail::rows_of(raw, D));
+    const matrix x = m.normaliser.apply_rows(detail::rows_of(raw, D));
+    m.selection = select_features(x, emo, perf, opt.selection);
+    m.selected = m.selection.selected;
+    const std::size_t S = m.selected.size(), N = use.size();
+    matrix xs = xt::zeros<double>({N, S});
+    for (std::size_t i = 0; i < N; ++i)
+        for (std::size_t k = 0; k < S; ++k) xs(i, k) = x(i, m.selected[k]);
+    m.pca = fit_pca(xs, opt.pca_keep, N > 1 ? N - 1 : 1);
+    const matrix scores = m.pca.project_rows(xs);
+    const auto names = detail::sorted_unique(emo);
+    const std::size_t K = names.size(), d = m.pca.dims();
+    for (const auto& n : names) {
+        label_point p = table.at(n, table_name);
+        m.labels.push_back(p);
+    }
+    matrix centres = xt::zeros<double>({K, d}), centre_feat = xt::zeros<double>({K, S}), centre_e = xt::zeros<double>({K, std::size_t{2}});
+    matrix targets = xt::zeros<double>({N, std::size_t{2}});
+    std::vector<double> count(K, 0.0);
+    for (std::size_t i = 0; i < N; ++i) {
+        const std::size_t k = static_cast<std::size_t>(std::find(names.begin(), names.end(), emo[i]) - names.begin());
+        count[k] += 1;
+        for (std::size_t j = 0; j < d; ++j) centres(k, j) += scores(i, j);
+        for (std::size_t j = 0; j < S; ++j) centre_feat(k, j) += xs(i, j);
+        targets(i, 0) = m.labels[k].valence;
+        targets(i, 1) = m.labels[k].arousal;
+    }
+    for (std::size_t k = 0; k < K; ++k) {
+        for (std::size_t j = 0; j < d; ++j) centres(k, j) /= count[k];
+        for (std::size_t j = 0; j < S; ++j) centre_feat(k, j) /= count[k];
+        centre_e(k, 0) = m.labels[k].valence;
+        centre_e(k, 1) = m.labels[k].arousal;
+    }
+    m.to_emotion = fit_rbf_regression(scores, targets, centres, centre_e, rbf_kernel::gaussian, mean_pairwise_distance(scores));
+    m.to_features = fit_rbf_interpolant(centre_e, centre_feat, rbf_kernel::multiquadric, mean_pairwise_distance(centre_e));
+    return m;
+}
+
+/// @brief Fits a whole model on labelled clips (one skeleton), with pose clusters when opt.cluster.
+/// @throws value_error / shape_error as the steps do, naming the clip where one is at fault.
+inline rcm_model fit_model(const std::vector<training_clip>& clips, const circumplex_table& table, const std::string& table_name,
+                           const fit_options& opt = {})
+{
+    if (clips.empty()) throw value_error("rcm fit: no training clips");
+    for (const auto& c : clips)
+        if (!c.motion->skel.same_topology(clips.front().motion->skel))
+            throw shape_error("rcm fit: " + c.name + " has a different skeleton from " + clips.front().name);
+    feature_set fs{};
+    const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
+    const auto feats = compute_features(clips, r, fs, opt.lma, opt.show_progress);
+    std::vector<std::size_t> all(clips.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+    rcm_model m = fit_from_features(clips, feats, all, fs, table, table_name, opt);
+    m.roles = r.to_json();
+    if (!opt.cluster) return m;
+    // Section 3.5: pose clusters and per-cluster selections
+    std::vector<pose> poses;
+    std::vector<std::vector<pose>> per_clip;
+    for (const auto& c : clips) {
+        per_clip.push_back(clip_poses(*c.motion, r, opt.lma.up_axis));
+        poses.insert(poses.end(), per_clip.back().begin(), per_clip.back().end());
+    }
+    pose_cluster_options co = opt.clustering;
+    co.clusters = std::min(co.clusters, poses.size());
+    m.clusters = cluster_poses(poses, pose_weights(clips.front().motion->skel, r), co);
+    m.has_clusters = true;
+    const std::size_t C = m.clusters.count(), D = derived_count(fs);
+    m.cluster_selected.assign(C, {});
+    m.cluster_survivors.assign(C, 0);
+    for (std::size_t c = 0; c < C; ++c) {
+        std::vector<vector> rows;
+        std::vector<std::string> emo, perf;
+        for (std::size_t i = 0; i < clips.size(); ++i) {
+            const auto& w = feats[i].windows;
+            vector acc = xt::zeros<double>({D});
+            double n = 0;
+            const auto starts = window_starts(clips[i].motion->frames, feats[i].window_length);
+            for (std::size_t k = 0; k < w.shape()[0]; ++k) {
+                const std::size_t centre = std::min(clips[i].motion->frames - 1, starts[k] + feats[i].window_length / 2);
+                if (m.clusters.assign(per_clip[i][centre]) != c) continue;
+                const vector row = xt::view(w, k, xt::all());
+                acc += m.normaliser.apply(row);
+                n += 1;
+            }
+            if (n == 0) continue;
+            rows.push_back(acc / n);
+            emo.push_back(clips[i].emotion);
+            perf.push_back(clips[i].performer);
+        }
+        try {
+            const auto sel = select_features(detail::rows_of(rows, D), emo, perf, opt.selection);
+            m.cluster_selected[c] = sel.selected;
+            m.cluster_survivors[c] = sel.survivors;
+        } catch (const value_error&) {
+            m.cluster_selected[c].clear();  // fewer than two emotions or performers reach this cluster
+        }
+    }
+    return m;
+}
+
+// ---- model file ----
+
+namespace detail {
+
+inline nlohmann::json to_json(const matrix& a)
+{
+    nlohmann::json j = nlohmann::json::array();
+    for (std::size_t i = 0; i < a.shape()[0]; ++i) {
+        nlohmann::json r = nlohmann::json::array();
+        for (std::size_t k = 0; k < a.shape()[1]; ++k) r.push_back(a(i, k));
+        j.push_back(r);
+    }
+    return j;
+}
+inline nlohmann::json to_json(const vector& a)
+{
+    nlohmann::json j = nlohmann::json::array();
+    for (double v : a) j.push_back(v);
+    return j;
+}
+inline nlohmann::json to_json(const rbf_map& r)
+{
+    return {{"kernel", std::string(to_string(r.kernel))}, {"sigma", r.sigma}, {"centres", to_json(r.centres)},
+            {"lambda", to_json(r.lambda)}, {"linear", to_json(r.linear)}};
+}
+inline nlohmann::json to_json(const pose& p)
+{
+    nlohmann::json q = nlohmann::json::array();
+    for (const auto& x : p.q) q.push_back({x[0], x[1], x[2], x[3]});
+    return {{"height", p.height}, {"q", q}};
+}
+
+/// Reader of one model file: every accessor names the file and the field path on error.
+struct model_reader {
+    std::string file;
+
+    [[noreturn]] void fail(const std::string& field, const std::string& what) const
+    {
+        throw format_error("rcm model: " + file + ": field '" + field + "' " + what);
+    }
+    const nlohmann::json& get(const nlohmann::json& o, const std::string& key, const std::string& path) const
+    {
+        if (!o.is_object() || !o.contains(key)) fail(path + key, "is missing");
+        return o.at(key);
+    }
+    double number(const nlohmann::json& o, const std::string& key, const std::string& path) const
+    {
+        const auto& v = get(o, key, path);
+        if (!v.is_number()) fail(path + key, "is not a number");
+        const double x = v.get<double>();
+        if (!std::isfinite(x)) fail(path + key, "is not finite");
+        return x;
+    }
+    std::string text(const nlohmann::json& o, const std::string& key, const std::string& path) const
+    {
+        const auto& v = get(o, key, path);
+        if (!v.is_string()) fail(path + key, "is not a string");
+        return v.get<std::string>();
+    }
+    std::vector<double> numbers(const nlohmann::json& v, const std::string& field) const
+    {
+        if (!v.is_array()) fail(field, "is not an array");
+        std::vector<double> out;
+        for (std::size_t i = 0; i < v.size(); ++i) {
+            if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) fail(field + "[" + std::to_string(i) + "]", "is not a finite number");
+            out.push_back(v[i].get<double>());
+        }
+        return out;
+    }
+    vector vec(const nlohmann::json& o, const std::string& key, const std::string& path, std::size_t n) const
+    {
+        const auto x = numbers(get(o, key, path), path + key);
+        if (x.size() != n) fail(path + key, "has " + std::to_string(x.size()) + " values, expected " + std::to_string(n));
+        vector v = xt::zeros<double>({n});
+        for (std::size_t i = 0; i < n; ++i) v(i) = x[i];
+        return v;
+    }
+    matrix mat(const nlohmann::json& o, const std::string& key, const std::string& path, std::size_t rows, std::size_t cols) const
+    {
+        const auto& v = get(o, key, path);
+        if (!v.is_array() || v.size() != rows)
+            fail(path + key, "is not an array of " + std::to_string(rows) + " rows");
+        matrix m = xt::zeros<double>({rows, cols});
+        for (std::size_t i = 0; i < rows; ++i) {
+            const auto r = numbers(v[i], path + key + "[" + std::to_string(i) + "]");
+            if (r.size() != cols)
+                fail(path + key + "[" + std::to_string(i) + "]", "has " + std::to_string(r.size()) + " values, expected " + std::to_string(cols));
+            for (std::size_t k = 0; k < cols; ++k) m(i, k) = r[k];
+        }
+        return m;
+    }
+    std::vector<std::size_t> indices(const nlohmann::json& v, const std::string& field, std::size_t bound) const
+    {
+        const auto x = numbers(v, field);
+        std::vector<std::size_t> out;
+        for (std::size_t i = 0; i < x.size(); ++i) {
+            if (x[i] < 0 || x[i] >= static_cast<double>(bound) || x[i] != std::floor(x[i]))
+                fail(field + "[" + std::to_string(i) + "]", "is not a feature index below " + std::to_string(bound));
+            out.push_back(static_cast<std::size_t>(x[i]));
+        }
+        return out;
+    }
+    rbf_map rbf(const nlohmann::json& o, const std::string& key, std::size_t in, std::size_t out) const
+    {
+        const std::string p = key + ".";
+        const auto& j = get(o, key, "");
+        rbf_map r;
+        const std::string k = text(j, "kernel", p);
+        if (k == "gaussian") r.kernel = rbf_kernel::gaussian;
+        else if (k == "multiquadric") r.kernel = rbf_kernel::multiquadric;
+        else fail(p + "kernel", "is '" + k + "', expected gaussian or multiquadric");
+        r.sigma = number(j, "sigma", p);
+        if (!(r.sigma > 0)) fail(p + "sigma", "is not positive");
+        const auto& c = get(j, "centres", p);
+        if (!c.is_array() || c.empty()) fail(p + "centres", "is not a non-empty array");
+        const std::size_t K = c.size();
+        r.centres = mat(j, "centres", p, K, in);
+        r.lambda = mat(j, "lambda", p, K, out);
+        r.linear = mat(j, "linear", p, in + 1, out);
+        return r;
+    }
+};
+
+}  // namespace detail
+
+/// @brief The model as JSON (see save_model()).
+inline nlohmann::json model_to_json(const rcm_model& m)
+{
+    using detail::to_json;
+    nlohmann::json j;
+    j["format"] = "handemo-rcm-model";
+    j["version"] = model_version;
+    j["paper"] = "Aristidou et al. 2017, Emotion control of unstructured dance movements (Section 3)";
+    j["feature_set"] = std::string(to_string(m.features));
+    j["lma"] = {{"up_axis", m.lma.up_axis}, {"window_frames_at_30", m.lma.window_frames_at_30}};
+    j["roles"] = m.roles;
+    j["normaliser"] = {{"lo", m.normaliser.lo}, {"hi", m.normaliser.hi}};
+    j["selected"] = m.selected;
+    j["selected_names"] = m.selected_names();
+    j["selection"] = {{"performer_kind", m.performer_kind}, {"performers", m.selection.performers}, {"emotions", m.selection.emotions},
+                      {"need_effective", m.selection.need_effective}, {"need_consistent", m.selection.need_consistent},
+                      {"survivors", m.selection.survivors}, {"fallback", m.selection.fallback}};
+    j["pca"] = {{"mean", to_json(m.pca.mean)}, {"components", to_json(m.pca.components)}, {"variances", to_json(m.pca.variances)},
+                {"total_variance", m.pca.total_variance}};
+    j["to_emotion"] = to_json(m.to_emotion);
+    j["to_features"] = to_json(m.to_features);
+    nlohmann::json labels = nlohmann::json::array();
+    for (const auto& l : m.labels) labels.push_back({{"name", l.name}, {"valence", l.valence}, {"arousal", l.arousal}});
+    j["labels"] = labels;
+    j["label_source"] = m.label_source;
+    j["training_clips"] = m.training_clips;
+    if (m.has_clusters) {
+        nlohmann::json med = nlohmann::json::array();
+        for (const auto& p : m.clusters.medoids) med.push_back(to_json(p));
+        j["clusters"] = {{"weights", m.clusters.weights}, {"height_weight", m.clusters.height_weight},
+                         {"height_scale", m.clusters.height_scale}, {"sizes", m.clusters.sizes}, {"medoids", med},
+                         {"selected", m.cluster_selected}, {"survivors", m.cluster_survivors}};
+    }
+    return j;
+}
+
+/// @brief Reads a model from JSON, validating every field.
+/// @throws format_error naming `file` and the field.
+inline rcm_model model_from_json(const nlohmann::json& j, const std::string& file)
+{
+    detail::model_reader rd{file};
+    if (rd.text(j, "format", "") != "handemo-rcm-model") rd.fail("format", "is not \"handemo-rcm-model\"");
+    const double ver = rd.number(j, "version", "");
+    if (ver != model_version) rd.fail("version", "is " + std::to_string(static_cast<int>(ver)) + ", this handemo reads " + std::to_string(model_version));
+    rcm_model m;
+    try {
+        m.features = feature_set_from_string(rd.text(j, "feature_set", ""));
+    } catch (const value_error&) {
+        rd.fail("feature_set", "is not 'body' or 'hand'");
+    }
+    const std::size_t D = derived_count(m.features);
+    const auto& lma = rd.get(j, "lma", "");
+    m.lma.up_axis = static_cast<int>(rd.number(lma, "up_axis", "lma."));
+    if (m.lma.up_axis < 0 || m.lma.up_axis > 2) rd.fail("lma.up_axis", "is not 0, 1 or 2");
+    m.lma.window_frames_at_30 = rd.number(lma, "window_frames_at_30", "lma.");
+    if (!(m.lma.window_frames_at_30 >= 2)) rd.fail("lma.window_frames_at_30", "is below 2");
+    m.roles = rd.get(j, "roles", "");
+    if (!m.roles.is_object()) rd.fail("roles", "is not an object");
+    for (const auto& [k, v] : m.roles.items()) {
+        try {
+            (void)role_from_string(k);
+        } catch (const value_error&) {
+            rd.fail("roles." + k, "is not a role");
+        }
+        if (!v.is_string()) rd.fail("roles." + k, "is not a joint name");
+    }
+    const auto& nm = rd.get(j, "normaliser", "");
+    const auto lo = rd.vec(nm, "lo", "normaliser.", D), hi = rd.vec(nm, "hi", "normaliser.", D);
+    m.normaliser.lo.assign(lo.begin(), lo.end());
+    m.normaliser.hi.assign(hi.begin(), hi.end());
+    m.selected = rd.indices(rd.get(j, "selected", ""), "selected", D);
+    if (m.selected.empty()) rd.fail("selected", "is empty");
+    const std::size_t S = m.selected.size();
+    const auto& sel = rd.get(j, "selection", "");
+    m.performer_kind = rd.text(sel, "performer_kind", "selection.");
+    m.selection.performers = static_cast<std::size_t>(rd.number(sel, "performers", "selection."));
+    m.selection.emotions = static_cast<std::size_t>(rd.number(sel, "emotions", "selection."));
+    m.selection.need_effective = static_cast<std::size_t>(rd.number(sel, "need_effective", "selection."));
+    m.selection.need_consistent = static_cast<std::size_t>(rd.number(sel, "need_consistent", "selection."));
+    m.selection.survivors = static_cast<std::size_t>(rd.number(sel, "survivors", "selection."));
+    if (!rd.get(sel, "fallback", "selection.").is_boolean()) rd.fail("selection.fallback", "is not true or false");
+    m.selection.fallback = sel.at("fallback").get<bool>();
+    m.selection.selected = m.selected;
+    const auto& pj = rd.get(j, "pca", "");
+    const auto& comps = rd.get(pj, "components", "pca.");
+    if (!comps.is_array() || comps.empty() || comps.size() > S) rd.fail("pca.components", "is not an array of 1 to " + std::to_string(S) + " rows");
+    const std::size_t d = comps.size();
+    m.pca.mean = rd.vec(pj, "mean", "pca.", S);
+    m.pca.components = rd.mat(pj, "components", "pca.", d, S);
+    m.pca.variances = rd.vec(pj, "variances", "pca.", d);
+    m.pca.total_variance = rd.number(pj, "total_variance", "pca.");
+    m.to_emotion = rd.rbf(j, "to_emotion", d, 2);
+    m.to_features = rd.rbf(j, "to_features", 2, S);
+    const auto& labels = rd.get(j, "labels", "");
+    if (!labels.is_array() || labels.empty()) rd.fail("labels", "is not a non-empty array");
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+        const std::string p = "labels[" + std::to_string(i) + "].";
+        label_point l;
+        l.name = rd.text(labels[i], "name", p);
+        l.valence = rd.number(labels[i], "valence", p);
+        l.arousal = rd.number(labels[i], "arousal", p);
+        if (std::abs(l.valence) > 1 || std::abs(l.arousal) > 1) rd.fail(p + "valence", "or arousal is outside [-1, 1]");
+        m.labels.push_back(l);
+    }
+    m.label_source = rd.text(j, "label_source", "");
+    m.training_clips = static_cast<std::size_t>(rd.number(j, "training_clips", ""));
+    if (j.contains("clusters")) {
+        const auto& cj = j.at("clusters");
+        m.has_clusters = true;
+        m.clusters.weights = rd.numbers(rd.get(cj, "weights", "clusters."), "clusters.weights");
+        m.clusters.height_weight = rd.number(cj, "height_weight", "clusters.");
+        m.clusters.height_scale = rd.number(cj, "height_scale", "clusters.");
+        if (!(m.clusters.height_scale > 0)) rd.fail("clusters.height_scale", "is not positive");
+        const auto sizes = rd.numbers(rd.get(cj, "sizes", "clusters."), "clusters.sizes");
+        for (double s : sizes) m.clusters.sizes.push_back(static_cast<std::size_t>(s));
+        const auto& med = rd.get(cj, "medoids", "clusters.");
+        if (!med.is_array() || med.empty()) rd.fail("clusters.medoids", "is not a non-empty array");
+        const std::size_t J = m.clusters.weights.size();
+        for (std::size_t c = 0; c < med.size(); ++c) {
+            const std::string p = "clusters.medoids[" + std::to_string(c) + "].";
+            pose ps;
+            ps.height = rd.number(med[c], "height", p);
+            const matrix q = rd.mat(med[c], "q", p, J, 4);
+            for (std::size_t k = 0; k < J; ++k) ps.q.push_back({q(k, 0), q(k, 1), q(k, 2), q(k, 3)});
+            m.clusters.medoids.push_back(std::move(ps));
+        }
+        const auto& cs = rd.get(cj, "selected", "clusters.");
+        if (!cs.is_array() || cs.size() != med.size()) rd.fail("clusters.selected", "does not have one list per medoid");
+        for (std::size_t c = 0; c < cs.size(); ++c)
+            m.cluster_selected.push_back(rd.indices(cs[c], "clusters.selected[" + std::to_string(c) + "]", D));
+        for (double s : rd.numbers(rd.get(cj, "survivors", "clusters."), "clusters.survivors")) m.cluster_survivors.push_back(static_cast<std::size_t>(s));
+        if (m.cluster_survivors.size() != med.size()) rd.fail("clusters.survivors", "does not have one count per medoid");
+    }
+    return m;
+}
+
+/// @brief Writes a model file atomically (JSON, `"format": "handemo-rcm-model"`, `"version": 1`).
+inline void save_model(const rcm_model& m, const std::filesystem::path& path)
+{
+    write_file_atomic(path, model_to_json(m).dump(1) + "\n");
+}
+
+/// @brief Reads and validates a model file.
+/// @throws io_error when it cannot be read, format_error naming the file and field when it is malformed.
+inline rcm_model load_model(const std::filesystem::path& path)
+{
+    const std::string text = read_file(path);
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw format_error("rcm model: " + path.string() + ": not JSON: " + e.what());
+    }
+    return model_from_json(j, path.string());
+}
+
+// ---- evaluation ----
+
+/// @brief One held-out clip's analysis.
+struct eval_sample {
+    std::string name, emotion, held_out;
+    double valence = 0, arousal = 0;  ///< predicted (clamped)
+    double true_valence = 0, true_arousal = 0;
+    double distance = 0;  ///< Euclidean distance on the circumplex
+    bool quadrant_ok = false;
+    double baseline_distance = 0;  ///< distance of the training set's mean label point (a constant predictor)
+};
+
+/// @brief The leave-one-group-out evaluation.
+struct eval_report {
+    std::vector<eval_sample> samples;
+    std::vector<std::string> folds;
+    std::vector<std::string> failed_folds;  ///< folds whose fit failed, with the reason
+    double mean_distance = 0, quadrant_accuracy = 0, baseline_distance = 0, baseline_quadrant_accuracy = 0;
+    double mean_selected = 0, mean_pca_dims = 0;
+};
+
+/// @brief Leave-one-group-out evaluation of the analysis: for each value of `group` (content or take), fit on
+/// the other clips (no pose clusters: analysis does not use them) and analyse the held-out ones.
+inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const std::vector<std::string>& group,
+                                const circumplex_table& table, const std::string& table_name, const fit_options& opt)
+{
+    if (group.size() != clips.size()) throw shape_error("rcm eval: one group per clip needed");
+    feature_set fs{};
+    const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
+    const auto feats = compute_features(clips, r, fs, opt.lma, opt.show_progress);
+    eval_report rep;
+    rep.folds = detail::sorted_unique(group);
+    progress bar("rcm eval folds", static_cast<long>(rep.folds.size()), opt.show_progress ? stderr : nullptr);
+    std::size_t fitted = 0, qbase = 0;
+    for (std::size_t f = 0; f < rep.folds.size(); ++f) {
+        std::vector<std::size_t> train, test;
+        for (std::size_t i = 0; i < clips.size(); ++i) (group[i] == rep.folds[f] ? test : train).push_back(i);
+        rcm_model m;
+        try {
+            m = fit_from_features(clips, feats, train, fs, table, table_name, opt);
+        } catch (const error& e) {
+            rep.failed_folds.push_back(rep.folds[f] + ": " + e.what());
+            bar.update(static_cast<long>(f + 1));
+            continue;
+        }
+        ++fitted;
+        rep.mean_selected += static_cast<double>(m.selected.size());
+        rep.mean_pca_dims += static_cast<double>(m.pca.dims());
+        double bv = 0, ba = 0;
+        for (std::size_t i : train) {
+            const auto& l = table.at(clips[i].emotion, table_name);
+            bv += l.valence / static_cast<double>(train.size());
+            ba += l.arousal / static_cast<double>(train.size());
+        }
+        for (std::size_t i : test) {
+            const vector all = m.normaliser.apply(feats[i].mean);
+            vector s = xt::zeros<double>({m.selected.size()});
+            for (std::size_t k = 0; k < m.selected.size(); ++k) s(k) = all(m.selected[k]);
+            const analysis a = m.analyse_features(s);
+            const auto& l = table.at(clips[i].emotion, table_name);
+            eval_sample es;
+            es.name = clips[i].name;
+            es.emotion = clips[i].emotion;
+            es.held_out = rep.folds[f];
+            es.valence = a.valence, es.arousal = a.arousal;
+            es.true_valence = l.valence, es.true_arousal = l.arousal;
+            es.distance = std::hypot(a.valence - l.valence, a.arousal - l.arousal);
+            es.quadrant_ok = a.quadrant == quadrant(l.valence, l.arousal);
+            es.baseline_distance = std::hypot(bv - l.valence, ba - l.arousal);
+            qbase += quadrant(bv, ba) == quadrant(l.valence, l.arousal) ? 1 : 0;
+            rep.samples.push_back(es);
+        }
+        bar.update(static_cast<long>(f + 1));
+    }
+    const double n = static_cast<double>(rep.samples.size());
+    for (const auto& s : rep.samples) {
+        rep.mean_distance += s.distance / n;
+        rep.quadrant_accuracy += (s.quadrant_ok ? 1.0 : 0.0) / n;
+        rep.baseline_distance += s.baseline_distance / n;
+    }
+    rep.baseline_quadrant_accuracy = n > 0 ? static_cast<double>(qbase) / n : 0;
+    if (fitted) rep.mean_selected /= static_cast<double>(fitted), rep.mean_pca_dims /= static_cast<double>(fitted);
+    return rep;
+}
+
+}  // namespace handemo::rcm

@@ -1,0 +1,194 @@
+// The whole analysis on a small synthetic hand set: fit, exactness at the emotion centres (Eq. 1 and 3),
+// analysis, the model file round trip and malformed files, the circumplex table, the evaluation.
+#include <handemo/rcm.hpp>
+#include <handemo/motion.hpp>
+
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+using namespace handemo;
+using doctest::Approx;
+
+namespace {
+
+struct fixture {
+    std::vector<synth_item> data = synthesize_dataset(1, 7, 30.0);
+    std::vector<rcm::training_clip> clips;
+    rcm::circumplex_table table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
+    rcm::fit_options opt;
+    fixture()
+    {
+        for (const auto& it : data) clips.push_back({&it.c, std::string(to_string(it.emo)), std::string(to_string(it.motion)), it.file_stem});
+        opt.clustering.max_samples = 300;
+        opt.selection.min_features = 12;
+    }
+};
+
+const fixture& shared()
+{
+    static const fixture f;
+    return f;
+}
+
+const rcm::rcm_model& fitted()
+{
+    static const rcm::rcm_model m = rcm::fit_model(shared().clips, shared().table, "circumplex.json", shared().opt);
+    return m;
+}
+
+std::filesystem::path tmp_dir()
+{
+    const auto d = std::filesystem::temp_directory_path() / "handemo_rcm_model_test";
+    std::filesystem::create_directories(d);
+    return d;
+}
+
+}  // namespace
+
+TEST_CASE("circumplex: the label table with its citation")
+{
+    const auto& t = shared().table;
+    CHECK(t.source.find("Warriner") != std::string::npos);
+    CHECK(t.at("happy").valence == Approx((8.47 - 5) / 4));
+    CHECK(t.at("happy").arousal == Approx((6.05 - 5) / 4));
+    CHECK(t.at("sad").valence < 0);
+    CHECK(t.at("sad").arousal < 0);
+    for (const char* l : {"active", "angry", "happy", "normal", "not-confident", "proud", "sad", "tired", "neutral", "fearful"})
+        CHECK_NOTHROW(t.at(l));
+    CHECK_THROWS_WITH_AS(t.at("bored", "x.json"), doctest::Contains("'bored'"), value_error);
+    CHECK(rcm::quadrant(0.5, 0.5) == 1);
+    CHECK(rcm::quadrant(-0.5, 0.5) == 2);
+    CHECK(rcm::quadrant(-0.5, -0.5) == 3);
+    CHECK(rcm::quadrant(0.5, -0.5) == 4);
+    CHECK_THROWS_WITH_AS(rcm::parse_circumplex(R"({"format": "handemo-rcm-circumplex", "version": 1, "labels": {}})", "c.json"),
+                         doctest::Contains("c.json: missing field 'source'"), format_error);
+    CHECK_THROWS_WITH_AS(rcm::parse_circumplex(R"({"format": "handemo-rcm-circumplex", "version": 1, "source": "x",
+                                                  "labels": {"a": {"valence": 2, "arousal": 0}}})", "c.json"),
+                         doctest::Contains("labels.a."), format_error);
+}
+
+TEST_CASE("model: fit on the synthetic hand set")
+{
+    const auto& m = fitted();
+    CHECK(m.features == rcm::feature_set::hand);
+    CHECK(m.labels.size() == 5);
+    CHECK(m.selected.size() >= 12);
+    CHECK(m.pca.dims() >= 1);
+    CHECK(m.pca.dims() <= m.selected.size());
+    CHECK(m.has_clusters);
+    CHECK(m.clusters.count() == 5);
+    CHECK(m.cluster_selected.size() == 5);
+    CHECK(m.selection.performers == 7);  // the contents
+    CHECK(m.selection.emotions == 5);
+    // Eq. 1 passes through each emotion's coordinates at that emotion's mean features
+    for (std::size_t k = 0; k < m.labels.size(); ++k) {
+        const rcm::vector c = xt::view(m.to_emotion.centres, k, xt::all());
+        const auto e = m.to_emotion(c);
+        CHECK(e(0) == Approx(m.labels[k].valence));
+        CHECK(e(1) == Approx(m.labels[k].arousal));
+    }
+    // Eq. 3 gives each emotion's mean selected features at its coordinates
+    const auto& sh = shared();
+    const std::string emo = "sad";
+    const auto& d = rcm::derived_features(m.features);
+    (void)d;
+    rcm::vector mean = xt::zeros<double>({m.selected.size()});
+    double n = 0;
+    for (const auto& c : sh.clips) {
+        if (c.emotion != emo) continue;
+        const auto r = m.roles_for(c.motion->skel);
+        mean += m.selected_features(rcm::world_positions(*c.motion), c.motion->fps, r);
+        n += 1;
+    }
+    mean /= n;
+    const auto& l = sh.table.at(emo);
+    const auto want = m.desired_features(l.valence, l.arousal);
+    for (std::size_t i = 0; i < mean.size(); ++i) CHECK(want(i) == Approx(mean(i)).epsilon(1e-6));
+}
+
+TEST_CASE("model: analysis of a clip is a clamped circumplex point")
+{
+    const auto& m = fitted();
+    const auto a = m.analyse(shared().data.front().c);
+    CHECK(std::abs(a.valence) <= 1.0);
+    CHECK(std::abs(a.arousal) <= 1.0);
+    CHECK(a.quadrant == rcm::quadrant(a.valence, a.arousal));
+    // a body clip has no hand roles
+    auto body = clip::make(skeleton{"b", {joint{"Hips", -1}, joint{"Head", 0}}}, 40, 30);
+    CHECK_THROWS_WITH_AS(m.analyse(body), doctest::Contains("role 'wrist'"), value_error);
+}
+
+TEST_CASE("model: file round trip")
+{
+    const auto& m = fitted();
+    const auto path = tmp_dir() / "model.json";
+    rcm::save_model(m, path);
+    const auto m2 = rcm::load_model(path);
+    CHECK(rcm::model_to_json(m2) == rcm::model_to_json(m));
+    const auto a = m.analyse(shared().data[3].c), b = m2.analyse(shared().data[3].c);
+    CHECK(a.valence == b.valence);
+    CHECK(a.arousal == b.arousal);
+}
+
+TEST_CASE("model: malformed files are errors naming the file and the field")
+{
+    const auto good = rcm::model_to_json(fitted());
+    const auto dir = tmp_dir();
+    auto expect = [&](nlohmann::json j, const std::string& field) {
+        const auto p = dir / "bad.json";
+        std::ofstream(p) << j.dump();
+        CHECK_THROWS_WITH_AS(rcm::load_model(p), doctest::Contains("bad.json: field '" + field + "'"), format_error);
+    };
+    auto j = good;
+    j.erase("pca");
+    expect(j, "pca");
+    j = good;
+    j["version"] = 2;
+    expect(j, "version");
+    j = good;
+    j["format"] = "something-else";
+    expect(j, "format");
+    j = good;
+    j["pca"]["mean"].push_back(1.0);
+    expect(j, "pca.mean");
+    j = good;
+    j["to_emotion"]["sigma"] = -1;
+    expect(j, "to_emotion.sigma");
+    j = good;
+    j["to_features"]["lambda"][0][0] = "x";
+    expect(j, "to_features.lambda[0][0]");
+    j = good;
+    j["selected"][0] = 5000;
+    expect(j, "selected[0]");
+    j = good;
+    j["labels"][0]["valence"] = 3;
+    expect(j, "labels[0].valence");
+    j = good;
+    j["feature_set"] = "tail";
+    expect(j, "feature_set");
+    j = good;
+    j["clusters"]["medoids"][0]["q"].erase(0);
+    expect(j, "clusters.medoids[0].q");
+    std::ofstream(dir / "notjson.json") << "{ nope";
+    CHECK_THROWS_WITH_AS(rcm::load_model(dir / "notjson.json"), doctest::Contains("notjson.json: not JSON"), format_error);
+    CHECK_THROWS_AS(rcm::load_model(dir / "missing.json"), io_error);
+}
+
+TEST_CASE("model: leave-one-content-out evaluation runs every fold")
+{
+    const auto& sh = shared();
+    std::vector<std::string> group;
+    for (const auto& c : sh.clips) group.push_back(c.performer);
+    auto opt = sh.opt;
+    opt.cluster = false;
+    const auto r = rcm::evaluate_loo(sh.clips, group, sh.table, "circumplex.json", opt);
+    CHECK(r.folds.size() == 7);
+    CHECK(r.samples.size() + 5 * r.failed_folds.size() == sh.clips.size());
+    CHECK(r.mean_distance >= 0);
+    CHECK(r.mean_distance <= 2 * std::sqrt(2.0));
+    CHECK(r.quadrant_accuracy >= 0);
+    CHECK(r.quadrant_accuracy <= 1);
+}
