@@ -284,16 +284,20 @@ public:
         detail::fk_context ctx{&s, layout_, positions.data(), pts};
         std::vector<double> jac(m * n), A(m * m), y(m), dq(n), qn(n), r(m);
         std::vector<char> locked(n);
+        bool fresh = false;  // jac and r belong to the current q
         for (int it = 0; it < opt_.max_iterations && std::sqrt(err / wsum) > opt_.tolerance; ++it) {
             rep.iterations = it + 1;
-            // residual r = sqrt(w) (target - FK(q)) on the tape; its Jacobian by reverse sweeps.
-            tp.reset();
-            const int qid = tp.leaf_copy(q.data(), n, true);
-            const int fk = detail::fk_points(tp, qid, ctx);
-            const int res = autodiff::detail::mul_raw(
-                tp, autodiff::detail::sub_raw(tp, tp.leaf_copy(tgt.data(), m, false), fk), tp.leaf_copy(sw.data(), m, false));
-            detail::reverse_jacobian(tp, res, qid, jac.data());
-            std::copy(tp.at(res).value, tp.at(res).value + m, r.begin());
+            if (!fresh) {
+                // residual r = sqrt(w) (target - FK(q)) on the tape; its Jacobian by reverse sweeps.
+                tp.reset();
+                const int qid = tp.leaf_copy(q.data(), n, true);
+                const int fk = detail::fk_points(tp, qid, ctx);
+                const int res = autodiff::detail::mul_raw(
+                    tp, autodiff::detail::sub_raw(tp, tp.leaf_copy(tgt.data(), m, false), fk), tp.leaf_copy(sw.data(), m, false));
+                detail::reverse_jacobian(tp, res, qid, jac.data());
+                std::copy(tp.at(res).value, tp.at(res).value + m, r.begin());
+                fresh = true;
+            }
             // Minimise |r + J dq|^2 + lambda^2 |dq|^2 over the free DOFs: dq = -J^T (J J^T + lambda^2 I)^-1 r.
             std::fill(locked.begin(), locked.end(), 0);
             for (int pass = 0; pass < 4; ++pass) {
@@ -326,8 +330,11 @@ public:
             const double en = error(qn);
             if (en < err) {
                 q.swap(qn);
+                const double gain = err - en;
                 err = en;
+                fresh = false;
                 lambda = std::max(opt_.min_damping, lambda * 0.3);
+                if (gain <= 1e-9 * err) break;  // converged to what it can reach (targets out of reach)
             } else {
                 lambda *= 4.0;
                 if (lambda > 1e8) break;
