@@ -2,7 +2,7 @@
 // et al. 2017. The model's multiquadric RBF (Eq. 3-4) gives the selected, normalised features at (V, A);
 // each one that the synthesis can differentiate (a max/min/std/mean over the sliding window of a basic
 // feature in features_ad.hpp) becomes a target of Eq. 6 in the feature's units (lo + f (hi - lo), residual
-// scaled by hi - lo); the rule coefficients are fitted jointly, every fifth frame is moved by IK and the
+// scaled by hi - lo, then calibrated for keyframe sampling, see below); the rule coefficients are fitted jointly, every fifth frame is moved by IK and the
 // clip is splined back to full rate (duration / c4). Prints what it targeted, the Eq. 6 losses, the
 // coefficients and `rcm analyse` of the input and of the output.
 #pragma once
@@ -20,6 +20,7 @@ struct stylise_run {
     std::string model, input, out;
     double valence = 0, arousal = 0;
     int iterations = 100;
+    double bound = 0.7;
     bool frame_rate = false;
 };
 
@@ -55,6 +56,7 @@ inline void run_stylise(const stylise_run& o)
     }
     std::vector<rc::feature_target> targets;
     std::vector<std::string> skipped;
+    std::vector<std::size_t> target_index;  // derived-feature index of each target
     for (std::size_t i = 0; i < m.selected.size(); ++i) {
         const auto& d = derived[m.selected[i]];
         const std::string key(basic[d.basic].key);
@@ -74,6 +76,34 @@ inline void run_stylise(const stylise_run& o)
         }
         const double f = std::clamp(desired(i), 0.0, 1.0);
         targets.push_back({key, st, lo + f * (hi - lo), 1.0, hi - lo});
+        target_index.push_back(m.selected[i]);
+    }
+    rc::synth_options opt;
+    opt.roles = roles;
+    opt.up = m.lma.up_axis;
+    opt.max_iterations = o.iterations;
+    opt.bound = o.bound;
+    opt.window = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(static_cast<double>(rc::window_length(c.fps, m.lma)) /
+                                                                            static_cast<double>(opt.keyframe_step))));
+    if (o.frame_rate) opt.time = rc::time_mode::frame_rate;
+    // Calibration: the model's features are taken on every frame, the synthesis sees keyframes 5 frames
+    // apart, which smooths accelerations and jerk. Each target is scaled by (keyframe statistic / frame
+    // statistic) of the input, so the fit asks for the model's relative change, not for the sampling bias.
+    if (!targets.empty()) {
+        clip u = c;
+        unwrap_angles(u);
+        const rc::rig r = rc::make_rig(u.skel, roles, opt.up);
+        const auto kp = rc::sample_control_points(r, u, rc::keyframe_indices(u.frames, opt.keyframe_step));
+        rc::objective obj(r, kp, targets, opt.window, opt.bound);
+        const auto at_keyframes = obj.statistics(std::vector<double>(r.coefficients(), 0.0));
+        const auto at_frames = rc::clip_features(rc::world_positions(c), c.fps, roles, m.features, m.lma);
+        for (std::size_t t = 0; t < targets.size(); ++t) {
+            const double kf = at_keyframes[t], fr = at_frames(target_index[t]);
+            if (std::abs(kf) > 1e-12 && std::abs(fr) > 1e-12 && (kf > 0) == (fr > 0)) {
+                targets[t].value *= kf / fr;
+                targets[t].scale *= kf / fr;
+            }
+        }
     }
     std::cout << "rcm stylise: " << targets.size() << " of " << m.selected.size() << " selected features targeted";
     if (!skipped.empty()) {
@@ -84,13 +114,6 @@ inline void run_stylise(const stylise_run& o)
     std::cout << "\n";
     if (targets.empty())
         throw handemo::value_error("rcm stylise: none of the model's selected features is one the rules can reach; nothing to optimise");
-    rc::synth_options opt;
-    opt.roles = roles;
-    opt.up = m.lma.up_axis;
-    opt.max_iterations = o.iterations;
-    opt.window = std::max<std::size_t>(1, static_cast<std::size_t>(std::lround(static_cast<double>(rc::window_length(c.fps, m.lma)) /
-                                                                            static_cast<double>(opt.keyframe_step))));
-    if (o.frame_rate) opt.time = rc::time_mode::frame_rate;
     const auto res = rc::stylise(c, targets, opt);
     handemo::write_bvh(o.out, res.motion);
     const auto names = rc::coefficient_names(res.fit.coefficients.size() == rc::body_coefficient_count ? rc::rig_kind::body : rc::rig_kind::hand);
@@ -119,6 +142,7 @@ inline void add_stylise(CLI::App& rcm)
     sub->add_option("--arousal", o->arousal, "Target arousal in [-1, 1]")->required();
     sub->add_option("--out", o->out, "Output BVH")->required();
     sub->add_option("--iters", o->iterations, "BFGS iterations of the joint coefficient fit")->capture_default_str();
+    sub->add_option("--bound", o->bound, "Largest |coefficient| (c = e^a within [e^-bound, e^bound] for g1, g2, g4)")->capture_default_str();
     sub->add_flag("--frame-rate", o->frame_rate, "Apply g4 as a frame rate (same frames, fps * c4) instead of resampling");
     sub->callback([o] { run_stylise(*o); });
 }

@@ -146,6 +146,15 @@ public:
         }
         return tape_.at(loss).value[0];
     }
+    /// @brief The value of each target's statistic at z (what the residual compares with its value).
+    std::vector<double> statistics(std::span<const double> z)
+    {
+        tape_.reset();
+        build(z, false);
+        std::vector<double> v;
+        for (int id : stat_ids_) v.push_back(tape_.at(id).value[0]);
+        return v;
+    }
     /// @brief Loss of the rule-free points `points` ([points][K, 3]) with frame-rate factor exp(a4): how well
     /// an IK result achieves the targets.
     double loss_of_points(const std::vector<std::vector<double>>& points, double a4)
@@ -177,6 +186,7 @@ private:
         const rule_nodes rn = apply_rules(t, *rig_, *kp_, a);
         const feature_nodes f = differentiable_features(t, *rig_, kp_->times, kp_->ground, rn);
         int loss = -1;
+        stat_ids_.clear();
         for (const auto& tg : targets_) {
             const int x = f.at(tg.feature);
             int s = -1;
@@ -202,6 +212,7 @@ private:
                 break;
             }
             }
+            stat_ids_.push_back(tg.stat == statistic::windowed_mean ? mean_all_id(s) : s);
             const double sc = tg.scale > 0 ? tg.scale : 1.0;
             const int r = ad::affine_raw(t, s, 1.0 / sc, -tg.value / sc);
             const int term = ad::affine_raw(t, detail::mean_all(t, ad::unary_raw(t, r, ad::unary::square_)), tg.weight, 0.0);
@@ -211,8 +222,11 @@ private:
         return {loss, zid};
     }
 
+    int mean_all_id(int x) { return detail::mean_all(tape_, x); }
+
     const rig* rig_;
     const keyframe_points* kp_;
+    std::vector<int> stat_ids_;
     std::vector<feature_target> targets_;
     double bound_;
     autodiff::tape<double> tape_;
