@@ -7,11 +7,13 @@
 #include "rcm/fit.hpp"
 #include "rcm/analyse.hpp"
 #include "rcm/eval.hpp"
+#include "rcm/stylise.hpp"
 
 static handemo::cli::add_command reg_rcm{70, [](CLI::App& app) {
-    auto* rcm = app.add_subcommand("rcm", "Continuous emotion on the circumplex (Aristidou et al. 2017): fit, analyse, eval");
+    auto* rcm = app.add_subcommand("rcm", "Continuous emotion on the circumplex (Aristidou et al. 2017): fit, analyse, eval, stylise");
     rcm->require_subcommand(1);
     handemo::cli::rcm_cmd::add_fit(*rcm);
     handemo::cli::rcm_cmd::add_analyse(*rcm);
     handemo::cli::rcm_cmd::add_eval(*rcm);
+    handemo::cli::rcm_cmd::add_stylise(*rcm);
 }};

@@ -12,3 +12,9 @@
 #include <handemo/rcm/cluster.hpp>
 #include <handemo/rcm/circumplex.hpp>
 #include <handemo/rcm/model.hpp>
+// Synthesis (Section 4): the rules of Table 2 on the autodiff tape, differentiable features, the Eq. 6
+// objective optimised jointly, damped least-squares IK, spline back to full rate.
+#include <handemo/rcm/ik.hpp>
+#include <handemo/rcm/rules.hpp>
+#include <handemo/rcm/features_ad.hpp>
+#include <handemo/rcm/synth.hpp>

@@ -1,0 +1,129 @@
+// The damped least-squares IK: bone lengths exactly kept, joint limits respected, reachable targets reached.
+#include "helpers.hpp"
+
+#include <doctest/doctest.h>
+
+#include <random>
+
+using namespace handemo;
+
+namespace {
+
+std::vector<rcm::ik_target> targets_of(const skeleton& s, const std::vector<double>& ang, const std::vector<double>& pos,
+                                       const std::vector<rcm::skeleton_point>& pts)
+{
+    const auto fk = forward_kinematics(s, ang.data(), pos.data());
+    std::vector<rcm::ik_target> t;
+    for (const auto& p : pts) {
+        const auto j = static_cast<std::size_t>(p.joint);
+        t.push_back({p, p.end_site ? fk.end_sites[j] : fk.joints[j], 1.0});
+    }
+    return t;
+}
+
+double max_distance(const skeleton& s, const std::vector<double>& ang, const std::vector<double>& pos,
+                    const std::vector<rcm::ik_target>& tg)
+{
+    const auto fk = forward_kinematics(s, ang.data(), pos.data());
+    double m = 0;
+    for (const auto& t : tg) {
+        const auto j = static_cast<std::size_t>(t.point.joint);
+        const vec3 p = t.point.end_site ? fk.end_sites[j] : fk.joints[j];
+        m = std::max(m, std::hypot(p[0] - t.position[0], p[1] - t.position[1], p[2] - t.position[2]));
+    }
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("rcm ik: the hand reaches reachable wrist and tip targets within its joint limits")
+{
+    const skeleton s = hand_skeleton();
+    const rcm::rig r = rcm::make_rig(s);
+    rcm::ik_solver ik(s, r.translation_joint);
+    std::mt19937 rng(3);
+    int reached = 0;
+    for (int trial = 0; trial < 10; ++trial) {
+        // A random pose inside the limits is the answer; start from another one nearby.
+        std::vector<double> goal(s.size() * 3), start(s.size() * 3), pos(s.size() * 3);
+        for (std::size_t j = 0; j < s.size(); ++j)
+            for (std::size_t a = 0; a < 3; ++a) {
+                const double lo = s.joints[j].lower_limit[a], hi = s.joints[j].upper_limit[a];
+                std::uniform_real_distribution<double> u(lo, hi);
+                goal[j * 3 + a] = u(rng);
+                start[j * 3 + a] = std::clamp(goal[j * 3 + a] + std::uniform_real_distribution<double>(-15, 15)(rng), lo, hi);
+                pos[j * 3 + a] = s.joints[j].offset[a];
+            }
+        const auto tg = targets_of(s, goal, pos, r.points);
+        auto q = start;
+        auto p = pos;
+        p[0] += 0.5;  // the forearm starts 5 mm off
+        const auto rep = ik.solve(q, p, tg);
+        CHECK(rep.rms_after <= rep.rms_before);
+        for (std::size_t j = 0; j < s.size(); ++j)
+            for (std::size_t a = 0; a < 3; ++a) {
+                CHECK(q[j * 3 + a] >= s.joints[j].lower_limit[a] - 1e-12);
+                CHECK(q[j * 3 + a] <= s.joints[j].upper_limit[a] + 1e-12);
+            }
+        if (max_distance(s, q, p, tg) < 1e-3) ++reached;
+    }
+    CHECK(reached >= 9);
+}
+
+TEST_CASE("rcm ik: a body reaches moved pelvis, head and hand targets with feet pinned; bones keep their lengths")
+{
+    const clip c = test::humanoid_dance(30);
+    const rcm::rig r = rcm::make_rig(c.skel);
+    rcm::ik_solver ik(c.skel, r.translation_joint);
+    const std::size_t J3 = c.skel.size() * 3;
+    for (std::size_t f : {0u, 7u, 19u}) {
+        // The answer: the dance's pose f with other angles (reachable by construction); start from frame f.
+        std::vector<double> goal(c.frame_angles(f), c.frame_angles(f) + J3), pos(c.frame_positions(f), c.frame_positions(f) + J3);
+        for (std::size_t i = 3; i < J3; ++i) goal[i] += 12.0 * std::sin(static_cast<double>(i) * 1.7 + static_cast<double>(f));
+        auto gpos = pos;
+        gpos[1] -= 6.0;  // pelvis 6 cm lower
+        const auto tg = targets_of(c.skel, goal, gpos, r.points);
+        std::vector<double> q(c.frame_angles(f), c.frame_angles(f) + J3), p = pos;
+        const double before = max_distance(c.skel, q, p, tg);
+        rcm::ik_options o;
+        o.max_iterations = 100;
+        rcm::ik_solver ik2(c.skel, r.translation_joint, o);
+        ik2.solve(q, p, tg);
+        CHECK(before > 5.0);
+        CHECK(max_distance(c.skel, q, p, tg) < 1e-3);
+        // bone lengths: every joint's distance to its parent equals the rest offset's length (to rounding)
+        const auto fk = forward_kinematics(c.skel, q.data(), p.data());
+        for (std::size_t j = 1; j < c.skel.size(); ++j) {
+            const auto pj = static_cast<std::size_t>(c.skel.joints[j].parent);
+            const auto& o3 = c.skel.joints[j].offset;
+            const double rest = std::hypot(o3[0], o3[1], o3[2]);
+            CHECK(std::hypot(fk.joints[j][0] - fk.joints[pj][0], fk.joints[j][1] - fk.joints[pj][1],
+                             fk.joints[j][2] - fk.joints[pj][2]) == doctest::Approx(rest).epsilon(1e-12));
+        }
+    }
+}
+
+TEST_CASE("rcm ik: unreachable targets leave limits and bone lengths intact and reduce the error")
+{
+    const skeleton s = hand_skeleton();
+    const rcm::rig r = rcm::make_rig(s);
+    rcm::ik_solver ik(s, -1);  // forearm fixed: the tips cannot reach a point 1 m away
+    std::vector<double> q(s.size() * 3, 0.0), p(s.size() * 3);
+    for (std::size_t j = 0; j < s.size(); ++j)
+        for (int a = 0; a < 3; ++a) p[j * 3 + a] = s.joints[j].offset[a];
+    std::vector<rcm::ik_target> tg;
+    for (std::size_t f = 0; f < 5; ++f) tg.push_back({r.points[2 + f], {0.0, -100.0, 30.0}, 1.0});
+    const auto rep = ik.solve(q, p, tg);
+    CHECK(rep.rms_after < rep.rms_before);
+    for (std::size_t j = 0; j < s.size(); ++j)
+        for (std::size_t a = 0; a < 3; ++a) {
+            CHECK(q[j * 3 + a] >= s.joints[j].lower_limit[a] - 1e-12);
+            CHECK(q[j * 3 + a] <= s.joints[j].upper_limit[a] + 1e-12);
+        }
+    bool some_at_limit = false;
+    for (std::size_t j = 0; j < s.size(); ++j)
+        for (std::size_t a = 0; a < 3; ++a)
+            some_at_limit = some_at_limit || q[j * 3 + a] == s.joints[j].upper_limit[a] || q[j * 3 + a] == s.joints[j].lower_limit[a];
+    CHECK(some_at_limit);
+    CHECK_THROWS_AS(ik.solve(q, p, std::vector<rcm::ik_target>{{{99, false}, {}, 1.0}}), shape_error);
+}
