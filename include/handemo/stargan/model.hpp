@@ -56,6 +56,13 @@ struct body_embedded {
     static constexpr std::size_t joints = 22, keyframes = 9, domains = 8, conv_dim = 32, res_blocks = 3,
                                  d_repeat = 3, batch = 1;
 };
+/// @brief Hand, microcontroller size (a glove's Cortex-M7): hand_embedded at a quarter of the width
+/// (conv_dim 8, 3 residual blocks), 80,632 parameters = 322,528 bytes of float weights, so the weights fit in
+/// flash as float and the activations of one inference in 30 KB of RAM (handemo::micro::generator).
+struct hand_micro {
+    static constexpr std::size_t joints = 23, keyframes = 9, domains = 5, conv_dim = 8, res_blocks = 3,
+                                 d_repeat = 3, batch = 1;
+};
 /// @brief Any config with another batch size: `with_batch<hand_embedded, 16>`.
 template <stargan_config Config, std::size_t N>
 struct with_batch : Config {
@@ -295,6 +302,13 @@ public:
             std::size_t s = 0;
             for (const auto& g : geometries()) s = std::max(s, kernels::conv2d_scratch_size<T>(g));
             scratch_ = aligned_buffer<T>(std::max<std::size_t>(s, 1));
+        }
+        /// @brief Bytes of activation memory one infer() uses (the four buffers and the kernels' scratch).
+        std::size_t bytes() const noexcept
+        {
+            std::size_t n = scratch_.size();
+            for (const auto& b : buf_) n += b.size();
+            return n * sizeof(T);
         }
 
     private:
