@@ -3,10 +3,19 @@
 # Usage: ./setup.sh            build, test and demo dependencies
 #        ./setup.sh --golden   also python3-torch, to regenerate the PyTorch golden fixtures and run
 #                              the side-by-side benchmark (bench/compare.sh)
+#        ./setup.sh --cross    also the cross toolchains and emulators of the CTest label `cross`: aarch64
+#                              (g++-aarch64-linux-gnu, qemu-user) and Cortex-M7 (gcc-arm-none-eabi,
+#                              libstdc++-arm-none-eabi-newlib, qemu-system-arm)
 set -euo pipefail
 pkgs=(g++ cmake make pkg-config libxtensor-dev libxsimd-dev xtl-dev nlohmann-json3-dev libstb-dev
       libhidapi-dev doctest-dev libbenchmark-dev libcli11-dev)
-if [[ "${1:-}" == "--golden" ]]; then pkgs+=(python3 python3-torch python3-numpy); fi
+for arg in "$@"; do
+  case "$arg" in
+    --golden) pkgs+=(python3 python3-torch python3-numpy) ;;
+    --cross) pkgs+=(g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib qemu-system-arm) ;;
+    *) echo "setup.sh: unknown option $arg (expected --golden or --cross)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
