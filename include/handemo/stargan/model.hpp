@@ -303,13 +303,6 @@ public:
             for (const auto& g : geometries()) s = std::max(s, kernels::conv2d_scratch_size<T>(g));
             scratch_ = aligned_buffer<T>(std::max<std::size_t>(s, 1));
         }
-        /// @brief Bytes of activation memory one infer() uses (the four buffers and the kernels' scratch).
-        std::size_t bytes() const noexcept
-        {
-            std::size_t n = scratch_.size();
-            for (const auto& b : buf_) n += b.size();
-            return n * sizeof(T);
-        }
 
     private:
         friend class generator;
