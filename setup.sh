@@ -7,6 +7,9 @@
 #        ./setup.sh --chromium    accepted for clarity: chromium is in the default set
 #        ./setup.sh --golden      also python3-torch, to regenerate the PyTorch golden fixtures and run
 #                                 the side-by-side benchmark (bench/compare.sh)
+#        ./setup.sh --cross       also the cross toolchains and emulators of the CTest label `cross`: aarch64
+#                                 (g++-aarch64-linux-gnu, qemu-user) and Cortex-M7 (gcc-arm-none-eabi,
+#                                 libstdc++-arm-none-eabi-newlib, qemu-system-arm)
 set -euo pipefail
 # libgif-dev: giflib, the animated GIFs of `handemo render --animate` and the demo (target handemo::gif).
 pkgs=(g++ cmake make pkg-config libxtensor-dev libxsimd-dev xtl-dev nlohmann-json3-dev libstb-dev libgif-dev
@@ -16,9 +19,10 @@ browser=1
 for arg in "$@"; do
   case "$arg" in
     --golden) pkgs+=(python3 python3-torch python3-numpy) ;;
+    --cross) pkgs+=(g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib qemu-system-arm) ;;
     --chromium) browser=1 ;;
     --no-browser) browser=0 ;;
-    *) echo "setup.sh: unknown option $arg (expected --golden, --chromium, --no-browser)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown option $arg (expected --golden, --cross, --chromium, --no-browser)" >&2; exit 2 ;;
   esac
 done
 if ((browser)); then pkgs+=(chromium); fi

@@ -9,6 +9,7 @@
 #include <handemo/motion.hpp>
 #include <handemo/tensor.hpp>
 #include <handemo/kernels.hpp>
+#include <handemo/micro.hpp>
 #include <handemo/autodiff.hpp>
 #include <handemo/nn.hpp>
 #include <handemo/stargan.hpp>

@@ -1,4 +1,4 @@
-// The StarGAN subcommands (train, transfer, demo, eval) in one translation unit: each instantiates the trainer
+// The StarGAN subcommands (train, transfer, demo, eval, export) in one translation unit: each instantiates the trainer
 // and the generator for every named configuration, and compiling those once instead of once per
 // subcommand halves the CLI's build time.
 #include "registry.hpp"
@@ -8,6 +8,7 @@
 #include "stargan/transfer.hpp"
 #include "stargan/demo.hpp"
 #include "stargan/eval.hpp"
+#include "stargan/export.hpp"
 
 namespace handemo::cli {
 /// For `handemo glove live` (cmd_glove.cpp), so that the glove's translation unit does not compile every

@@ -4,6 +4,7 @@
 
 #include <handemo/stargan/configs.hpp>
 #include <handemo/stargan/dataset.hpp>
+#include <handemo/stargan/export.hpp>
 #include <handemo/stargan/gate.hpp>
 #include <handemo/stargan/model.hpp>
 #include <handemo/stargan/train.hpp>

@@ -55,7 +55,7 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     auto o = std::make_shared<eval_cli>();
     auto& t = o->opt.train;
     sub->add_option("--data", o->data, "Folder of <prefix>_<content>_<emotion>_<take>.bvh|csv clips or with a manifest.csv")->required();
-    sub->add_option("--config", o->config, "hand-embedded | hand-paper | body-embedded | hand-tiny")->capture_default_str();
+    sub->add_option("--config", o->config, "hand-embedded | hand-paper | body-embedded | hand-micro | hand-tiny")->capture_default_str();
     sub->add_option("--report", o->report, "Report folder (report.md, results.csv, summary.csv, summary.svg, folds/)")->required();
     sub->add_option("--iters", t.iters, "D iterations per fold (G every --n-critic)")->capture_default_str();
     sub->add_option("--seed", t.seed, "Random seed (fold i trains with seed + i)")->capture_default_str();

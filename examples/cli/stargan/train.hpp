@@ -80,7 +80,7 @@ static handemo::cli::add_command reg_train{40, [](CLI::App& app) {
     auto& t = o->opt;
     sub->add_option("--data", o->data, "Folder of <prefix>_<content>_<emotion>_<take>.bvh|csv clips or with a manifest.csv")->required();
     sub->add_option("--out", o->out, "Model folder (checkpoint.safetensors, log.csv, losses.svg, ...)")->required();
-    sub->add_option("--config", o->config, "hand-embedded | hand-paper | body-embedded | hand-tiny")->capture_default_str();
+    sub->add_option("--config", o->config, "hand-embedded | hand-paper | body-embedded | hand-micro | hand-tiny")->capture_default_str();
     sub->add_option("--iters", t.iters, "D iterations (G every --n-critic)")->capture_default_str();
     sub->add_option("--exclude-content", o->exclude, "Leave this content (motion type) out of training; repeatable");
     sub->add_option("--seed", t.seed, "Random seed; same seed and threads give bitwise the same weights")->capture_default_str();

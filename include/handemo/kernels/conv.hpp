@@ -16,9 +16,10 @@
 namespace handemo::kernels {
 
 namespace detail {
-/// float and double take the xsimd path; any other T the reference loops.
+/// float and double take the xsimd path when xsimd has an instruction set for the target; any other T,
+/// or a target without SIMD, the reference loops.
 template <class T>
-inline constexpr bool fast_type = std::is_same_v<T, float> || std::is_same_v<T, double>;
+inline constexpr bool fast_type = has_simd && (std::is_same_v<T, float> || std::is_same_v<T, double>);
 }  // namespace detail
 
 /// @brief Elements of T the kernels of this file need as `scratch` for geometry g (the maximum over all

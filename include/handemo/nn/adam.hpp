@@ -23,6 +23,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <vector>
 
 namespace handemo {
@@ -197,18 +198,21 @@ private:
     static void update(T* __restrict p, const T* __restrict g, T* __restrict m, T* __restrict v, std::size_t n,
                        T b1, T omb1, T b2, T omb2, T sqrt_bc2, T eps, T neg_step) noexcept
     {
-        using batch = xsimd::batch<T>;
-        constexpr std::size_t w = batch::size;
-        const std::size_t nv = n - n % w;
-        const batch vb1(b1), vomb1(omb1), vb2(b2), vomb2(omb2), vs(sqrt_bc2), ve(eps), vstep(neg_step);
-        for (std::size_t i = 0; i < nv; i += w) {
-            const batch gi = batch::load_unaligned(g + i);
-            const batch mi = batch::load_unaligned(m + i) * vb1 + gi * vomb1;
-            const batch vi = batch::load_unaligned(v + i) * vb2 + (gi * gi) * vomb2;
-            const batch pi = batch::load_unaligned(p + i) + (vstep * mi) / (xsimd::sqrt(vi) / vs + ve);
-            mi.store_unaligned(m + i);
-            vi.store_unaligned(v + i);
-            pi.store_unaligned(p + i);
+        std::size_t nv = 0;  // elements done by the SIMD loop (none on a target xsimd has no instruction set for)
+        if constexpr (!std::is_same_v<xsimd::default_arch, xsimd::unavailable>) {
+            using batch = xsimd::batch<T>;
+            constexpr std::size_t w = batch::size;
+            nv = n - n % w;
+            const batch vb1(b1), vomb1(omb1), vb2(b2), vomb2(omb2), vs(sqrt_bc2), ve(eps), vstep(neg_step);
+            for (std::size_t i = 0; i < nv; i += w) {
+                const batch gi = batch::load_unaligned(g + i);
+                const batch mi = batch::load_unaligned(m + i) * vb1 + gi * vomb1;
+                const batch vi = batch::load_unaligned(v + i) * vb2 + (gi * gi) * vomb2;
+                const batch pi = batch::load_unaligned(p + i) + (vstep * mi) / (xsimd::sqrt(vi) / vs + ve);
+                mi.store_unaligned(m + i);
+                vi.store_unaligned(v + i);
+                pi.store_unaligned(p + i);
+            }
         }
         for (std::size_t i = nv; i < n; ++i) {
             const T gi = g[i];

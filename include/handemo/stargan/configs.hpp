@@ -45,7 +45,7 @@ config_info make_info(std::string name, std::vector<std::string> domains, std::s
 }
 
 /// Names accepted by with_config().
-inline std::vector<std::string> config_names() { return {"hand-embedded", "hand-paper", "body-embedded", "hand-tiny"}; }
+inline std::vector<std::string> config_names() { return {"hand-embedded", "hand-paper", "body-embedded", "hand-micro", "hand-tiny"}; }
 
 /// @brief Calls `f.template operator()<Config>(info)` for the configuration called `name`.
 /// @throws value_error listing the known names when `name` is unknown.
@@ -58,6 +58,8 @@ decltype(auto) with_config(std::string_view name, F&& f)
         return f.template operator()<hand_paper>(make_info<hand_paper>("hand-paper", hand_domains(), "neutral"));
     if (name == "body-embedded")
         return f.template operator()<body_embedded>(make_info<body_embedded>("body-embedded", body_domains(), "normal"));
+    if (name == "hand-micro")
+        return f.template operator()<hand_micro>(make_info<hand_micro>("hand-micro", hand_domains(), "neutral"));
     if (name == "hand-tiny")
         return f.template operator()<hand_tiny>(make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral"));
     std::string known;

@@ -56,6 +56,13 @@ struct body_embedded {
     static constexpr std::size_t joints = 22, keyframes = 9, domains = 8, conv_dim = 32, res_blocks = 3,
                                  d_repeat = 3, batch = 1;
 };
+/// @brief Hand, microcontroller size (a glove's Cortex-M7): hand_embedded at a quarter of the width
+/// (conv_dim 8, 3 residual blocks), 80,632 parameters = 322,528 bytes of float weights, so the weights fit in
+/// flash as float and the activations of one inference in 30 KB of RAM (handemo::micro::generator).
+struct hand_micro {
+    static constexpr std::size_t joints = 23, keyframes = 9, domains = 5, conv_dim = 8, res_blocks = 3,
+                                 d_repeat = 3, batch = 1;
+};
 /// @brief Any config with another batch size: `with_batch<hand_embedded, 16>`.
 template <stargan_config Config, std::size_t N>
 struct with_batch : Config {

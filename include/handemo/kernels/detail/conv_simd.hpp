@@ -12,18 +12,24 @@
 //                   dot products of contiguous rows on the same wide grid.
 //   dot             for <= 64 output pixels: vectorised along (c,u,v), 4 out channels x 3 pixels.
 // The architecture is whatever xsimd's default_arch is for the target's -march (AVX2 + FMA here; SSE2
-// without flags). Tuned for AVX2 on Zen 3 (32 KiB L1d, 512 KiB L2).
+// without flags; NEON64 on aarch64, where FMA is native). Tuned for AVX2 on Zen 3 (32 KiB L1d, 512 KiB L2).
+// On a target xsimd has no architecture for (32-bit ARM without NEON, a Cortex-M) kernels/conv.hpp takes
+// the plain-loop reference kernels instead (has_simd).
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 #include <xsimd/xsimd.hpp>
 
 #include <handemo/kernels/reference.hpp>
 
 namespace handemo::kernels::detail {
+
+/// Whether xsimd found a SIMD instruction set for this target (false: conv.hpp uses the reference kernels).
+inline constexpr bool has_simd = !std::is_same_v<xsimd::default_arch, xsimd::unavailable>;
 
 template <class T>
 using simd_t = xsimd::batch<T>;
@@ -42,12 +48,17 @@ inline constexpr int forward_kc = 256;
 /// Makes the compiler keep a loaded V vector in a register: without it GCC folds the load into each of
 /// the NR FMAs that use it (NV*NR + NR loads per k instead of NV + NR) and the load ports, not the FMA
 /// units, bound the micro-kernel (measured in isolation: 51 -> 99 GFLOP/s of a 102 GFLOP/s peak).
+/// On aarch64 the same empty asm with a NEON register ("w"); on any other target the value as is.
 template <class B>
 inline B keep_in_register(B a) noexcept
 {
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
     auto r = static_cast<typename B::register_type>(a);
     __asm__("" : "+x"(r));
+    return B(r);
+#elif defined(__GNUC__) && defined(__aarch64__)
+    auto r = static_cast<typename B::register_type>(a);
+    __asm__("" : "+w"(r));
     return B(r);
 #else
     return a;
@@ -549,7 +560,9 @@ inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
         for (int o = 0; o < Co; ++o)
             for (int i = 0; i < MR; ++i) dst[std::ptrdiff_t(o) * MR + i] = i < nk ? w[std::ptrdiff_t(o) * K + k0 + i] : T(0);
     }
-    const bool runs4 = kw % 4 == 0;  // every aligned group of 4 lanes is 4 consecutive v of one (c, u)
+    // every aligned group of 4 lanes is 4 consecutive v of one (c, u): needs MR and so every panel start k0 to
+    // be a multiple of 4 (not so for double on 128-bit NEON or SSE, MR = 3 x 2 lanes = 6)
+    const bool runs4 = kw % 4 == 0 && MR % 4 == 0;
     std::ptrdiff_t koff[MR];
     for (int n = 0; n < g.batch; ++n) {
         for (std::ptrdiff_t i = 0; i < std::ptrdiff_t(g.in_channels) * HWp; ++i) gpad[i] = T(0);

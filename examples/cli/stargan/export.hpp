@@ -1,0 +1,47 @@
+// `handemo export --header MODEL --out model.hpp`: writes a trained generator as a C++ header of constexpr
+// weights plus its configuration (stargan/export.hpp), for handemo::micro::generator on a microcontroller.
+#pragma once
+
+#include "../registry.hpp"
+
+#include <handemo/core/io.hpp>
+#include <handemo/stargan/export.hpp>
+
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <string>
+
+namespace handemo::cli::export_cmd {
+
+struct export_cli {
+    std::string model, out;
+    stargan::header_export_options opt;
+    bool no_self_test = false;
+};
+
+inline void run_export(export_cli& o)
+{
+    o.opt.self_test = !o.no_self_test;
+    const std::string text = stargan::export_generator_header(o.model, o.opt);
+    std::ofstream f(o.out, std::ios::binary);
+    if (!f) throw io_error("export: cannot write " + o.out);
+    f << text;
+    f.close();
+    if (!f) throw io_error("export: writing " + o.out + " failed");
+    std::cout << "export: " << o.model << " -> " << o.out << " (" << text.size() << " bytes of C++)\n";
+}
+
+}  // namespace handemo::cli::export_cmd
+
+static handemo::cli::add_command reg_export{55, [](CLI::App& app) {
+    auto* sub = app.add_subcommand("export", "Write a trained generator as a C++ header (constexpr weights + config) for handemo::micro");
+    auto o = std::make_shared<handemo::cli::export_cmd::export_cli>();
+    sub->add_option("--header", o->model, "Model folder or checkpoint.safetensors written by 'handemo train'")->required();
+    sub->add_option("--out", o->out, "Header to write, e.g. model.hpp")->required();
+    sub->add_option("--namespace", o->opt.name_space, "Namespace of the generated struct")->capture_default_str();
+    sub->add_option("--name", o->opt.struct_name, "Name of the generated struct")->capture_default_str();
+    sub->add_option("--self-test-emotion", o->opt.self_test_emotion, "Target domain of the embedded self-test (default: the first non-neutral)");
+    sub->add_flag("--no-self-test", o->no_self_test, "Do not embed the host-computed self-test input/output");
+    sub->callback([o] { handemo::cli::export_cmd::run_export(*o); });
+}};
