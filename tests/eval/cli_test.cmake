@@ -15,11 +15,20 @@ foreach(f report.md results.csv summary.csv summary.svg folds/patting/checkpoint
 endforeach()
 file(STRINGS ${WORK_DIR}/report/results.csv rows)
 list(LENGTH rows n)
+file(STRINGS ${WORK_DIR}/report/results.csv ungated REGEX ",stargan-ungated,")
+list(LENGTH ungated nu)
 # header + 2 folds x 4 targets x 1 take x 8 methods (stargan, stargan-g, identity, mean-offset, amplitude-only,
-# nearest-neighbour, real, and the oracle: --synth-seed)
-if(NOT n EQUAL 65)
-  message(FATAL_ERROR "results.csv has ${n} lines, expected 65")
+# nearest-neighbour, real, and the oracle: --synth-seed), plus stargan-ungated (4 rows) in each fold whose change
+# gate is not all 1
+math(EXPR expect "65 + ${nu}")
+if(NOT n EQUAL expect OR NOT (nu EQUAL 0 OR nu EQUAL 4 OR nu EQUAL 8))
+  message(FATAL_ERROR "results.csv has ${n} lines with ${nu} stargan-ungated rows, expected 65 + those (0, 4 or 8)")
 endif()
+foreach(f patting gripping)
+  if(NOT EXISTS ${WORK_DIR}/report/folds/${f}/gate/gate.csv)
+    message(FATAL_ERROR "eval did not fit the change gate in fold ${f}")
+  endif()
+endforeach()
 file(READ ${WORK_DIR}/report/report.md md)
 foreach(s "### held out: patting" "### held out: gripping" "Where StarGAN beats each baseline" "--folds" "Partial report")
   string(FIND "${md}" "${s}" at)

@@ -51,8 +51,22 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(r.folds[0].held_out == "patting");
     CHECK(r.folds[0].train_clips == 10);
     CHECK(r.folds[0].test_inputs == 1);
-    // 2 folds x 4 targets x 1 take x 7 methods (the handemo preset's amplitude stage adds stargan-g and amplitude-only)
-    CHECK(r.samples.size() == 56);
+    // 2 folds x 4 targets x 1 take x 7 methods (the handemo preset's amplitude stage adds stargan-g and
+    // amplitude-only), and stargan-ungated in each fold whose change gate is not all 1
+    std::size_t gated_folds = 0;
+    for (const char* f : {"patting", "gripping"}) {
+        const auto ck = read_checkpoint(dir / "folds" / f / "checkpoint.safetensors").second;
+        REQUIRE(fs::exists(dir / "folds" / f / "gate" / "gate.csv"));  // the preset fits the gate in every fold
+        bool gated = false;
+        for (std::size_t d = 0; d < ck.gate_posture.size(); ++d) gated |= ck.gate_posture[d] != 1.0 || ck.gate_motion[d] != 1.0;
+        gated_folds += gated;
+        const auto n_ungated = std::count_if(r.samples.begin(), r.samples.end(), [&](const sample_record& s) {
+            return s.fold == f && s.method == "stargan-ungated";
+        });
+        CHECK(n_ungated == (gated ? 4 : 0));
+    }
+    const std::size_t n_samples = 56 + 4 * gated_folds;
+    CHECK(r.samples.size() == n_samples);
     std::set<std::string> methods;
     for (const auto& s : r.samples) {
         methods.insert(s.method);
@@ -71,7 +85,7 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         }
         if (s.method == "nearest-neighbour") CHECK(s.predicted_content != s.fold);  // a clip of another content
     }
-    CHECK(methods.size() == 7);
+    CHECK(methods.size() == (gated_folds ? 8u : 7u));
     for (const char* f : {"report.md", "results.csv", "summary.csv", "summary.svg", "folds.svg", "folds/patting/checkpoint.safetensors",
                           "folds/patting/losses.svg", "folds/gripping/log.csv"})
         CHECK_MESSAGE(fs::exists(dir / f), f);
@@ -82,7 +96,7 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(md.find("### held out: gripping") != std::string::npos);
     CHECK(md.find("## Closing note") != std::string::npos);
     const std::string csv = read_file(dir / "results.csv");
-    CHECK(std::count(csv.begin(), csv.end(), '\n') == 57);  // header + 56 samples
+    CHECK(static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')) == n_samples + 1);  // header + samples
     // comparisons exist for each baseline and metric with a direction, pooled and per target
     const auto cmp = compare_with_baselines(r);
     CHECK(cmp.size() == 4 * 5 * 5);  // identity, mean-offset, amplitude-only, nearest-neighbour x 5 metrics x (pooled + 4 targets)
@@ -136,8 +150,10 @@ TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed 
     const fs::path dir = fs::temp_directory_path() / ("handemo_eval_oracle_test_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     const auto r = run_eval<hand_tiny>(clips, info, o, dir);
-    // 1 fold x 4 targets x 1 take x 8 methods
-    REQUIRE(r.samples.size() == 32);
+    // 1 fold x 4 targets x 1 take x 8 methods (+ stargan-ungated when the fold's change gate is not all 1)
+    const auto n_ungated = std::count_if(r.samples.begin(), r.samples.end(), [](const sample_record& s) { return s.method == "stargan-ungated"; });
+    CHECK((n_ungated == 0 || n_ungated == 4));
+    REQUIRE(r.samples.size() == 32 + static_cast<std::size_t>(n_ungated));
     double oracle = 0, identity = 0;
     for (const auto& s : r.samples) {
         if (s.method == "oracle") {
