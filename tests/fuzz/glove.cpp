@@ -1,9 +1,11 @@
 // Fuzz target: the glove's outside bytes. Input starting with '{' is a device profile (parse_glove_profile);
-// anything else is a stream of HID reports (one length byte, then that many bytes, repeated) decoded with
-// both example profiles of examples/glove/.
+// input starting with "HGLVRAW1" a recorded raw stream (parse_raw_stream, `handemo glove record --raw`)
+// whose reports are decoded with recorded times; anything else is a stream of HID reports (one length byte,
+// then that many bytes, repeated). Reports are decoded with both example profiles of examples/glove/.
 #include "fuzz.hpp"
 
 #include <handemo/glove/profile.hpp>
+#include <handemo/glove/transport.hpp>
 
 #include <memory>
 #include <vector>
@@ -37,7 +39,15 @@ inline int run(const std::uint8_t* data, std::size_t size)
 {
     const std::string_view text = as_text(data, size);
     return refuse_ok([&] {
-        if (!text.empty() && text.front() == '{') {
+        if (text.starts_with("HGLVRAW1")) {
+            long truncated = -1;
+            const auto reports = handemo::parse_raw_stream(text, "fuzz.raw", truncated);
+            for (const auto& p : profiles()) {
+                handemo::report_decoder dec(p);
+                handemo::glove_sample s;
+                for (const auto& r : reports) (void)dec.decode(r.bytes, r.host_time, s);
+            }
+        } else if (!text.empty() && text.front() == '{') {
             const handemo::glove_profile p = handemo::parse_glove_profile(text, "fuzz-profile.json");
             decode_stream(p, std::string_view("\x40\x01\x02\x03\x04\x05\x06\x07\x08", 9));
         } else {
