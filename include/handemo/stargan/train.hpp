@@ -455,7 +455,10 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
     checkpoint_info info;
     info.source = path.string();
     try {
-        const auto j = nlohmann::json::parse(meta("handemo"));
+        const auto j = nlohmann::json::parse(meta("handemo"), [&](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+            if (depth > 4) throw fail("metadata 'handemo' nests JSON deeper than 4 levels");
+            return true;
+        });
         info.config = j.at("config").get<std::string>();
         info.domains = j.at("domains").get<std::vector<std::string>>();
         info.neutral = j.at("neutral").get<std::string>();
