@@ -1,6 +1,7 @@
 // Replays fuzz corpora and regression files through the harnesses' plain entry points (no libFuzzer), so
 // CTest (label fuzz-replay) runs them under ASan/UBSan with any compiler that has the sanitizers (GCC too).
-// Usage: handemo_fuzz_replay <target> <file or folder>...   (folders are walked recursively, sorted)
+// Usage: handemo_fuzz_replay <target> [--optional] <file or folder>...   (folders are walked recursively, sorted;
+// a path after --optional may be missing)
 // Exit 0 when every input is accepted or refused with a handemo error; anything else aborts.
 #define HANDEMO_FUZZ_REPLAY 1
 #include "bvh.cpp"
@@ -17,6 +18,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 int main(int argc, char** argv)
@@ -35,8 +37,15 @@ int main(int argc, char** argv)
     }
     const auto run = targets.at(argv[1]);
     std::vector<fs::path> files;
+    bool optional = false;  // the next path may be missing (a target without regression files yet)
     for (int i = 2; i < argc; ++i) {
+        if (std::string(argv[i]) == "--optional") {
+            optional = true;
+            continue;
+        }
         const fs::path p = argv[i];
+        if (!fs::exists(p) && std::exchange(optional, false)) continue;
+        optional = false;
         if (fs::is_directory(p)) {
             for (const auto& e : fs::recursive_directory_iterator(p))
                 if (e.is_regular_file() && e.path().filename().string().front() != '.') files.push_back(e.path());
