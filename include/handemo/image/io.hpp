@@ -159,11 +159,17 @@ inline void check_png(std::string_view data, const std::string& what)
 
 /// Checks a BMP before stb_image sees it (stb fills missing pixel data with zeros and takes a negative
 /// compression field for none): only uncompressed 24- or 32-bit BMPs with every row present are read.
-inline void check_bmp(std::string_view data, std::size_t w, std::size_t h, const std::string& what)
+inline void check_bmp(std::string_view data, const std::string& what)
 {
     if (data.size() < 54)
         throw format_error(what + ": truncated BMP: " + std::to_string(data.size()) + " bytes, a header needs 54");
     const std::uint32_t declared = read_le32(data, 2), offset = read_le32(data, 10), header = read_le32(data, 14);
+    // width and height are signed (a negative height is a top-down BMP)
+    const std::int64_t sw = static_cast<std::int32_t>(read_le32(data, 18)), sh = static_cast<std::int32_t>(read_le32(data, 22));
+    if (sw <= 0 || sh == 0)
+        throw format_error(what + ": BMP size " + std::to_string(sw) + "x" + std::to_string(sh) + " is empty");
+    const std::size_t w = static_cast<std::size_t>(sw), h = static_cast<std::size_t>(sh < 0 ? -sh : sh);
+    check_image_size(what, w, h);
     const unsigned bpp = static_cast<unsigned char>(data[28]) | static_cast<unsigned>(static_cast<unsigned char>(data[29])) << 8;
     const std::uint32_t compression = read_le32(data, 30);
     if (header < 40 || compression != 0 || (bpp != 24 && bpp != 32))
@@ -232,6 +238,9 @@ inline rgb_image decode_image(std::string_view data, std::string_view source_nam
         throw format_error(what + ": file of " + std::to_string(data.size()) + " bytes is too large");
     const auto* buf = reinterpret_cast<const stbi_uc*>(data.data());
     const int len = static_cast<int>(data.size());
+    // handemo's own checks first: stb's header scan neither checks nor explains enough
+    if (is_bmp) detail::check_bmp(data, what);
+    if (is_png) detail::check_png(data, what);
     int w = 0, h = 0, comp = 0;
     if (!stbi_info_from_memory(buf, len, &w, &h, &comp))
         throw format_error(what + ": corrupt " + (is_png ? "PNG" : "BMP") + " header: " + detail::stb_reason());
@@ -241,8 +250,6 @@ inline rgb_image decode_image(std::string_view data, std::string_view source_nam
     if (comp != 3 || deep)
         throw format_error(what + ": " + std::to_string(comp) + " channel" + (comp == 1 ? "" : "s") +
                            (deep ? " of 16 bits" : "") + " found, expected 3 (8-bit RGB)");
-    if (is_bmp) detail::check_bmp(data, static_cast<std::size_t>(w), static_cast<std::size_t>(h), what);
-    if (is_png) detail::check_png(data, what);
     int n = 0;
     std::unique_ptr<stbi_uc, void (*)(void*)> px(stbi_load_from_memory(buf, len, &w, &h, &n, 3), stbi_image_free);
     if (!px) throw format_error(what + ": corrupt or truncated " + (is_png ? "PNG" : "BMP") + ": " + detail::stb_reason());
