@@ -57,7 +57,7 @@ TEST_CASE("manifest.csv: duplicate rows, ../ and absolute paths are refused, nam
     const std::string m = "data/manifest.csv";
     auto refused = [&](const std::string& rows, const std::string& expected) {
         CHECK_THROWS_WITH_AS(stargan::parse_manifest("path,content,emotion\n" + rows, "data", m),
-                             doctest::Contains(expected), format_error);
+                             doctest::Contains(expected.c_str()), format_error);
     };
     refused("a.bvh,wave,neutral\nb.bvh,wave,sad\na.bvh,wave,sad\n",
             "data/manifest.csv:4: path 'a.bvh' is listed twice (first on line 2)");
