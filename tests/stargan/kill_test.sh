@@ -29,7 +29,9 @@ for pct in 10 25 40 55 70 85 95; do
   sleep "$(printf '%d.%03d' $((delay_ms / 1000)) $((delay_ms % 1000)))"
   if kill -KILL "$pid" 2>/dev/null; then killed_mid=$((killed_mid + 1)); fi
   wait "$pid" 2>/dev/null || true
+  how=restarted
   if [[ -f "$out/checkpoint.safetensors" ]]; then
+    how=resumed
     # the checkpoint left behind by the killed run loads
     if ! "$cli" transfer --model "$out" --in "$work/data/hand_pointing_neutral_0.bvh" --emotion sad \
          --out "$out/probe.bvh" >/dev/null 2>"$out/probe.err"; then
@@ -47,7 +49,7 @@ for pct in 10 25 40 55 70 85 95; do
       exit 1
     fi
   done
-  echo "kill at ${delay_ms} ms (${pct}%): $( [[ $checked -gt 0 ]] && echo resumed || echo restarted ), bitwise equal"
+  echo "kill at ${delay_ms} ms (${pct}%): ${how}, bitwise equal"
 done
 if ((killed_mid == 0 || checked == 0)); then
   echo "no run was killed while training with a checkpoint on disk (machine too fast or too slow?)"
