@@ -243,7 +243,7 @@ TEST_CASE("PNG: a 60000 x 60000 header, a zlib bomb and bad CRC or Adler-32 are 
     // 16 x 16 declared (784 bytes of scanlines), 400 MB inflated.
     const std::string bomb = png_signature + png_ihdr(16, 16) + png_chunk("IDAT", zlib_zeros(1 + 258 * 1'550'000)) + iend;
     CHECK(bomb.size() < 3'000'000);
-    refused_within_bounds([&] { (void)decode_image(bomb, "bomb.png"); }, "bomb.png: corrupt PNG: IDAT stream is corrupt or does not decompress to the 784 bytes");
+    refused_within_bounds([&] { (void)decode_image(bomb, "bomb.png"); }, "bomb.png: corrupt or truncated PNG: IDAT stream is corrupt or does not decompress to the 784 bytes");
 
     // A valid 2 x 2 image, then the same with one flipped bit in a chunk, and with a wrong Adler-32.
     const std::string rows("\0\1\2\3\4\5\6\0\7\10\11\12\13\14", 14);
@@ -256,9 +256,9 @@ TEST_CASE("PNG: a 60000 x 60000 header, a zlib bomb and bad CRC or Adler-32 are 
     CHECK(im.pixels == std::vector<std::uint8_t>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
     std::string flipped = good;
     flipped[flipped.size() - 20] ^= 0x01;  // inside IDAT
-    refused_within_bounds([&] { (void)decode_image(flipped, "flipped.png"); }, "flipped.png: corrupt PNG: CRC mismatch in chunk 'IDAT'");
+    refused_within_bounds([&] { (void)decode_image(flipped, "flipped.png"); }, "flipped.png: corrupt or truncated PNG: CRC mismatch in chunk 'IDAT'");
     const std::string bad_adler = png_signature + png_ihdr(2, 2) + png_chunk("IDAT", z + std::string(4, '\x11')) + iend;
-    refused_within_bounds([&] { (void)decode_image(bad_adler, "adler.png"); }, "adler.png: corrupt PNG: Adler-32 mismatch");
+    refused_within_bounds([&] { (void)decode_image(bad_adler, "adler.png"); }, "adler.png: corrupt or truncated PNG: Adler-32 mismatch");
 }
 
 TEST_CASE("BMP: truncated files of any compression or depth and palette BMPs are refused")

@@ -96,7 +96,7 @@ inline std::uint32_t adler32(const unsigned char* p, std::size_t n) noexcept
 /// that size, so a zlib bomb stops there) with a matching Adler-32.
 inline void check_png(std::string_view data, const std::string& what)
 {
-    auto fail = [&](const std::string& msg) { throw format_error(what + ": corrupt PNG: " + msg); };
+    auto fail = [&](const std::string& msg) { throw format_error(what + ": corrupt or truncated PNG: " + msg); };
     std::size_t at = 8;
     std::uint32_t w = 0, h = 0;
     unsigned interlace = 0;
@@ -120,9 +120,12 @@ inline void check_png(std::string_view data, const std::string& what)
             const unsigned depth = static_cast<unsigned char>(body[8]), color = static_cast<unsigned char>(body[9]);
             interlace = static_cast<unsigned char>(body[12]);
             check_image_size(what, w, h);
-            if (depth != 8 || color != 2)
-                throw format_error(what + ": PNG of bit depth " + std::to_string(depth) + " and colour type " +
-                                   std::to_string(color) + ", expected 8-bit RGB (colour type 2)");
+            if (depth != 8 || color != 2) {
+                const int comp = color == 0 ? 1 : color == 4 ? 2 : color == 6 ? 4 : 3;  // 3: RGB or palette
+                throw format_error(what + ": " + std::to_string(comp) + " channel" + (comp == 1 ? "" : "s") +
+                                   (depth == 16 ? " of 16 bits" : "") + " found, expected 3 (8-bit RGB; PNG colour type " +
+                                   std::to_string(color) + ", bit depth " + std::to_string(depth) + ")");
+            }
             if (body[10] != 0 || body[11] != 0 || interlace > 1) fail("unknown compression, filter or interlace method");
         } else if (type == "IDAT") {
             idat.append(body);
@@ -172,7 +175,8 @@ inline void check_bmp(std::string_view data, const std::string& what)
     check_image_size(what, w, h);
     const unsigned bpp = static_cast<unsigned char>(data[28]) | static_cast<unsigned>(static_cast<unsigned char>(data[29])) << 8;
     const std::uint32_t compression = read_le32(data, 30);
-    if (header < 40 || compression != 0 || (bpp != 24 && bpp != 32))
+    // 32-bit BMPs may carry bit-field masks (compression 3); the row layout is the same
+    if (header < 40 || (compression != 0 && !(compression == 3 && bpp == 32)) || (bpp != 24 && bpp != 32))
         throw format_error(what + ": BMP with a " + std::to_string(header) + "-byte header, " + std::to_string(bpp) +
                            " bits per pixel and compression " + std::to_string(compression) +
                            ", expected an uncompressed 24- or 32-bit BMP (40-byte header or larger)");
