@@ -10,6 +10,8 @@
 #        ./setup.sh --cross       also the cross toolchains and emulators of the CTest label `cross`: aarch64
 #                                 (g++-aarch64-linux-gnu, qemu-user) and Cortex-M7 (gcc-arm-none-eabi,
 #                                 libstdc++-arm-none-eabi-newlib, qemu-system-arm)
+#        ./setup.sh --fuzz        also clang 14 and its runtime libraries (libFuzzer, sanitizers), for the
+#                                 libFuzzer harnesses (-DHANDEMO_FUZZ=ON, tests/fuzz/) and the clang build
 set -euo pipefail
 # libgif-dev: giflib, the animated GIFs of `handemo render --animate` and the demo (target handemo::gif).
 pkgs=(g++ cmake make pkg-config libxtensor-dev libxsimd-dev xtl-dev nlohmann-json3-dev libstb-dev libgif-dev
@@ -20,9 +22,10 @@ for arg in "$@"; do
   case "$arg" in
     --golden) pkgs+=(python3 python3-torch python3-numpy) ;;
     --cross) pkgs+=(g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib qemu-system-arm) ;;
+    --fuzz) pkgs+=(clang-14 libclang-rt-14-dev) ;;
     --chromium) browser=1 ;;
     --no-browser) browser=0 ;;
-    *) echo "setup.sh: unknown option $arg (expected --golden, --cross, --chromium, --no-browser)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown option $arg (expected --golden, --cross, --fuzz, --chromium, --no-browser)" >&2; exit 2 ;;
   esac
 done
 if ((browser)); then pkgs+=(chromium); fi

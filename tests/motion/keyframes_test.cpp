@@ -61,6 +61,10 @@ TEST_CASE("extract_keyframes: uniform times, exact frames, any J and K, runtime 
     CHECK(k7.at(6, 5, 2) == doctest::Approx(d.angle(9, 5, 2)));
     CHECK_THROWS_AS(extract_keyframes<dynamic_keyframes>(d, 1), value_error);
     CHECK_THROWS_AS(extract_keyframes<9>(clip::make(hand_skeleton(), 1, 30)), value_error);
+    // the error names the clip it was reading (the skeleton's name is the file a reader got it from)
+    clip one = clip::make(hand_skeleton(), 1, 30);
+    one.skel.name = "one_frame.bvh";
+    CHECK_THROWS_WITH_AS(extract_keyframes<9>(one), doctest::Contains("one_frame.bvh has 1 frames, expected at least 2"), value_error);
     // Wrapped input gives the unwrapped keyframes.
     clip w = clip::make(hand_skeleton(), 9, 30);
     for (std::size_t f = 0; f < 9; ++f) w.angle(f, 0, 1) = std::remainder(150.0 + 10.0 * static_cast<double>(f), 360.0);

@@ -52,6 +52,25 @@ TEST_CASE("manifest.csv labels clips and bad manifests are refused with the line
     fs::remove_all(dir);
 }
 
+TEST_CASE("manifest.csv: duplicate rows, ../ and absolute paths are refused, naming the line")
+{
+    const std::string m = "data/manifest.csv";
+    auto refused = [&](const std::string& rows, const std::string& expected) {
+        CHECK_THROWS_WITH_AS(stargan::parse_manifest("path,content,emotion\n" + rows, "data", m),
+                             doctest::Contains(expected.c_str()), format_error);
+    };
+    refused("a.bvh,wave,neutral\nb.bvh,wave,sad\na.bvh,wave,sad\n",
+            "data/manifest.csv:4: path 'a.bvh' is listed twice (first on line 2)");
+    refused("a.bvh,wave,neutral\n./sub/../a.bvh,wave,sad\n", "data/manifest.csv:3: path './sub/../a.bvh' leaves the data folder");
+    refused("sub/./x.bvh,wave,neutral\nsub/x.bvh,wave,sad\n", "data/manifest.csv:3: path 'sub/x.bvh' is listed twice (first on line 2)");
+    refused("../secret.bvh,wave,neutral\n", "data/manifest.csv:2: path '../secret.bvh' leaves the data folder (..)");
+    refused("a/../../b.bvh,wave,neutral\n", "data/manifest.csv:2: path 'a/../../b.bvh' leaves the data folder");
+    refused("/etc/passwd,wave,neutral\n", "data/manifest.csv:2: path '/etc/passwd' is absolute");
+    const auto ok = stargan::parse_manifest("path,content,emotion\nsub/a.bvh,wave,neutral\n", "data", m);
+    REQUIRE(ok.size() == 1);
+    CHECK(ok[0].path == fs::path("data") / "sub/a.bvh");
+}
+
 using namespace handemo::test;
 
 TEST_CASE("tempo_fit recovers consistent duration ratios and prefers the simplest exact estimator")

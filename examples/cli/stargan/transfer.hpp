@@ -40,7 +40,7 @@ inline void run_transfer(const transfer_cli& o)
     if (!out_image && !has_ext(o.out, ".bvh")) throw value_error("transfer: --out " + o.out + ": expected a .bvh, .bmp or .png file");
     const std::size_t target = model->domain(o.emotion);
     if (in_image) {
-        const auto px = from_image<dynamic_keyframes>(read_image(o.in), model->joints(), model->keyframes());
+        const auto px = from_image<dynamic_keyframes>(read_image(o.in), model->joints(), model->keyframes(), o.in);
         const auto gen = model->translate(px, target);
         if (out_image) {
             (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(gen));

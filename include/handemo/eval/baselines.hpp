@@ -43,7 +43,9 @@ public:
                 by_take[{c.content, c.take}] = kf;
                 if (!first.count(c.content)) first[c.content] = kf;
             }
-        if (first.empty()) throw value_error("mean_offset_baseline: no '" + neutral + "' clip in the training set");
+        if (first.empty())
+            throw value_error("mean_offset_baseline: no '" + neutral + "' clip in the training set (" + std::to_string(train.size()) +
+                              " clips" + (train.empty() ? std::string() : ", the first " + train.front().path.string()) + ")");
         std::map<std::string, std::size_t> pairs;
         for (const auto& c : train) {
             if (c.emotion == neutral) continue;

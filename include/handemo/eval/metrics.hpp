@@ -53,8 +53,8 @@ template <std::size_t K = 9>
 double keyframe_rmse(const clip& a, const clip& b)
 {
     if (a.skel.size() != b.skel.size())
-        throw shape_error("keyframe_rmse: clips have " + std::to_string(a.skel.size()) + " and " +
-                          std::to_string(b.skel.size()) + " joints");
+        throw shape_error("keyframe_rmse: clips " + a.skel.name + " and " + b.skel.name + " have " +
+                          std::to_string(a.skel.size()) + " and " + std::to_string(b.skel.size()) + " joints");
     return keyframe_rmse(extract_keyframes<K>(a), extract_keyframes<K>(b));
 }
 
@@ -64,7 +64,7 @@ double keyframe_rmse(const clip& a, const clip& b)
 /// some Bandai spine tracks, which unwrap to +-1980 degrees) cannot dominate the mean.
 inline double range_of_motion(const clip& c)
 {
-    if (c.frames == 0 || c.skel.size() == 0) throw value_error("range_of_motion: empty clip");
+    if (c.frames == 0 || c.skel.size() == 0) throw value_error("range_of_motion: clip " + c.skel.name + " is empty");
     const std::size_t J3 = c.skel.size() * 3;
     if (c.angles.size() != c.frames * J3)
         throw shape_error("range_of_motion: clip holds " + std::to_string(c.angles.size()) + " angles, expected frames*joints*3 = " +
@@ -86,7 +86,7 @@ inline double range_of_motion(const clip& c)
 /// @brief Mean absolute angular velocity (degrees per second) over joints, axes and frames.
 inline double mean_speed(const clip& c)
 {
-    if (c.frames < 2) throw value_error("mean_speed: a clip of " + std::to_string(c.frames) + " frames has no speed");
+    if (c.frames < 2) throw value_error("mean_speed: clip " + c.skel.name + " of " + std::to_string(c.frames) + " frames has no speed");
     clip u = c;
     unwrap_angles(u);
     const std::size_t J3 = c.skel.size() * 3;

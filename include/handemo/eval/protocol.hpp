@@ -164,7 +164,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
     opt.train.validate();
     const auto contents = stargan::contents_of(clips);
     if (contents.size() < 2)
-        throw value_error("eval: the data set has " + std::to_string(contents.size()) + " content(s); leave-one-content-out needs at least 2");
+        throw value_error("eval: data set " + opt.data + " has " + std::to_string(contents.size()) + " content(s); leave-one-content-out needs at least 2");
     std::vector<std::string> folds = opt.folds.empty() ? contents : opt.folds;
     for (const auto& f : folds)
         if (std::find(contents.begin(), contents.end(), f) == contents.end()) {
@@ -360,7 +360,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
             }
         }
         if (fsum.test_inputs == 0)
-            throw value_error("eval: fold '" + held + "' has no '" + info.neutral + "' clip to transfer");
+            throw value_error("eval: data set " + opt.data + ": fold '" + held + "' has no '" + info.neutral + "' clip to transfer");
         fsum.eval_seconds = std::chrono::duration<double>(clock::now() - t0).count();
         res.folds.push_back(fsum);
         res.seconds = std::chrono::duration<double>(clock::now() - t_start).count();

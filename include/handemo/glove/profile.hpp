@@ -165,7 +165,10 @@ inline glove_profile parse_glove_profile(std::string_view text, const std::strin
     using nlohmann::json;
     json j;
     try {
-        j = json::parse(text);
+        j = json::parse(text, [&](int depth, json::parse_event_t, json&) {
+            if (depth > 16) throw format_error("glove profile: " + source + ": JSON nested deeper than 16 levels");
+            return true;
+        });
     } catch (const json::exception& e) {
         throw format_error("glove profile: " + source + ": " + e.what());
     }

@@ -26,8 +26,9 @@ namespace handemo {
 
 /// Largest width or height handemo reads or writes (larger headers are treated as corrupt).
 inline constexpr std::size_t image_max_side = std::size_t{1} << 15;
-/// Largest pixel count handemo reads or writes (64 Mi pixels, 192 MiB of RGB).
-inline constexpr std::size_t image_max_pixels = std::size_t{1} << 26;
+/// Largest pixel count handemo reads or writes (16 Mi pixels, 48 MiB of RGB), so that decoding the largest
+/// image accepted (the file, stb's inflated rows and the pixels) stays under 256 MB.
+inline constexpr std::size_t image_max_pixels = std::size_t{1} << 24;
 
 namespace detail {
 
@@ -50,6 +51,142 @@ inline std::uint32_t read_le32(std::string_view d, std::size_t at) noexcept
            static_cast<std::uint32_t>(static_cast<unsigned char>(d[at + 1])) << 8 |
            static_cast<std::uint32_t>(static_cast<unsigned char>(d[at + 2])) << 16 |
            static_cast<std::uint32_t>(static_cast<unsigned char>(d[at + 3])) << 24;
+}
+
+inline std::uint32_t read_be32(std::string_view d, std::size_t at) noexcept
+{
+    return static_cast<std::uint32_t>(static_cast<unsigned char>(d[at])) << 24 |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(d[at + 1])) << 16 |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(d[at + 2])) << 8 |
+           static_cast<std::uint32_t>(static_cast<unsigned char>(d[at + 3]));
+}
+
+/// CRC-32 (ISO 3309, as PNG chunks use it) of `d`.
+inline std::uint32_t crc32(std::string_view d, std::uint32_t crc = 0) noexcept
+{
+    crc = ~crc;
+    for (char ch : d) {
+        crc ^= static_cast<unsigned char>(ch);
+        for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+/// Adler-32 (RFC 1950, the zlib stream's trailer) of `n` bytes.
+inline std::uint32_t adler32(const unsigned char* p, std::size_t n) noexcept
+{
+    std::uint32_t a = 1, b = 0;
+    while (n > 0) {
+        const std::size_t m = n < 5552 ? n : 5552;  // largest run without overflow of b
+        for (std::size_t i = 0; i < m; ++i) {
+            a += p[i];
+            b += a;
+        }
+        a %= 65521u;
+        b %= 65521u;
+        p += m;
+        n -= m;
+    }
+    return b << 16 | a;
+}
+
+/// Checks a PNG before stb_image sees it (stb checks neither the chunk CRCs nor the zlib Adler-32, and
+/// inflates whatever the stream holds): the chunk layout and every CRC, an 8-bit RGB IHDR within the size
+/// limits, and that the IDAT stream inflates to exactly the size the header declares (into a buffer of
+/// that size, so a zlib bomb stops there) with a matching Adler-32.
+inline void check_png(std::string_view data, const std::string& what)
+{
+    auto fail = [&](const std::string& msg) { throw format_error(what + ": corrupt or truncated PNG: " + msg); };
+    std::size_t at = 8;
+    std::uint32_t w = 0, h = 0;
+    unsigned interlace = 0;
+    bool have_ihdr = false, have_iend = false;
+    std::string idat;
+    while (!have_iend) {
+        if (data.size() - at < 12) fail("truncated at byte " + std::to_string(at) + " (no IEND chunk)");
+        const std::uint32_t len = read_be32(data, at);
+        if (len > 0x7FFFFFFFu || len > data.size() - at - 12)
+            fail("chunk at byte " + std::to_string(at) + " declares " + std::to_string(len) + " bytes, the file has " +
+                 std::to_string(data.size() - at - 12) + " left");
+        const std::string_view type = data.substr(at + 4, 4), body = data.substr(at + 8, len);
+        if (crc32(data.substr(at + 4, 4 + len)) != read_be32(data, at + 8 + len))
+            fail("CRC mismatch in chunk '" + std::string(type) + "' at byte " + std::to_string(at));
+        if (!have_ihdr && type != "IHDR") fail("first chunk is '" + std::string(type) + "', expected IHDR");
+        if (type == "IHDR") {
+            if (have_ihdr || len != 13) fail("IHDR repeated or not 13 bytes");
+            have_ihdr = true;
+            w = read_be32(body, 0);
+            h = read_be32(body, 4);
+            const unsigned depth = static_cast<unsigned char>(body[8]), color = static_cast<unsigned char>(body[9]);
+            interlace = static_cast<unsigned char>(body[12]);
+            check_image_size(what, w, h);
+            if (depth != 8 || color != 2) {
+                const int comp = color == 0 ? 1 : color == 4 ? 2 : color == 6 ? 4 : 3;  // 3: RGB or palette
+                throw format_error(what + ": " + std::to_string(comp) + " channel" + (comp == 1 ? "" : "s") +
+                                   (depth == 16 ? " of 16 bits" : "") + " found, expected 3 (8-bit RGB; PNG colour type " +
+                                   std::to_string(color) + ", bit depth " + std::to_string(depth) + ")");
+            }
+            if (body[10] != 0 || body[11] != 0 || interlace > 1) fail("unknown compression, filter or interlace method");
+        } else if (type == "IDAT") {
+            idat.append(body);
+        } else if (type == "IEND") {
+            have_iend = true;
+        }
+        at += 12 + len;
+    }
+    // Bytes of the filtered scanlines: 1 filter byte + 3 w bytes per row (per pass row when Adam7-interlaced).
+    std::size_t expected = 0;
+    if (interlace == 0) {
+        expected = std::size_t{h} * (1 + 3 * std::size_t{w});
+    } else {
+        constexpr unsigned xs[] = {0, 4, 0, 2, 0, 1, 0}, ys[] = {0, 0, 4, 0, 2, 0, 1}, dx[] = {8, 8, 4, 4, 2, 2, 1},
+                           dy[] = {8, 8, 8, 4, 4, 2, 2};
+        for (int p = 0; p < 7; ++p) {
+            const std::size_t pw = w > xs[p] ? (w - xs[p] + dx[p] - 1) / dx[p] : 0;
+            const std::size_t ph = h > ys[p] ? (h - ys[p] + dy[p] - 1) / dy[p] : 0;
+            if (pw && ph) expected += ph * (1 + 3 * pw);
+        }
+    }
+    if (idat.size() < 6) fail("IDAT holds " + std::to_string(idat.size()) + " bytes, too few for a zlib stream");
+    if (idat.size() > static_cast<std::size_t>(INT_MAX)) fail("IDAT stream is too large");
+    // One byte of headroom: a stream that fills it decompresses to more than the header declares.
+    std::unique_ptr<char[]> raw(new char[expected + 1]);
+    const int got = stbi_zlib_decode_buffer(raw.get(), static_cast<int>(expected + 1), idat.data(), static_cast<int>(idat.size()));
+    if (got < 0 || static_cast<std::size_t>(got) != expected)
+        fail("IDAT stream is corrupt or does not decompress to the " + std::to_string(expected) + " bytes of a " +
+             std::to_string(w) + "x" + std::to_string(h) + " image" +
+             (got >= 0 ? " (found " + std::to_string(got) + ")" : std::string()));
+    if (adler32(reinterpret_cast<const unsigned char*>(raw.get()), expected) != read_be32(idat, idat.size() - 4))
+        fail("Adler-32 mismatch in the IDAT stream");
+}
+
+/// Checks a BMP before stb_image sees it (stb fills missing pixel data with zeros and takes a negative
+/// compression field for none): only uncompressed 24- or 32-bit BMPs with every row present are read.
+inline void check_bmp(std::string_view data, const std::string& what)
+{
+    if (data.size() < 54)
+        throw format_error(what + ": truncated BMP: " + std::to_string(data.size()) + " bytes, a header needs 54");
+    const std::uint32_t declared = read_le32(data, 2), offset = read_le32(data, 10), header = read_le32(data, 14);
+    // width and height are signed (a negative height is a top-down BMP)
+    const std::int64_t sw = static_cast<std::int32_t>(read_le32(data, 18)), sh = static_cast<std::int32_t>(read_le32(data, 22));
+    if (sw <= 0 || sh == 0)
+        throw format_error(what + ": BMP size " + std::to_string(sw) + "x" + std::to_string(sh) + " is empty");
+    const std::size_t w = static_cast<std::size_t>(sw), h = static_cast<std::size_t>(sh < 0 ? -sh : sh);
+    check_image_size(what, w, h);
+    const unsigned bpp = static_cast<unsigned char>(data[28]) | static_cast<unsigned>(static_cast<unsigned char>(data[29])) << 8;
+    const std::uint32_t compression = read_le32(data, 30);
+    // 32-bit BMPs may carry bit-field masks (compression 3); the row layout is the same
+    if (header < 40 || (compression != 0 && !(compression == 3 && bpp == 32)) || (bpp != 24 && bpp != 32))
+        throw format_error(what + ": BMP with a " + std::to_string(header) + "-byte header, " + std::to_string(bpp) +
+                           " bits per pixel and compression " + std::to_string(compression) +
+                           ", expected an uncompressed 24- or 32-bit BMP (40-byte header or larger)");
+    if (offset < 14 + std::size_t{header})
+        throw format_error(what + ": BMP pixel data offset " + std::to_string(offset) + " lies inside the header");
+    const std::size_t stride = (w * (bpp / 8) + 3) / 4 * 4;
+    const std::size_t need = std::max<std::size_t>(declared, std::size_t{offset} + stride * h);
+    if (data.size() < need)
+        throw format_error(what + ": truncated BMP: " + std::to_string(data.size()) + " bytes, header needs " +
+                           std::to_string(need));
 }
 
 inline std::string stb_reason()
@@ -105,6 +242,9 @@ inline rgb_image decode_image(std::string_view data, std::string_view source_nam
         throw format_error(what + ": file of " + std::to_string(data.size()) + " bytes is too large");
     const auto* buf = reinterpret_cast<const stbi_uc*>(data.data());
     const int len = static_cast<int>(data.size());
+    // handemo's own checks first: stb's header scan neither checks nor explains enough
+    if (is_bmp) detail::check_bmp(data, what);
+    if (is_png) detail::check_png(data, what);
     int w = 0, h = 0, comp = 0;
     if (!stbi_info_from_memory(buf, len, &w, &h, &comp))
         throw format_error(what + ": corrupt " + (is_png ? "PNG" : "BMP") + " header: " + detail::stb_reason());
@@ -114,20 +254,6 @@ inline rgb_image decode_image(std::string_view data, std::string_view source_nam
     if (comp != 3 || deep)
         throw format_error(what + ": " + std::to_string(comp) + " channel" + (comp == 1 ? "" : "s") +
                            (deep ? " of 16 bits" : "") + " found, expected 3 (8-bit RGB)");
-    if (is_bmp && data.size() >= 34) {
-        // stb_image fills missing BMP pixel data with zeros; refuse truncated files explicitly.
-        const std::uint32_t declared = detail::read_le32(data, 2), offset = detail::read_le32(data, 10);
-        const unsigned bpp = static_cast<unsigned char>(data[28]) | static_cast<unsigned>(static_cast<unsigned char>(data[29])) << 8;
-        const std::uint32_t compression = detail::read_le32(data, 30);
-        std::size_t need = declared;
-        if (compression == 0 && (bpp == 24 || bpp == 32)) {
-            const std::size_t stride = (static_cast<std::size_t>(w) * (bpp / 8) + 3) / 4 * 4;
-            need = std::max(need, static_cast<std::size_t>(offset) + stride * static_cast<std::size_t>(h));
-        }
-        if (data.size() < need)
-            throw format_error(what + ": truncated BMP: " + std::to_string(data.size()) + " bytes, header needs " +
-                               std::to_string(need));
-    }
     int n = 0;
     std::unique_ptr<stbi_uc, void (*)(void*)> px(stbi_load_from_memory(buf, len, &w, &h, &n, 3), stbi_image_free);
     if (!px) throw format_error(what + ": corrupt or truncated " + (is_png ? "PNG" : "BMP") + ": " + detail::stb_reason());

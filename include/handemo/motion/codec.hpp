@@ -230,7 +230,12 @@ inline angle_range parse_range(std::string_view text, const std::string& source)
 {
     nlohmann::json j;
     try {
-        j = nlohmann::json::parse(text);
+        // range.json is flat: deeper nesting is refused while parsing (nlohmann's dump, used in the
+        // messages below, recurses once per level)
+        j = nlohmann::json::parse(text, [&](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+            if (depth > 2) throw format_error("range: " + source + ": JSON nested deeper than 2 levels");
+            return true;
+        });
     } catch (const nlohmann::json::parse_error& e) {
         throw format_error("range: " + source + ": malformed JSON at byte " + std::to_string(e.byte) + ": " + e.what());
     } catch (const nlohmann::json::exception& e) {  // out_of_range.406: a number such as 1e400 overflows
@@ -252,17 +257,19 @@ inline angle_range parse_range(std::string_view text, const std::string& source)
         if (!v.is_number()) throw format_error("range: " + source + ": field '" + name + "' is " + v.dump() + ", expected a number");
         return v.get<double>();
     };
-    auto count = [&](const char* name) {
+    // at most 65536 keyframes and 10000 joints (bvh_max_joints), so joints * 3 cannot wrap around
+    auto count = [&](const char* name, std::uint64_t max) {
         const auto& v = field(name);
-        if (!v.is_number_unsigned())
-            throw format_error("range: " + source + ": field '" + name + "' is " + v.dump() + ", expected a non-negative integer");
-        return v.get<std::size_t>();
+        if (!v.is_number_unsigned() || v.get<std::uint64_t>() > max)
+            throw format_error("range: " + source + ": field '" + name + "' is " + v.dump() + ", expected an integer in 0.." +
+                               std::to_string(max));
+        return static_cast<std::size_t>(v.get<std::uint64_t>());
     };
     angle_range r;
     r.p_min = number("p_min");
     r.p_max = number("p_max");
-    r.keyframes = count("keyframes");
-    r.joints = count("joints");
+    r.keyframes = count("keyframes", 65536);
+    r.joints = count("joints", 10000);
     if (!std::isfinite(r.p_min) || !std::isfinite(r.p_max) || !(r.p_max > r.p_min) || !std::isfinite(r.p_max - r.p_min))
         throw format_error("range: " + source + ": field 'p_max' " + std::to_string(r.p_max) +
                            " is not above field 'p_min' " + std::to_string(r.p_min));

@@ -98,7 +98,8 @@ inline void check_keyframe_args(const clip& c, std::size_t k, const char* fn)
 {
     if (k < 2) throw value_error(std::string(fn) + ": " + std::to_string(k) + " keyframes, expected at least 2");
     if (c.frames < 2)
-        throw value_error(std::string(fn) + ": clip has " + std::to_string(c.frames) + " frames, expected at least 2");
+        throw value_error(std::string(fn) + ": clip " + (c.skel.name.empty() ? std::string("(unnamed)") : c.skel.name) +
+                          " has " + std::to_string(c.frames) + " frames, expected at least 2");
     const std::size_t n = c.frames * c.skel.size() * 3;
     if (c.angles.size() != n)
         throw shape_error(std::string(fn) + ": clip holds " + std::to_string(c.angles.size()) +

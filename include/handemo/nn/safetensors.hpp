@@ -29,6 +29,9 @@
 
 namespace handemo {
 
+/// Largest safetensors header (JSON) handemo parses: a StarGAN checkpoint's is about 10 KB.
+inline constexpr std::uint64_t safetensors_max_header = std::uint64_t{4} << 20;
+
 /// @brief Parses a safetensors image held in memory.
 /// @param bytes  the whole file.
 /// @param source file name for error messages.
@@ -47,7 +50,11 @@ inline safetensors_file parse_safetensors(std::string_view bytes, std::string_vi
     if (n > bytes.size() - 8)
         throw fail("header length " + std::to_string(n) + " is beyond the file (" + std::to_string(bytes.size() - 8) +
                    " bytes after the length field)");
-    if (n > 100'000'000) throw fail("header length " + std::to_string(n) + " exceeds the 100000000-byte limit");
+    // nlohmann's tree takes up to ~20 times the bytes of its JSON text (a number in 2 bytes becomes a
+    // 16-byte value in a growing vector), so the header is bounded before it is parsed.
+    if (n > safetensors_max_header)
+        throw fail("header length " + std::to_string(n) + " exceeds the " + std::to_string(safetensors_max_header) +
+                   "-byte limit");
     const std::string_view header = bytes.substr(8, n);
     const std::string_view data = bytes.substr(8 + n);
 
@@ -59,6 +66,7 @@ inline safetensors_file parse_safetensors(std::string_view bytes, std::string_vi
         h = nlohmann::json::parse(
             header.begin(), header.end(),
             [&](int depth, nlohmann::json::parse_event_t ev, nlohmann::json& parsed) {
+                if (depth > 4) throw fail("header nests JSON deeper than 4 levels");
                 if (depth == 1 && ev == nlohmann::json::parse_event_t::key && parsed.is_string()) {
                     if (!seen.insert(parsed.get<std::string>()).second && duplicate.empty())
                         duplicate = parsed.get<std::string>();

@@ -111,41 +111,60 @@ inline std::vector<std::string> split_csv_line(std::string_view line)
 
 }  // namespace detail
 
-/// @brief Reads `dir/manifest.csv` (`path,content,emotion[,take]`, header line first).
-/// @throws format_error naming the file and line.
-inline std::vector<labelled_clip> read_manifest(const std::filesystem::path& dir)
+/// @brief Parses the text of a `manifest.csv` (`path,content,emotion[,take]`, header line first) whose
+/// paths are relative to `dir`.
+/// @param source the file name used in error messages.
+/// @throws format_error naming the file and line for a bad header or row, a path that is absolute or
+///         climbs out of `dir` (`..`), or a path listed twice (naming both lines).
+inline std::vector<labelled_clip> parse_manifest(std::string_view text, const std::filesystem::path& dir, const std::string& source)
 {
-    const auto mpath = dir / "manifest.csv";
-    const std::string text = read_file(mpath);
     std::vector<labelled_clip> out;
+    std::map<std::string, std::size_t> first_line;  // normalised path -> line that listed it
     std::size_t line_no = 0, pos = 0;
     bool header = true;
+    auto fail = [&](const std::string& msg) -> format_error {
+        return format_error("manifest: " + source + ":" + std::to_string(line_no) + ": " + msg);
+    };
     while (pos <= text.size()) {
         const std::size_t nl = text.find('\n', pos);
-        const std::string_view line(text.data() + pos, (nl == std::string::npos ? text.size() : nl) - pos);
-        pos = nl == std::string::npos ? text.size() + 1 : nl + 1;
+        const std::string_view line = text.substr(pos, (nl == std::string_view::npos ? text.size() : nl) - pos);
+        pos = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
         ++line_no;
         if (line.find_first_not_of(" \t\r") == std::string_view::npos) continue;
         const auto f = detail::split_csv_line(line);
         if (header) {
             header = false;
             if (f.size() < 3 || f[0] != "path" || f[1] != "content" || f[2] != "emotion")
-                throw format_error("manifest: " + mpath.string() + ":" + std::to_string(line_no) +
-                                   ": header is not 'path,content,emotion[,take]'");
+                throw fail("header is not 'path,content,emotion[,take]'");
             continue;
         }
         if (f.size() < 3 || f.size() > 4 || f[0].empty() || f[1].empty() || f[2].empty())
-            throw format_error("manifest: " + mpath.string() + ":" + std::to_string(line_no) + ": expected 3 or 4 non-empty fields, found " +
-                               std::to_string(f.size()));
+            throw fail("expected 3 or 4 non-empty fields, found " + std::to_string(f.size()));
+        const std::filesystem::path rel(f[0]);
+        if (rel.is_absolute() || rel.has_root_name() || rel.has_root_directory())
+            throw fail("path '" + f[0] + "' is absolute, expected a path inside " + dir.string());
+        for (const auto& part : rel)
+            if (part == "..") throw fail("path '" + f[0] + "' leaves the data folder (..)");
+        const std::string key = rel.lexically_normal().generic_string();
+        if (const auto [it, fresh] = first_line.emplace(key, line_no); !fresh)
+            throw fail("path '" + f[0] + "' is listed twice (first on line " + std::to_string(it->second) + ")");
         labelled_clip c;
-        c.path = dir / f[0];
+        c.path = dir / rel;
         c.content = f[1];
         c.emotion = f[2];
         c.take = f.size() == 4 ? f[3] : std::to_string(out.size());
         out.push_back(std::move(c));
     }
-    if (out.empty()) throw format_error("manifest: " + mpath.string() + ": no clips listed");
+    if (out.empty()) throw format_error("manifest: " + source + ": no clips listed");
     return out;
+}
+
+/// @brief Reads `dir/manifest.csv` (`path,content,emotion[,take]`, header line first).
+/// @throws io_error when unreadable; format_error naming the file and line (see parse_manifest).
+inline std::vector<labelled_clip> read_manifest(const std::filesystem::path& dir)
+{
+    const auto mpath = dir / "manifest.csv";
+    return parse_manifest(read_file(mpath), dir, mpath.string());
 }
 
 /// @brief Loads every labelled clip of a folder (BVH preferred over a CSV of the same stem), sorted by

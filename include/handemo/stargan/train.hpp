@@ -16,6 +16,7 @@
 #include <handemo/core/io.hpp>
 #include <handemo/core/progress.hpp>
 #include <handemo/kernels/thread_pool.hpp>
+#include <handemo/motion/bvh.hpp>
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/nn/adam.hpp>
@@ -34,6 +35,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <set>
 #include <numeric>
 #include <optional>
 #include <string>
@@ -431,6 +433,7 @@ inline std::vector<double> json_doubles(const nlohmann::json& j)
 
 /// @brief The run-time description stored in a checkpoint.
 struct checkpoint_info {
+    std::string source;  ///< the checkpoint file, named in error messages
     std::string config;
     std::vector<std::string> domains;
     std::string neutral;
@@ -445,12 +448,12 @@ struct checkpoint_info {
     nlohmann::json options;
 };
 
-/// @brief Reads and verifies a checkpoint file (format, checksum, metadata fields).
-/// @throws io_error for a missing file; format_error naming the file and the field for a truncated,
-///         corrupted or foreign file.
-inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::filesystem::path& path)
+/// @brief Verifies a checkpoint held in memory (format, checksum, metadata fields, each value's type and range).
+/// @param f the parsed safetensors file; its `source` names the file in error messages.
+/// @throws format_error naming the file and the field for a corrupted or foreign file.
+inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors_file f)
 {
-    safetensors_file f = read_safetensors(path);
+    const std::filesystem::path path = f.source;
     const auto fail = [&](const std::string& what) -> format_error {
         return format_error("checkpoint: " + path.string() + ": " + what);
     };
@@ -465,15 +468,28 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
         throw fail("checksum mismatch (stored " + meta("checksum") + ", computed " + detail::checkpoint_checksum(f) +
                    "): the file is corrupted");
     checkpoint_info info;
+    info.source = path.string();
     try {
-        const auto j = nlohmann::json::parse(meta("handemo"));
+        const auto j = nlohmann::json::parse(meta("handemo"), [&](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+            if (depth > 4) throw fail("metadata 'handemo' nests JSON deeper than 4 levels");
+            return true;
+        });
         info.config = j.at("config").get<std::string>();
         info.domains = j.at("domains").get<std::vector<std::string>>();
         info.neutral = j.at("neutral").get<std::string>();
         info.range.p_min = j.at("p_min").get<double>();
         info.range.p_max = j.at("p_max").get<double>();
-        info.range.keyframes = j.at("keyframes").get<std::size_t>();
-        info.range.joints = j.at("joints").get<std::size_t>();
+        // Integers are read only from JSON integers: nlohmann converts a float such as 1e300 to an integer
+        // type with a plain cast, which is undefined behaviour out of range.
+        auto count = [&](const char* key, std::uint64_t max) -> std::uint64_t {
+            const auto& v = j.at(key);
+            if (!v.is_number_unsigned() || v.get<std::uint64_t>() > max)
+                throw fail(std::string("metadata field '") + key + "' is " + v.dump() + ", expected an integer in 0.." +
+                           std::to_string(max));
+            return v.get<std::uint64_t>();
+        };
+        info.range.keyframes = count("keyframes", 1u << 16);
+        info.range.joints = count("joints", bvh_max_joints);
         if (j.contains("range")) {  // per-channel ranges (handemo-range/2); older checkpoints have p_min/p_max only
             const auto r = parse_range(j.at("range").dump(), path.string() + " (metadata 'range')");
             if (r.keyframes != info.range.keyframes || r.joints != info.range.joints)
@@ -488,7 +504,7 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
             info.gate_motion = detail::json_doubles(j.at("gate").at("motion"));
         }
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
-        info.step = j.at("step").get<long>();
+        info.step = static_cast<long>(count("step", std::uint64_t{1} << 53));
         info.options = j.at("options");
     } catch (const nlohmann::json::exception& e) {
         throw fail(std::string("metadata 'handemo' is malformed: ") + e.what());
@@ -506,7 +522,19 @@ inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::f
     for (std::size_t d = 0; d < info.domains.size(); ++d)
         if (!(info.gate_posture[d] >= 0 && info.gate_posture[d] <= 1) || !(info.gate_motion[d] >= 0 && info.gate_motion[d] <= 1))
             throw fail("gate of domain '" + info.domains[d] + "' is not in [0, 1]");
+    if (std::find(info.domains.begin(), info.domains.end(), info.neutral) == info.domains.end())
+        throw fail("neutral domain '" + info.neutral + "' is not one of the " + std::to_string(info.domains.size()) + " domains");
+    if (std::set<std::string>(info.domains.begin(), info.domains.end()).size() != info.domains.size())
+        throw fail("a domain name appears twice");
     return {std::move(f), std::move(info)};
+}
+
+/// @brief Reads and verifies a checkpoint file (format, checksum, metadata fields).
+/// @throws io_error for a missing file; format_error naming the file and the field for a truncated,
+///         corrupted or foreign file.
+inline std::pair<safetensors_file, checkpoint_info> read_checkpoint(const std::filesystem::path& path)
+{
+    return parse_checkpoint(read_safetensors(path));
 }
 
 /// @brief One row of the loss log.
@@ -765,6 +793,8 @@ public:
                 throw format_error("checkpoint: " + path.string() + ": data.perm_cursor entry out of range (different data set?)");
             perm_[i] = static_cast<std::size_t>(pc[i]);
         }
+        if (pc.back() < 0 || static_cast<std::size_t>(pc.back()) > perm_.size())
+            throw format_error("checkpoint: " + path.string() + ": data.perm_cursor position out of range (different data set?)");
         cursor_ = static_cast<std::size_t>(pc.back());
         const auto& lt = f.at("log");
         const auto lg = lt.to_vector<double>();
@@ -774,6 +804,10 @@ public:
             throw format_error("checkpoint: " + path.string() + ": log has " + std::to_string(cols) + " columns, expected at most " +
                                std::to_string(loss_columns().size() + 1));
         log_.clear();
+        for (std::size_t i = 0; i + cols <= lg.size(); i += cols)
+            if (!(lg[i] >= 0 && lg[i] <= 9e15))  // the step column becomes a long below
+                throw format_error("checkpoint: " + path.string() + ": log row " + std::to_string(i / cols) + " has step " +
+                                   std::to_string(lg[i]) + ", expected a non-negative integer");
         for (std::size_t i = 0; i + cols <= lg.size(); i += cols) {
             std::vector<double> v(lg.begin() + long(i) + 1, lg.begin() + long(i + cols));
             v.resize(loss_columns().size(), std::nan(""));

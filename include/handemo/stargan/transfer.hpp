@@ -47,7 +47,7 @@ public:
     /// @brief Index of an emotion. @throws value_error naming it and the known ones.
     std::size_t domain(std::string_view emotion) const
     {
-        return domain_index(info_.domains, emotion, "transfer: model " + info_.config);
+        return domain_index(info_.domains, emotion, "transfer: model " + info_.source + " (" + info_.config + ")");
     }
 
     /// @brief Duration factor of a transfer from `source` (default: the neutral domain) to `target`:
@@ -77,10 +77,12 @@ public:
     keyframe_pixels<dynamic_keyframes> translate(const keyframe_pixels<dynamic_keyframes>& px, std::size_t target) const
     {
         if (px.count() != keyframes() || px.joints != joints())
-            throw shape_error("transfer: motion image is " + std::to_string(px.count()) + "x" + std::to_string(px.joints) +
+            throw shape_error("transfer: model " + info_.source + ": motion image is " + std::to_string(px.count()) + "x" + std::to_string(px.joints) +
                               " (keyframes x joints), the model expects " + std::to_string(keyframes()) + "x" +
                               std::to_string(joints()));
-        if (target >= info_.domains.size()) throw value_error("transfer: target domain out of range");
+        if (target >= info_.domains.size())
+            throw value_error("transfer: model " + info_.source + ": target domain " + std::to_string(target) + " out of range (" +
+                              std::to_string(info_.domains.size()) + " domains)");
         return from_network(generate(to_network(px), target));
     }
 
@@ -113,13 +115,15 @@ public:
     network_image<dynamic_keyframes> generate(const network_image<dynamic_keyframes>& net, std::size_t target) const
     {
         if (net.count() != keyframes() || net.joints != joints() || net.data.size() != 3 * keyframes() * joints())
-            throw shape_error("transfer: network image is " + std::to_string(net.count()) + "x" + std::to_string(net.joints) +
+            throw shape_error("transfer: model " + info_.source + ": network image is " + std::to_string(net.count()) + "x" + std::to_string(net.joints) +
                               ", the model expects " + std::to_string(keyframes()) + "x" + std::to_string(joints()));
-        if (target >= info_.domains.size()) throw value_error("transfer: target domain out of range");
+        if (target >= info_.domains.size())
+            throw value_error("transfer: model " + info_.source + ": target domain " + std::to_string(target) + " out of range (" +
+                              std::to_string(info_.domains.size()) + " domains)");
         network_image<dynamic_keyframes> out = net;
         run_generator(net.data.data(), target, out.data.data());
         for (float v : out.data)
-            if (!std::isfinite(v)) throw value_error("transfer: the generator produced a non-finite value (corrupted weights?)");
+            if (!std::isfinite(v)) throw value_error("transfer: model " + info_.source + ": the generator produced a non-finite value (corrupted weights?)");
         return out;
     }
 
@@ -128,7 +132,7 @@ public:
     transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
     {
         check_skeleton(in.skel);
-        in.validate("transfer: input");
+        in.validate("transfer: input " + in.skel.name);
         auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
         const bool amp = amplitude_stage();
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
@@ -177,12 +181,12 @@ public:
     void check_skeleton(const skeleton& s) const
     {
         if (s.size() != joints())
-            throw shape_error("transfer: clip has " + std::to_string(s.size()) + " joints, the model (" + info_.config +
-                              ") was trained on " + std::to_string(joints()) + " (wrong skeleton for the model)");
+            throw shape_error("transfer: clip " + s.name + " has " + std::to_string(s.size()) + " joints, the model " +
+                              info_.source + " (" + info_.config + ") was trained on " + std::to_string(joints()) + " (wrong skeleton for the model)");
         for (std::size_t j = 0; j < s.size() && j < info_.joint_names.size(); ++j)
             if (s.joints[j].name != info_.joint_names[j])
-                throw shape_error("transfer: joint " + std::to_string(j) + " is '" + s.joints[j].name + "', the model expects '" +
-                                  info_.joint_names[j] + "' (wrong skeleton for the model)");
+                throw shape_error("transfer: clip " + s.name + ": joint " + std::to_string(j) + " is '" + s.joints[j].name + "', the model expects '" +
+                                  info_.joint_names[j] + "' (wrong skeleton for the model " + info_.source + ")");
     }
 
 protected:
@@ -205,6 +209,14 @@ public:
             throw format_error("checkpoint: " + f.source + ": range is for " + std::to_string(info_.range.keyframes) + "x" +
                                std::to_string(info_.range.joints) + ", configuration " + info_.config + " is " +
                                std::to_string(K) + "x" + std::to_string(J));
+        // Every field the generator indexes with is checked against the configuration: a target index is
+        // a position in info_.domains and becomes label[target] in run_generator (Base::domains floats).
+        if (info_.domains.size() != Base::domains)
+            throw format_error("checkpoint: " + f.source + ": " + std::to_string(info_.domains.size()) +
+                               " domain names, configuration " + info_.config + " has " + std::to_string(Base::domains));
+        if (info_.joint_names.size() != J)
+            throw format_error("checkpoint: " + f.source + ": " + std::to_string(info_.joint_names.size()) +
+                               " joint names, configuration " + info_.config + " has " + std::to_string(J) + " joints");
         load_parameters(f, g_, f.find("G_ema.main.0.weight") ? "G_ema." : "G.");  // the EMA weights when trained with them
         g_.set_residual(residual());
         g_.set_requires_grad(false);
@@ -214,6 +226,7 @@ private:
     void run_generator(const float* x, std::size_t target, float* out) const override
     {
         std::vector<float> label(Base::domains, 0.f);
+        if (target >= label.size()) throw value_error("transfer: target domain " + std::to_string(target) + " out of range");
         label[target] = 1.f;
         pad_image(x, K, J, in_.data(), H, W);
         g_.infer(in_.data(), label.data(), out_.data(), ws_);
@@ -226,16 +239,24 @@ private:
 
 }  // namespace detail
 
+/// @brief Builds a model from a verified checkpoint (parse_checkpoint / read_checkpoint).
+/// @throws format_error when a field does not fit the configuration (domain or joint count, image size,
+///         missing or misshapen tensors), value_error (unknown configuration).
+inline std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info)
+{
+    return with_config(info.config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
+        return std::make_unique<detail::emotion_model_impl<Config>>(f, info);
+    });
+}
+
 /// @brief Loads a model from a checkpoint file, or from a training output folder holding one.
 /// @throws io_error, format_error (corrupted, truncated, foreign file), value_error (unknown configuration).
 inline std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path)
 {
     const auto file = std::filesystem::is_directory(path) ? path / "checkpoint.safetensors" : path;
-    auto [f, info] = read_checkpoint(file);
-    const std::string config = info.config;
-    return with_config(config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
-        return std::make_unique<detail::emotion_model_impl<Config>>(f, info);
-    });
+    // No structured binding here: clang 14 cannot capture one in a lambda (C++20's P1091 came in clang 16).
+    const auto loaded = read_checkpoint(file);
+    return load_model(loaded.first, loaded.second);
 }
 
 }  // namespace handemo::stargan

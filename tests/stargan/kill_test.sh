@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Crash safety of what `handemo train` keeps: kills a training run with SIGKILL at several points while it
+# trains and writes a checkpoint every iteration, then requires that
+#   - the checkpoint left behind (if any) is whole: `handemo transfer` loads it,
+#   - `train --resume` from it ends bitwise equal (checkpoint and generator) to an uninterrupted run.
+# Usage: kill_test.sh HANDEMO_CLI WORK_DIR
+set -euo pipefail
+cli=$1
+work=$2
+iters=8
+rm -rf "$work"
+mkdir -p "$work"
+train=(train --data "$work/data" --config hand-tiny --iters $iters --threads 1 --checkpoint-every 1 --log-every 1
+       --exclude-content pointing --seed 5)
+"$cli" synth --out "$work/data" --takes 1 --seed 3 >/dev/null
+
+start=$(date +%s%N)
+"$cli" "${train[@]}" --out "$work/ref" >/dev/null
+total_ms=$(( ($(date +%s%N) - start) / 1000000 ))
+echo "uninterrupted run: ${total_ms} ms"
+
+checked=0
+killed_mid=0
+for pct in 10 25 40 55 70 85 95; do
+  out="$work/kill_$pct"
+  delay_ms=$(( total_ms * pct / 100 ))
+  "$cli" "${train[@]}" --out "$out" >/dev/null 2>&1 &
+  pid=$!
+  sleep "$(printf '%d.%03d' $((delay_ms / 1000)) $((delay_ms % 1000)))"
+  if kill -KILL "$pid" 2>/dev/null; then killed_mid=$((killed_mid + 1)); fi
+  wait "$pid" 2>/dev/null || true
+  how=restarted
+  if [[ -f "$out/checkpoint.safetensors" ]]; then
+    how=resumed
+    # the checkpoint left behind by the killed run loads
+    if ! "$cli" transfer --model "$out" --in "$work/data/hand_pointing_neutral_0.bvh" --emotion sad \
+         --out "$out/probe.bvh" >/dev/null 2>"$out/probe.err"; then
+      echo "kill at ${delay_ms} ms: the checkpoint left behind does not load: $(cat "$out/probe.err")"
+      exit 1
+    fi
+    "$cli" "${train[@]}" --out "$out" --resume >/dev/null
+    checked=$((checked + 1))
+  else
+    "$cli" "${train[@]}" --out "$out" >/dev/null  # killed before the first checkpoint: start again
+  fi
+  for f in checkpoint.safetensors generator.safetensors; do
+    if ! cmp -s "$work/ref/$f" "$out/$f"; then
+      echo "kill at ${delay_ms} ms: $f after --resume differs from the uninterrupted run"
+      exit 1
+    fi
+  done
+  echo "kill at ${delay_ms} ms (${pct}%): ${how}, bitwise equal"
+done
+if ((killed_mid == 0 || checked == 0)); then
+  echo "no run was killed while training with a checkpoint on disk (machine too fast or too slow?)"
+  exit 1
+fi
+echo "kill_test: ${killed_mid} runs killed, ${checked} resumed from the checkpoint left behind, all bitwise equal"
