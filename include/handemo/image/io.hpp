@@ -123,7 +123,7 @@ inline void check_png(std::string_view data, const std::string& what)
             if (depth != 8 || color != 2) {
                 const int comp = color == 0 ? 1 : color == 4 ? 2 : color == 6 ? 4 : 3;  // 3: RGB or palette
                 throw format_error(what + ": " + std::to_string(comp) + " channel" + (comp == 1 ? "" : "s") +
-                                   (depth == 16 ? " of 16 bits" : "") + " found, expected 3 (8-bit RGB; PNG colour type " +
+                                   (depth == 16 ? " of 16 bits" : "") + " found, expected 3 (8-bit RGB) (PNG colour type " +
                                    std::to_string(color) + ", bit depth " + std::to_string(depth) + ")");
             }
             if (body[10] != 0 || body[11] != 0 || interlace > 1) fail("unknown compression, filter or interlace method");
