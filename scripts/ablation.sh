@@ -20,9 +20,16 @@ declare -A args=(
   [global-range]="--range global"
   [no-ema]="--ema 0"
   [no-id]="--lambda-id 0"
+  [gate-no-rule]="--gate-margin -1"
+  [gate-no-prior]="--gate-prior false"
+  [gate-first]="--gate-prior false --gate-margin -1"
 )
+# variants that only change the gate: the handemo variant's trained models with another gate (seconds each)
+declare -A regate=([gate-no-rule]=1 [gate-no-prior]=1 [gate-first]=1)
 variants=("$@")
-if ((${#variants[@]} == 0)); then variants=(handemo paper no-gate no-pair no-residual no-augment global-range no-ema no-id); fi
+if ((${#variants[@]} == 0)); then
+  variants=(handemo paper no-gate no-pair no-residual no-augment global-range no-ema no-id gate-no-rule gate-no-prior gate-first)
+fi
 mkdir -p "$out"
 [[ -d "$out/data" ]] || "$bin" synth --out "$out/data" --takes 3 --seed 1 >/dev/null
 run() {  # variant
@@ -35,10 +42,19 @@ run() {  # variant
 running=0
 for v in "${variants[@]}"; do
   [[ -n "${args[$v]+x}" ]] || { echo "ablation: unknown variant '$v' (known: ${!args[*]})" >&2; exit 1; }
+  [[ -n "${regate[$v]+x}" ]] && continue
   run "$v" & running=$((running + 1))
   if ((running == 2)); then wait -n; running=$((running - 1)); fi
 done
 wait
+for v in "${variants[@]}"; do
+  [[ -n "${regate[$v]+x}" && ! -f "$out/$v/summary.csv" ]] || continue
+  [[ -f "$out/handemo/summary.csv" ]] || run handemo
+  rm -rf "$out/$v" && cp -r "$out/handemo" "$out/$v"
+  # shellcheck disable=SC2086
+  "$bin" eval --data "$out/data" --config hand-embedded --report "$out/$v" --threads 1 --synth-seed 1 --reuse-models ${args[$v]} \
+    >"$out/$v.log" 2>&1
+done
 echo "| variant | options | RMSE to real (deg) | G alone (deg) | identity | mean-offset | pairs beating mean-offset |"
 echo "|---|---|---|---|---|---|---|"
 for v in "${variants[@]}"; do

@@ -58,7 +58,11 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         const auto ck = read_checkpoint(dir / "folds" / f / "checkpoint.safetensors").second;
         REQUIRE(fs::exists(dir / "folds" / f / "gate" / "gate.csv"));  // the preset fits the gate in every fold
         bool gated = false;
-        for (std::size_t d = 0; d < ck.gate_posture.size(); ++d) gated |= ck.gate_posture[d] != 1.0 || ck.gate_motion[d] != 1.0;
+        for (std::size_t d = 0; d < ck.gate_posture.size(); ++d)
+            gated |= ck.gate_posture[d] != 1.0 || ck.gate_motion[d] != 1.0 || ck.gate_prior[d] != 0.0;
+        // the fold's seed follows the content's place among all contents (gripping 0, patting 1, pointing 2), so
+        // `--folds patting` trains what the full run trains
+        CHECK(ck.options.at("seed").get<std::uint64_t>() == o.train.seed + (std::string(f) == "patting" ? 1u : 0u));
         gated_folds += gated;
         const auto n_ungated = std::count_if(r.samples.begin(), r.samples.end(), [&](const sample_record& s) {
             return s.fold == f && s.method == "stargan-ungated";
@@ -113,6 +117,16 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     for (std::size_t i = 0; i < r.samples.size(); ++i) CHECK(again.samples[i].rmse_real == r.samples[i].rmse_real);
     CHECK(again.folds[0].reused_model);
     CHECK(again.folds[1].seen_rmse_stargan == r.folds[1].seen_rmse_stargan);
+    // only the gate's options differ: the same G, its gate fitted again from the stored inner models
+    o.train.gate_margin = -1;
+    o.train.gate_prior = false;
+    const auto regated = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(regated.folds[0].reused_model);
+    const auto ck2 = read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second;
+    auto want = o.train.to_json();
+    want["seed"] = o.train.seed + 1;  // patting's seed
+    CHECK(ck2.options == want);
+    CHECK(ck2.gate_prior == std::vector<double>(5, 0.0));
     // ... but not when the options differ
     o.train.iters = 13;
     CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("--reuse-models"), value_error);

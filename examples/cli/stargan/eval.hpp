@@ -60,6 +60,9 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--iters", t.iters, "D iterations per fold (G every --n-critic)")->capture_default_str();
     sub->add_option("--seed", t.seed, "Random seed (fold i trains with seed + i)")->capture_default_str();
     sub->add_option("--folds", o->opt.folds, "Held-out contents to run, comma separated (default: all)")->delimiter(',');
+    sub->add_flag("--reuse-models", o->opt.reuse_models,
+                  "Reuse each fold's model already in the report folder when it was trained with the same options and steps "
+                  "(when only the change gate's options differ, the gate is fitted again from the stored inner models)");
     handemo::cli::add_train_options(sub, t, o->ov);
     auto* seed_opt = sub->add_option("--synth-seed", o->synth_seed,
                                      "Seed of a synthetic hand set (`handemo synth --seed`): adds the 'oracle' method, the input "

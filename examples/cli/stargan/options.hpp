@@ -19,7 +19,8 @@ struct train_overrides {
     std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
         lambda_delta, ema, augment;
     std::optional<int> n_critic, gate_folds;
-    std::optional<bool> residual, amplitude;
+    std::optional<bool> residual, amplitude, gate_prior;
+    std::optional<double> gate_margin;
     std::optional<std::string> range;
 };
 
@@ -54,6 +55,12 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
     sub->add_option("--gate-folds", o.gate_folds,
                     "Change gate: train G this many more times, each without a group of the training contents, and blend "
                     "G's change per target emotion by what helps those held-out contents; 0 = off (handemo 2, paper 0)");
+    sub->add_option("--gate-prior", o.gate_prior,
+                    "Change gate: also offer the training pairs' mean posture change of the target emotion, weighted 0..1 "
+                    "(handemo true)");
+    sub->add_option("--gate-margin", o.gate_margin,
+                    "Change gate: choose the lowest-RMSE setting whose held-out outputs the emotion classifier recognises at most "
+                    "this share below the real clips; < 0 = lowest RMSE only (handemo 0.10)");
     sub->add_option("--range", o.range, "Eq. 3 range: 'channel' (per channel, wrapped against a reference) or 'global' (the paper's)");
 }
 
@@ -81,6 +88,8 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.amplitude = o.amplitude.value_or(p.amplitude);
     t.augment = o.augment.value_or(p.augment);
     t.gate_folds = o.gate_folds.value_or(p.gate_folds);
+    t.gate_prior = o.gate_prior.value_or(p.gate_prior);
+    t.gate_margin = o.gate_margin.value_or(p.gate_margin);
     t.validate();
 }
 

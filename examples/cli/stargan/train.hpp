@@ -61,9 +61,10 @@ inline void run_train(train_cli& o)
                       << tr.data().amplitude_check.first << " unscaled" << (tr.data().amplitude_check.second < tr.data().amplitude_check.first ? ")" : "; not used)") << "\n";
         }
         if (!gate.rows.empty()) {
-            std::cout << "train: change gate (weight of G's posture / motion change per target, chosen on held-out training contents; "
+            std::cout << "train: change gate (weight of G's posture / motion change / posture prior per target, chosen on held-out "
+                         "training contents; "
                       << (fs::path(o.out) / "gate" / "gate.csv").string() << "):";
-            for (const auto& r : gate.rows) std::cout << " " << r.target << " " << r.posture << "/" << r.motion;
+            for (const auto& r : gate.rows) std::cout << " " << r.target << " " << r.posture << "/" << r.motion << "/" << r.prior;
             std::cout << "\n";
         }
         std::cout << "train: tempo factors (duration relative to " << info.neutral << "):";

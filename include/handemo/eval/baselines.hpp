@@ -66,6 +66,9 @@ public:
         return b;
     }
 
+    /// @brief Whether `emotion` is the neutral one or the training set had pairs of it.
+    bool has(const std::string& emotion) const { return emotion == neutral_ || delta_.count(emotion) > 0; }
+
     /// @brief delta_e [K, J, 3] (zeros for the neutral emotion).
     /// @throws value_error for an emotion the training set had no pairs of.
     keyframes<K> delta(const std::string& emotion, std::size_t joints) const

@@ -229,12 +229,21 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         const fs::path fold_dir = out_dir / "folds" / held;
         auto t0 = clock::now();
         auto to = opt.train;
-        to.seed = opt.train.seed + fi;
+        // the seed follows the content's place among all contents, so `--folds X` trains X as the full run does
+        to.seed = opt.train.seed + static_cast<std::uint64_t>(std::find(contents.begin(), contents.end(), held) - contents.begin());
         to.progress_out = opt.progress_out;
         const fs::path ck_path = fold_dir / "checkpoint.safetensors";
         if (opt.reuse_models && fs::exists(ck_path)) {
             const auto ck = stargan::read_checkpoint(ck_path).second;
-            if (ck.config != info.name || ck.step != to.iters || ck.options != to.to_json())
+            // only the gate's options differ: G is the same, the gate is fitted again (inner models reused)
+            if (ck.config == info.name && ck.step == to.iters && ck.options != to.to_json() &&
+                stargan::detail::options_without_gate(ck.options) == stargan::detail::options_without_gate(to.to_json())) {
+                if (opt.progress_out)
+                    std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate options: refitting the gate\n",
+                                 ck_path.string().c_str());
+                stargan::refit_gate<Config>(train, info, to, fold_dir);
+            }
+            if (ck.config != info.name || ck.step != to.iters || stargan::read_checkpoint(ck_path).second.options != to.to_json())
                 throw value_error("eval: --reuse-models: " + ck_path.string() + " is a " + ck.config + " model of " +
                                   std::to_string(ck.step) + " steps with options " + ck.options.dump() + ", this run wants " +
                                   info.name + ", " + std::to_string(to.iters) + " steps, " + to.to_json().dump() +
@@ -262,10 +271,12 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         const stargan::detail::emotion_model_impl<Config> model_g(ckf, g_info);
         // the same model with G's whole change: what the change gate buys (an ablation row)
         bool gated = false;
-        for (std::size_t d = 0; d < ckinfo.gate_posture.size(); ++d) gated |= ckinfo.gate_posture[d] != 1.0 || ckinfo.gate_motion[d] != 1.0;
+        for (std::size_t d = 0; d < ckinfo.gate_posture.size(); ++d)
+            gated |= ckinfo.gate_posture[d] != 1.0 || ckinfo.gate_motion[d] != 1.0 || ckinfo.gate_prior[d] != 0.0;
         auto u_info = ckinfo;
         u_info.gate_posture.assign(u_info.gate_posture.size(), 1.0);
         u_info.gate_motion.assign(u_info.gate_motion.size(), 1.0);
+        u_info.gate_prior.assign(u_info.gate_prior.size(), 0.0);
         const stargan::detail::emotion_model_impl<Config> model_u(ckf, u_info);
 
         // ---- baselines and the independent emotion classifier, from the training clips only

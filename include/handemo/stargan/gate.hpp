@@ -6,16 +6,25 @@
 // fit_change_gate() splits the training contents into gate_folds groups, trains G once per group without that
 // group (same options and steps), and transfers the held-out group's neutral takes to every other emotion.
 // G's change is split into its mean over the keyframes per channel (the posture: a held wrist, a sunk hand)
-// and the rest (the motion), and every pair of weights (posture, motion) in {0, 0.25, 0.5, 0.75, 1}^2 is
-// scored by keyframe RMSE to the real take of the target emotion (the evaluation's measure); each target
-// emotion gets the pair with the lowest mean. (1, 1) is G's whole change, as StarGAN; (0, 0) leaves the input
-// as it is, with the amplitude stage and tempo. The final G is then trained on every training content and
-// the gate is stored in its checkpoint; transfer applies it (emotion_model::transfer).
+// and the rest (the motion), each weighted by 0, 0.25, 0.5, 0.75 or 1. With train_options::gate_prior a third
+// part is offered: the posture prior, the training pairs' mean keyframe-mean change of the target emotion per
+// channel (mean-offset's difference emotion - neutral averaged over the keyframes; posture_prior()), which
+// does not depend on the input's content, also weighted 0 .. 1. Every setting is scored on the held-out pairs
+// by keyframe RMSE to the real take of the target emotion (the evaluation's measure) and, with
+// train_options::gate_margin >= 0, by how often the independent emotion classifier (nearest centroid, trained
+// on the inner training clips, as the evaluation's) recognises the target. Each target emotion gets the
+// lowest-RMSE setting whose recognition rate is at most gate_margin below the real held-out clips' rate (when
+// none is, the most recognised one); with gate_margin < 0 simply the lowest-RMSE one (the first gate).
+// (1, 1, 0) is G's whole change, as StarGAN; (0, 0, 0) leaves the input as it is, with the amplitude stage
+// and tempo. The final G is then trained on every training content and the gate (and the prior, from every
+// training content) is stored in its checkpoint; transfer applies it (emotion_model::transfer).
 // Cost: gate_folds more trainings (each on fewer clips); train_model() runs them first, then the final one.
 #pragma once
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
+#include <handemo/eval/baselines.hpp>
+#include <handemo/eval/classifier.hpp>
 #include <handemo/eval/metrics.hpp>
 #include <handemo/stargan/dataset.hpp>
 #include <handemo/stargan/train.hpp>
@@ -35,43 +44,98 @@ namespace handemo::stargan {
 
 /// @brief The outcome of fit_change_gate().
 struct gate_fit {
-    std::vector<double> posture, motion;  ///< [C] the chosen weights per target domain (1 for neutral)
+    std::vector<double> posture, motion;  ///< [C] the chosen weights of G's change per target domain (1 for neutral)
+    std::vector<double> prior;            ///< [C] the chosen weight of the posture prior (0 for neutral or without gate_prior)
     /// One row per target domain that had validation pairs.
     struct row {
         std::string target;
-        double posture = 1, motion = 1;
-        double rmse_gated = 0, rmse_full = 0, rmse_none = 0;  ///< mean keyframe RMSE (deg): chosen, (1, 1), (0, 0)
-        std::size_t pairs = 0;                                ///< (held-out neutral take, real target take) pairs
+        double posture = 1, motion = 1, prior = 0;
+        double rmse_gated = 0, rmse_full = 0, rmse_none = 0;  ///< mean keyframe RMSE (deg): chosen, (1, 1, 0), (0, 0, 0)
+        /// share of held-out outputs the inner classifier recognises as the target: chosen, (1, 1, 0), and the
+        /// real held-out clips' share (NaN when gate_margin < 0: no classifier)
+        double emotion_gated = std::nan(""), emotion_full = std::nan(""), emotion_real = std::nan("");
+        std::size_t pairs = 0;  ///< (held-out neutral take, real target take) pairs
     };
     std::vector<row> rows;
-    std::size_t folds = 0;  ///< inner trainings run
+    std::size_t folds = 0;          ///< inner trainings run or reused
+    std::size_t reused_folds = 0;   ///< inner models reused (fit_change_gate(..., reuse = true))
 
-    /// @brief The rows as CSV (target,posture,motion,rmse_gated,rmse_full,rmse_none,pairs).
+    /// @brief The rows as CSV (target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs).
     std::string csv() const
     {
-        std::string s = "target,posture,motion,rmse_gated,rmse_full,rmse_none,pairs\n";
-        char b[256];
+        std::string s = "target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs\n";
+        char b[320];
         for (const auto& r : rows) {
-            std::snprintf(b, sizeof b, "%s,%.2f,%.2f,%.6f,%.6f,%.6f,%zu\n", r.target.c_str(), r.posture, r.motion, r.rmse_gated,
-                          r.rmse_full, r.rmse_none, r.pairs);
+            std::snprintf(b, sizeof b, "%s,%.2f,%.2f,%.2f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%zu\n", r.target.c_str(), r.posture, r.motion, r.prior,
+                          r.rmse_gated, r.rmse_full, r.rmse_none, r.emotion_gated, r.emotion_full, r.emotion_real, r.pairs);
             s += b;
         }
         return s;
     }
 };
 
-/// The weights fit_change_gate() chooses from, for the posture and for the motion part of G's change.
+/// The weights fit_change_gate() chooses from, for the posture and for the motion part of G's change (and the prior).
 inline constexpr std::array<double, 5> gate_grid{1.0, 0.75, 0.5, 0.25, 0.0};
+
+/// @brief The posture prior of train_options::gate_prior: for every domain, the mean over the training pairs
+/// (an emotional take and the neutral take of the same content and take) of their keyframe difference, averaged
+/// over the keyframes per channel, in degrees: [C][J*3]; zeros for the neutral domain and for a domain without pairs.
+/// It is the keyframe mean of mean-offset's difference, so it does not depend on the amplitude stage (which
+/// scales excursions about that mean).
+/// @throws value_error when no clip is neutral; shape_error for clips of different skeletons.
+template <std::size_t K>
+std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>& clips, const config_info& info)
+{
+    if (clips.empty()) throw value_error("posture_prior: no clips");
+    const std::size_t J = clips.front().motion.skel.size(), C = J * 3;
+    for (const auto& c : clips)
+        if (c.motion.skel.size() != J)
+            throw shape_error("posture_prior: " + c.path.string() + " has " + std::to_string(c.motion.skel.size()) + " joints, " +
+                              clips.front().path.string() + " has " + std::to_string(J));
+    const auto b = eval::mean_offset_baseline<K>::fit(clips, info.neutral);
+    std::vector<std::vector<double>> prior(info.domains, std::vector<double>(C, 0.0));
+    for (std::size_t d = 0; d < info.domains; ++d) {
+        const std::string& e = info.domain_names[d];
+        if (e == info.neutral || !b.has(e)) continue;
+        const auto delta = b.delta(e, J);
+        for (std::size_t k = 0; k < delta.count(); ++k)
+            for (std::size_t ch = 0; ch < C; ++ch) prior[d][ch] += delta.angles[k * C + ch] / static_cast<double>(delta.count());
+    }
+    return prior;
+}
+
+namespace detail {
+
+/// The training options without the gate's own (gate_folds, gate_prior, gate_margin): two checkpoints whose
+/// options agree on these trained the same G, whatever gate was fitted around it.
+inline nlohmann::json options_without_gate(nlohmann::json o)
+{
+    if (o.is_object())
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin"}) o.erase(k);
+    return o;
+}
+
+/// Whether the checkpoint at `path` was trained with `opt` (gate options aside) for opt.iters steps.
+inline bool checkpoint_matches(const std::filesystem::path& path, const train_options& opt)
+{
+    if (!std::filesystem::exists(path)) return false;
+    const auto ck = read_checkpoint(path).second;
+    return ck.step == opt.iters && options_without_gate(ck.options) == options_without_gate(opt.to_json());
+}
+
+}  // namespace detail
 
 /// @brief Chooses the change gate of a residual G by leave-content-group-out inside `clips` (see the header
 /// comment). Inner models are written to work_dir/inner<i>/ and the table to work_dir/gate.csv.
 /// @param opt the options the final G is trained with (gate_folds inner trainings of them, each with its own seed)
+/// @param reuse keep an inner model already in work_dir/inner<i>/ when it was trained with the same options
+///        (the gate's own aside) and steps, instead of training it again (`handemo eval --reuse-models`)
 /// @return all-1 weights (and no rows) when the clips have fewer contents than opt.gate_folds or no neutral take
 ///         with a real target in a held-out group.
 /// @throws value_error when opt is not residual; the errors of training and transfer otherwise.
 template <stargan_config Config>
 gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
-                         const std::filesystem::path& work_dir)
+                         const std::filesystem::path& work_dir, bool reuse = false)
 {
     constexpr std::size_t K = Config::keyframes;
     const std::size_t C = info.domains;
@@ -79,6 +143,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
     gate_fit g;
     g.posture.assign(C, 1.0);
     g.motion.assign(C, 1.0);
+    g.prior.assign(C, 0.0);
     const std::size_t F = static_cast<std::size_t>(std::max(opt.gate_folds, 2));
     std::set<std::string> content_set;
     for (const auto& c : clips) content_set.insert(c.content);
@@ -93,11 +158,12 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         return static_cast<std::size_t>(std::find(contents.begin(), contents.end(), content) - contents.begin()) % F;
     };
     constexpr std::size_t G = gate_grid.size();
-    // [target][posture index][motion index]: sum of RMSE; count per target
-    std::vector<std::array<std::array<double, G>, G>> sum(C);
-    for (auto& a : sum)
-        for (auto& b : a) b.fill(0.0);
-    std::vector<std::size_t> count(C, 0);
+    const std::size_t P = opt.gate_prior ? G : 1;  // prior weights tried: the grid, or only 0
+    const auto prior_weight = [&](std::size_t c) { return opt.gate_prior ? gate_grid[c] : 0.0; };
+    const bool use_emotion = opt.gate_margin >= 0;
+    const std::size_t S = G * G * P;  // settings, index (a * G + b) * P + c
+    std::vector<std::vector<double>> sum(C, std::vector<double>(S, 0.0)), ok(C, std::vector<double>(S, 0.0));
+    std::vector<std::size_t> count(C, 0), real_ok(C, 0);
     std::filesystem::create_directories(work_dir);
     for (std::size_t f = 0; f < F; ++f) {
         std::vector<labelled_clip> train;
@@ -112,21 +178,35 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         }
         for (const auto& c : contents)
             if (group_of(c) == f) names += (names.empty() ? "" : ", ") + c;
-        if (opt.progress_out)
-            std::fprintf(opt.progress_out, "gate %zu/%zu: training G without %s (%zu clips) to choose the change gate\n", f + 1, F,
-                         names.c_str(), train.size());
         auto inner = opt;
         inner.gate_folds = 0;
         inner.seed = opt.seed + 7919 * (f + 1);
         inner.checkpoint_every = inner.iters;
         inner.stop_at = -1;
         const auto dir = work_dir / ("inner" + std::to_string(f + 1));
-        {
+        if (reuse && detail::checkpoint_matches(dir / "checkpoint.safetensors", inner)) {
+            if (opt.progress_out)
+                std::fprintf(opt.progress_out, "gate %zu/%zu: reusing the G trained without %s (%s)\n", f + 1, F, names.c_str(),
+                             (dir / "checkpoint.safetensors").string().c_str());
+            ++g.reused_folds;
+        } else {
+            if (opt.progress_out)
+                std::fprintf(opt.progress_out, "gate %zu/%zu: training G without %s (%zu clips) to choose the change gate\n", f + 1, F,
+                             names.c_str(), train.size());
             trainer<Config> tr(info, prepare_data<Config>(train, info, inner), inner);
             tr.run(dir);
         }
         auto [file, ckinfo] = read_checkpoint(dir / "checkpoint.safetensors");
         detail::emotion_model_impl<Config> model(file, ckinfo);
+        if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
+        // the independent emotion classifier of the evaluation, fitted on this inner training set only
+        eval::nearest_centroid_classifier clf;
+        if (use_emotion) {
+            std::vector<std::vector<double>> x;
+            std::vector<std::string> y;
+            for (const auto& c : train) x.push_back(eval::motion_features(extract_keyframes<K>(c.motion), c.motion.duration())), y.push_back(c.emotion);
+            clf.fit(x, y);
+        }
         for (const auto* in : held) {
             if (in->emotion != info.neutral) continue;
             for (std::size_t t = 0; t < C; ++t) {
@@ -137,35 +217,88 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                     if (r->content == in->content && r->emotion == target && r->take == in->take) real = r;
                 if (!real) continue;
                 const auto real_kf = extract_keyframes<K>(real->motion);
+                if (use_emotion) real_ok[t] += clf.predict(eval::motion_features(real_kf, real->motion.duration())) == target;
+                const auto parts = model.parts(in->motion, target);
                 for (std::size_t a = 0; a < G; ++a)
-                    for (std::size_t b = 0; b < G; ++b) {
-                        model.set_gate(std::vector<double>(C, gate_grid[a]), std::vector<double>(C, gate_grid[b]));
-                        sum[t][a][b] += eval::keyframe_rmse(extract_keyframes<K>(model.transfer(in->motion, target).motion), real_kf);
-                    }
+                    for (std::size_t b = 0; b < G; ++b)
+                        for (std::size_t c = 0; c < P; ++c) {
+                            const clip out = model.finish(in->motion, parts, gate_grid[a], gate_grid[b], prior_weight(c));
+                            const auto kf = extract_keyframes<K>(out);
+                            const std::size_t s = (a * G + b) * P + c;
+                            sum[t][s] += eval::keyframe_rmse(kf, real_kf);
+                            if (use_emotion) ok[t][s] += clf.predict(eval::motion_features(kf, out.duration())) == target;
+                        }
                 ++count[t];
             }
         }
         ++g.folds;
     }
+    // G's whole change (1, 1, prior 0) and no change (0, 0, 0): gate_grid runs from 1 down to 0
+    const std::size_t full_s = (0 * G + 0) * P + (opt.gate_prior ? G - 1 : 0);
+    const std::size_t none_s = ((G - 1) * G + (G - 1)) * P + (opt.gate_prior ? G - 1 : 0);
     for (std::size_t t = 0; t < C; ++t) {
         if (count[t] == 0) continue;
-        std::size_t ba = 0, bb = 0;
-        for (std::size_t a = 0; a < G; ++a)
-            for (std::size_t b = 0; b < G; ++b)
-                if (sum[t][a][b] < sum[t][ba][bb]) ba = a, bb = b;
         const double n = static_cast<double>(count[t]);
-        g.posture[t] = gate_grid[ba];
-        g.motion[t] = gate_grid[bb];
-        g.rows.push_back({info.domain_names[t], gate_grid[ba], gate_grid[bb], sum[t][ba][bb] / n, sum[t][0][0] / n,
-                          sum[t][G - 1][G - 1] / n, count[t]});
+        const double real_rate = static_cast<double>(real_ok[t]) / n;
+        std::size_t best = S;
+        if (use_emotion) {
+            for (std::size_t s = 0; s < S; ++s)
+                if (ok[t][s] / n >= real_rate - opt.gate_margin - 1e-12 && (best == S || sum[t][s] < sum[t][best])) best = s;
+            if (best == S)  // no setting is recognised well enough: the most recognised, then the lowest RMSE
+                for (std::size_t s = 0; s < S; ++s)
+                    if (best == S || ok[t][s] > ok[t][best] || (ok[t][s] == ok[t][best] && sum[t][s] < sum[t][best])) best = s;
+        } else {
+            best = 0;
+            for (std::size_t s = 0; s < S; ++s)
+                if (sum[t][s] < sum[t][best]) best = s;
+        }
+        const std::size_t a = best / (G * P), b = (best / P) % G, c = best % P;
+        g.posture[t] = gate_grid[a];
+        g.motion[t] = gate_grid[b];
+        g.prior[t] = prior_weight(c);
+        gate_fit::row r{info.domain_names[t], g.posture[t], g.motion[t], g.prior[t], sum[t][best] / n, sum[t][full_s] / n, sum[t][none_s] / n};
+        if (use_emotion) r.emotion_gated = ok[t][best] / n, r.emotion_full = ok[t][full_s] / n, r.emotion_real = real_rate;
+        r.pairs = count[t];
+        g.rows.push_back(r);
         if (opt.progress_out)
             std::fprintf(opt.progress_out,
-                         "gate: %-10s posture %.2f motion %.2f (held-out contents: %.3f deg, G's whole change %.3f, no change %.3f; "
-                         "%zu pairs)\n",
-                         info.domain_names[t].c_str(), g.posture[t], g.motion[t], g.rows.back().rmse_gated, g.rows.back().rmse_full,
-                         g.rows.back().rmse_none, count[t]);
+                         "gate: %-10s posture %.2f motion %.2f prior %.2f (held-out contents: %.3f deg, G's whole change %.3f, no change %.3f; "
+                         "recognised %.0f%%, G's whole change %.0f%%, real %.0f%%; %zu pairs)\n",
+                         info.domain_names[t].c_str(), r.posture, r.motion, r.prior, r.rmse_gated, r.rmse_full, r.rmse_none,
+                         100 * r.emotion_gated, 100 * r.emotion_full, 100 * r.emotion_real, r.pairs);
     }
     write_file_atomic(work_dir / "gate.csv", g.csv());
+    return g;
+}
+
+/// @brief Fits the change gate again around a model already trained into `out_dir` (its inner models reused
+/// when they match, see fit_change_gate()) and rewrites the checkpoint's gate, prior and options in place
+/// (atomically, new checksum); G's weights are untouched. `handemo eval --reuse-models` uses it when only
+/// the gate options changed since the model was trained.
+/// @throws value_error when the checkpoint was trained with other options (the gate's aside) or steps.
+template <stargan_config Config>
+gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
+                    const std::filesystem::path& out_dir)
+{
+    const auto ck_path = out_dir / "checkpoint.safetensors";
+    if (!detail::checkpoint_matches(ck_path, opt))
+        throw value_error("train: " + ck_path.string() + " was not trained with these options (the gate's aside) and " +
+                          std::to_string(opt.iters) + " steps: its gate cannot be refitted");
+    gate_fit g;
+    if (opt.gate_folds > 0) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", true);
+    auto f = read_safetensors(ck_path);
+    auto j = nlohmann::json::parse(f.metadata.at("handemo"));
+    const std::size_t C = info.domains;
+    j["gate"] = {{"posture", g.posture.empty() ? std::vector<double>(C, 1.0) : g.posture},
+                 {"motion", g.motion.empty() ? std::vector<double>(C, 1.0) : g.motion},
+                 {"prior", g.prior.empty() ? std::vector<double>(C, 0.0) : g.prior},
+                 {"prior_posture", opt.gate_prior && opt.gate_folds > 0 ? posture_prior<Config::keyframes>(clips, info)
+                                                                        : std::vector<std::vector<double>>{}}};
+    j["options"] = opt.to_json();
+    f.metadata["handemo"] = j.dump();
+    f.metadata["checksum"] = detail::checkpoint_checksum(f);
+    write_safetensors(ck_path, f);
+    read_checkpoint(ck_path);  // the rewritten file passes every check
     return g;
 }
 
@@ -182,7 +315,8 @@ std::unique_ptr<trainer<Config>> train_model(const std::vector<labelled_clip>& c
     gate_fit g;
     if (opt.gate_folds > 0 && !resume) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate");
     auto data = prepare_data<Config>(clips, info, opt, range);
-    if (!g.posture.empty()) data.gate_posture = g.posture, data.gate_motion = g.motion;
+    if (!g.posture.empty()) data.gate_posture = g.posture, data.gate_motion = g.motion, data.gate_prior = g.prior;
+    if (opt.gate_prior && opt.gate_folds > 0 && !resume) data.prior_posture = posture_prior<Config::keyframes>(clips, info);
     auto tr = std::make_unique<trainer<Config>>(info, std::move(data), opt);
     tr->run(out_dir, resume);
     if (gate_out) *gate_out = std::move(g);

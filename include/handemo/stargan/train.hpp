@@ -76,6 +76,14 @@ struct train_options {
     /// applies it. Leave-content-out inside the training set: the held-out evaluation fold is never seen.
     /// 0: off (G's whole change, as StarGAN); otherwise at least 2.
     int gate_folds = 0;
+    /// change gate: also offer the training set's mean posture change per target emotion (the keyframe mean
+    /// of mean-offset's difference emotion - neutral, a "posture prior") as a third gated part, 0 .. 1
+    bool gate_prior = false;
+    /// change gate: the setting chosen per target is the lowest-RMSE one among those whose held-out outputs
+    /// the independent emotion classifier (trained on the inner training clips) recognises at a rate no more
+    /// than gate_margin below the real held-out clips' rate; when none does, the most recognised one. < 0: off
+    /// (lowest RMSE only, the first gate)
+    double gate_margin = -1.0;
 
     /// @throws value_error naming the option.
     void validate() const
@@ -94,6 +102,7 @@ struct train_options {
         if (range != "global" && range != "channel") bad("range '" + range + "' is not 'global' or 'channel'");
         if (gate_folds != 0 && (gate_folds < 2 || gate_folds > 16)) bad("gate_folds " + std::to_string(gate_folds) + " is not 0 or in [2, 16]");
         if (gate_folds != 0 && !residual) bad("gate_folds needs a residual G (the gate blends G's change)");
+        if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; < 0: off)");
     }
     nlohmann::json to_json() const
     {
@@ -102,7 +111,7 @@ struct train_options {
                 {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed},
                 {"residual", residual}, {"lambda_id", lambda_id}, {"lambda_pair", lambda_pair},
                 {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}, {"amplitude", amplitude},
-                {"augment", augment}, {"gate_folds", gate_folds}};
+                {"augment", augment}, {"gate_folds", gate_folds}, {"gate_prior", gate_prior}, {"gate_margin", gate_margin}};
     }
 };
 
@@ -135,6 +144,8 @@ inline train_options handemo_options()
     o.n_critic = 1;
     o.iters = 2000;
     o.gate_folds = 2;
+    o.gate_prior = true;
+    o.gate_margin = 0.10;
     return o;
 }
 
@@ -180,6 +191,10 @@ struct prepared_data {
     /// [C] change gate per target domain (fit_change_gate()): the weight of G's change averaged over the
     /// keyframes (posture) and of the rest (motion); empty: 1 (G's whole change)
     std::vector<double> gate_posture, gate_motion;
+    /// [C] weight of the posture prior per target (train_options::gate_prior); empty: 0
+    std::vector<double> gate_prior;
+    /// [C][J*3] the posture prior: the training pairs' mean keyframe-mean change (deg) per target and channel
+    std::vector<std::vector<double>> prior_posture;
     std::size_t size() const noexcept { return labels.size(); }
 };
 
@@ -443,6 +458,10 @@ struct checkpoint_info {
     /// [C] change gate per target domain (prepared_data::gate_posture/gate_motion; all 1 for checkpoints
     /// written before it existed or trained without it)
     std::vector<double> gate_posture, gate_motion;
+    /// [C] weight of the posture prior (all 0 for checkpoints written before it existed) and [C][J*3] the
+    /// prior itself in degrees (empty when every weight is 0)
+    std::vector<double> gate_prior;
+    std::vector<std::vector<double>> prior_posture;
     std::vector<std::string> joint_names;
     long step = 0;
     nlohmann::json options;
@@ -502,7 +521,11 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
         if (j.contains("gate")) {
             info.gate_posture = detail::json_doubles(j.at("gate").at("posture"));
             info.gate_motion = detail::json_doubles(j.at("gate").at("motion"));
+            if (j.at("gate").contains("prior")) info.gate_prior = detail::json_doubles(j.at("gate").at("prior"));
+            if (j.at("gate").contains("prior_posture"))
+                for (const auto& row : j.at("gate").at("prior_posture")) info.prior_posture.push_back(detail::json_doubles(row));
         }
+        if (info.gate_prior.empty()) info.gate_prior.assign(info.tempo.size(), 0.0);
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = static_cast<long>(count("step", std::uint64_t{1} << 53));
         info.options = j.at("options");
@@ -522,6 +545,25 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
     for (std::size_t d = 0; d < info.domains.size(); ++d)
         if (!(info.gate_posture[d] >= 0 && info.gate_posture[d] <= 1) || !(info.gate_motion[d] >= 0 && info.gate_motion[d] <= 1))
             throw fail("gate of domain '" + info.domains[d] + "' is not in [0, 1]");
+    if (info.gate_prior.size() != info.domains.size())
+        throw fail("gate prior has " + std::to_string(info.gate_prior.size()) + " weights for " + std::to_string(info.domains.size()) + " domains");
+    bool any_prior = false;
+    for (std::size_t d = 0; d < info.domains.size(); ++d) {
+        if (!(info.gate_prior[d] >= 0 && info.gate_prior[d] <= 1)) throw fail("gate prior of domain '" + info.domains[d] + "' is not in [0, 1]");
+        any_prior |= info.gate_prior[d] != 0;
+    }
+    if (any_prior || !info.prior_posture.empty()) {
+        const std::size_t ch = info.range.joints * 3;
+        if (info.prior_posture.size() != info.domains.size())
+            throw fail("gate prior_posture has " + std::to_string(info.prior_posture.size()) + " rows for " + std::to_string(info.domains.size()) + " domains");
+        for (std::size_t d = 0; d < info.domains.size(); ++d) {
+            if (info.prior_posture[d].size() != ch)
+                throw fail("gate prior_posture of domain '" + info.domains[d] + "' has " + std::to_string(info.prior_posture[d].size()) +
+                           " channels, expected joints*3 = " + std::to_string(ch));
+            for (double v : info.prior_posture[d])
+                if (!(std::abs(v) <= 360)) throw fail("gate prior_posture of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
+        }
+    }
     if (std::find(info.domains.begin(), info.domains.end(), info.neutral) == info.domains.end())
         throw fail("neutral domain '" + info.neutral + "' is not one of the " + std::to_string(info.domains.size()) + " domains");
     if (std::set<std::string>(info.domains.begin(), info.domains.end()).size() != info.domains.size())
@@ -587,6 +629,9 @@ public:
         if ((!data_.gate_posture.empty() || !data_.gate_motion.empty()) && (data_.gate_posture.size() != C || data_.gate_motion.size() != C))
             throw value_error("train: the prepared data's change gate has " + std::to_string(data_.gate_posture.size()) + " posture and " +
                               std::to_string(data_.gate_motion.size()) + " motion entries for " + std::to_string(C) + " domains");
+        if ((!data_.gate_prior.empty() && data_.gate_prior.size() != C) || (!data_.prior_posture.empty() && data_.prior_posture.size() != C))
+            throw value_error("train: the prepared data's posture prior has " + std::to_string(data_.gate_prior.size()) + " weights and " +
+                              std::to_string(data_.prior_posture.size()) + " rows for " + std::to_string(C) + " domains");
         if (opt_.ema > 0) {
             ema_.emplace();
             ema_->set_residual(opt_.residual);
@@ -757,7 +802,9 @@ public:
                             {"tempo", data_.tempo},
                             {"amplitude", data_.amplitude},
                             {"gate", {{"posture", data_.gate_posture.empty() ? std::vector<double>(C, 1.0) : data_.gate_posture},
-                                      {"motion", data_.gate_motion.empty() ? std::vector<double>(C, 1.0) : data_.gate_motion}}},
+                                      {"motion", data_.gate_motion.empty() ? std::vector<double>(C, 1.0) : data_.gate_motion},
+                                      {"prior", data_.gate_prior.empty() ? std::vector<double>(C, 0.0) : data_.gate_prior},
+                                      {"prior_posture", data_.prior_posture}}},
                             {"joint_names", data_.joint_names},
                             {"step", step_},
                             {"options", opt_.to_json()}};
@@ -816,6 +863,8 @@ public:
         data_.range = info.range;
         data_.gate_posture = info.gate_posture;
         data_.gate_motion = info.gate_motion;
+        data_.gate_prior = info.gate_prior;
+        data_.prior_posture = info.prior_posture;
         step_ = info.step;
     }
 

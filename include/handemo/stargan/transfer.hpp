@@ -97,8 +97,19 @@ public:
     /// change, (0, 0) no change (a residual model then returns its input, amplitude stage and tempo aside).
     /// Only a residual model has a change to gate.
     /// @throws value_error for a wrong size, a value outside [0, 1], or a model that is not residual.
-    void set_gate(std::vector<double> posture, std::vector<double> motion)
+    /// `prior` (optional, one per domain in [0, 1]) weights the model's posture prior (train_options::gate_prior);
+    /// a model without one (trained before it existed or without it) takes only zeros.
+    void set_gate(std::vector<double> posture, std::vector<double> motion, std::vector<double> prior = {})
     {
+        if (prior.empty()) prior.assign(info_.domains.size(), 0.0);
+        if (prior.size() != info_.domains.size())
+            throw value_error("transfer: a change gate needs one prior weight per domain (" + std::to_string(info_.domains.size()) + ")");
+        for (std::size_t d = 0; d < prior.size(); ++d) {
+            if (!(prior[d] >= 0 && prior[d] <= 1)) throw value_error("transfer: prior weight of domain '" + info_.domains[d] + "' is not in [0, 1]");
+            if (prior[d] != 0 && info_.prior_posture.empty())
+                throw value_error("transfer: model " + info_.source + " has no posture prior (trained without --gate-prior)");
+        }
+        info_.gate_prior = std::move(prior);
         if (!residual()) throw value_error("transfer: the change gate needs a residual model (" + info_.config + " is not)");
         if (posture.size() != info_.domains.size() || motion.size() != info_.domains.size())
             throw value_error("transfer: a change gate needs one posture and one motion weight per domain (" +
@@ -108,6 +119,22 @@ public:
                 throw value_error("transfer: change gate of domain '" + info_.domains[d] + "' is not in [0, 1]");
         info_.gate_posture = std::move(posture);
         info_.gate_motion = std::move(motion);
+    }
+
+    /// @brief Sets the posture prior (train_options::gate_prior): [domains][joints*3] degrees added, times the
+    /// gate's prior weight, to every keyframe of the output in that domain (posture_prior() computes it).
+    /// @throws value_error for a wrong size or a value that is not finite.
+    void set_prior_posture(std::vector<std::vector<double>> prior)
+    {
+        if (prior.size() != info_.domains.size())
+            throw value_error("transfer: a posture prior needs one row per domain (" + std::to_string(info_.domains.size()) + ")");
+        for (const auto& row : prior) {
+            if (row.size() != joints() * 3)
+                throw value_error("transfer: a posture prior row has " + std::to_string(row.size()) + " channels, expected " + std::to_string(joints() * 3));
+            for (double v : row)
+                if (!std::isfinite(v)) throw value_error("transfer: a posture prior value is not finite");
+        }
+        info_.prior_posture = std::move(prior);
     }
 
     /// @brief G on a network image [3, K, J] in [-1, 1] (float output, not quantised).
@@ -127,9 +154,24 @@ public:
         return out;
     }
 
-    /// @brief Transfers a clip to `target` emotion (source emotion defaults to the neutral domain).
+    /// @brief What transfer() combines, computed once: fit_change_gate() scores many gate settings on it
+    /// without running G again.
+    struct transfer_parts {
+        handemo::keyframes<dynamic_keyframes> base;  ///< the input's keyframes in the model's (amplitude-normalised) space; decoded G output when not residual
+        std::vector<double> change;         ///< [K*C] G's change in degrees (residual models; empty otherwise)
+        std::vector<double> change_mean;    ///< [C] its mean over the keyframes per channel (the posture part)
+        std::vector<double> prior;          ///< [C] the target's posture prior in degrees (empty when the model has none)
+        std::size_t target = 0;
+        double amplitude = 1, tempo = 1;    ///< the target's excursion scale (applied after the change) and tempo factor
+        std::size_t frames = 0;             ///< output frame count
+        double fps = 0;
+        keyframe_pixels<dynamic_keyframes> image;
+        std::size_t clamped_values = 0;
+    };
+
+    /// @brief The parts of a transfer (see transfer()).
     /// @throws shape_error when the clip's skeleton is not the model's (joint count or names).
-    transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
+    transfer_parts parts(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
     {
         check_skeleton(in.skel);
         in.validate("transfer: input " + in.skel.name);
@@ -138,42 +180,85 @@ public:
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
         const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
         if (amp) scale_keyframe_excursions(kf, 1.0 / a_src);
-        transfer_result r;
+        transfer_parts r;
         const std::size_t C = joints() * 3;
         for (std::size_t i = 0; i < kf.angles.size(); ++i) r.clamped_values += info_.range.contains(kf.angles[i], i % C) ? 0 : 1;
         const auto net = to_network(encode(kf, info_.range));
-        const auto gen = generate(net, domain(target));
+        r.target = domain(target);
+        const auto gen = generate(net, r.target);
         r.image = from_network(gen);
-        auto out_kf = kf;
         if (residual()) {
             // angle-space residual: input angles + G's change (network units x degrees per unit of the channel)
-            const std::size_t plane = keyframes() * joints(), t = domain(target);
-            std::vector<double> change(kf.angles.size());
+            const std::size_t plane = keyframes() * joints();
+            r.change.resize(kf.angles.size());
             for (std::size_t p = 0; p < plane; ++p)
                 for (std::size_t c = 0; c < 3; ++c) {
                     const std::size_t ch = (p % joints()) * 3 + c;
-                    change[p * 3 + c] = double(gen.data[c * plane + p] - net.data[c * plane + p]) * info_.range.half_span(ch);
+                    r.change[p * 3 + c] = double(gen.data[c * plane + p] - net.data[c * plane + p]) * info_.range.half_span(ch);
                 }
-            // the change gate: posture (the change's mean over the keyframes) and motion (the rest) weighted apart
-            const double gp = info_.gate_posture[t], gm = info_.gate_motion[t];
-            if (gp != 1.0 || gm != 1.0)
-                for (std::size_t ch = 0; ch < C; ++ch) {
-                    double mean = 0;
-                    for (std::size_t k = 0; k < keyframes(); ++k) mean += change[k * C + ch];
-                    mean /= static_cast<double>(keyframes());
-                    for (std::size_t k = 0; k < keyframes(); ++k) change[k * C + ch] = gp * mean + gm * (change[k * C + ch] - mean);
-                }
-            for (std::size_t i = 0; i < change.size(); ++i) out_kf.angles[i] += change[i];
+            r.change_mean.assign(C, 0.0);
+            for (std::size_t ch = 0; ch < C; ++ch) {
+                for (std::size_t k = 0; k < keyframes(); ++k) r.change_mean[ch] += r.change[k * C + ch];
+                r.change_mean[ch] /= static_cast<double>(keyframes());
+            }
+            if (!info_.prior_posture.empty()) r.prior = info_.prior_posture[r.target];
+            r.base = std::move(kf);
         } else {
-            out_kf = decode(r.image, info_.range);
+            r.base = decode(r.image, info_.range);
         }
         // back from the normalised space: the target's excursions (net: amplitude[target] / amplitude[source])
-        r.amplitude = amp ? amplitude(target, source) : 1.0;
-        if (amp) scale_keyframe_excursions(out_kf, info_.amplitude[domain(target)]);
+        r.amplitude = amp ? info_.amplitude[r.target] : 1.0;
         r.tempo = tempo(target, source);
-        const std::size_t frames = output_frames(in.frames, r.tempo);
-        r.motion = reconstruct(out_kf, in.skel, frames, in.fps);
-        r.motion.positions = stretch_positions(in, frames);
+        r.frames = output_frames(in.frames, r.tempo);
+        r.fps = in.fps;
+        return r;
+    }
+
+    /// @brief The output keyframes of `p` with a change gate (posture, motion, prior weights; see set_gate()).
+    /// (1, 1, 0) is G's whole change, (0, 0, 0) the input with the amplitude stage. Not residual: G's output.
+    handemo::keyframes<dynamic_keyframes> combine(const transfer_parts& p, double posture, double motion, double prior) const
+    {
+        auto out = p.base;
+        if (!p.change.empty()) {
+            const std::size_t C = joints() * 3;
+            if (posture == 1.0 && motion == 1.0) {
+                for (std::size_t i = 0; i < p.change.size(); ++i) out.angles[i] += p.change[i];
+            } else {
+                // the change gate: posture (the change's mean over the keyframes) and motion (the rest) weighted apart
+                for (std::size_t k = 0; k < keyframes(); ++k)
+                    for (std::size_t ch = 0; ch < C; ++ch) {
+                        const double m = p.change_mean[ch];
+                        out.angles[k * C + ch] += posture * m + motion * (p.change[k * C + ch] - m);
+                    }
+            }
+            if (prior != 0.0 && !p.prior.empty())
+                for (std::size_t k = 0; k < keyframes(); ++k)
+                    for (std::size_t ch = 0; ch < C; ++ch) out.angles[k * C + ch] += prior * p.prior[ch];
+        }
+        if (p.amplitude != 1.0) scale_keyframe_excursions(out, p.amplitude);
+        return out;
+    }
+
+    /// @brief The full-rate output clip of `p` (the parts of `in`) with a change gate: combine(), then the
+    /// keyframe spline at the target's tempo. transfer() is finish() with the model's gate.
+    clip finish(const clip& in, const transfer_parts& p, double posture, double motion, double prior) const
+    {
+        return reconstruct(combine(p, posture, motion, prior), in.skel, p.frames, in.fps);
+    }
+
+    /// @brief Transfers a clip to `target` emotion (source emotion defaults to the neutral domain).
+    /// @throws shape_error when the clip's skeleton is not the model's (joint count or names).
+    transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
+    {
+        auto p = parts(in, target, source);
+        const std::size_t t = p.target;
+        transfer_result r;
+        r.motion = finish(in, p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t]);
+        r.clamped_values = p.clamped_values;
+        r.image = std::move(p.image);
+        r.amplitude = amplitude_stage() ? amplitude(target, source) : 1.0;
+        r.tempo = p.tempo;
+        r.motion.positions = stretch_positions(in, p.frames);
         return r;
     }
 
