@@ -1,18 +1,14 @@
-// The circumplex method inside the leave-one-content-out evaluation (eval/rcm.hpp through the protocol's
-// extension hook): the regression numbers must be those of rcm::evaluate_loo() on the same folds (so the fold
-// model is fitted on the fold's training clips only), the "rcm" rows must be scored like every other method,
-// and every output's circumplex analysis must agree with the fold model's analysis of the same clip.
+// The circumplex method of the leave-one-content-out evaluation (eval/rcm.hpp, the extension the protocol
+// calls): the regression numbers must be those of rcm::evaluate_loo() on the same folds (so the fold model is
+// fitted on the fold's training clips only), every (input, target) must give an rcm output, and the analysis
+// of a real clip as an output must be the fold model's analysis of that clip. No StarGAN is trained here.
 #include <doctest/doctest.h>
-#include <handemo/eval/protocol.hpp>
 #include <handemo/eval/rcm.hpp>
 #include <handemo/motion/synth.hpp>
 
-#include <filesystem>
+#include <algorithm>
 #include <map>
-#include <set>
-#include <unistd.h>
 
-namespace fs = std::filesystem;
 using namespace handemo;
 using namespace handemo::eval;
 using namespace handemo::stargan;
@@ -34,37 +30,66 @@ std::vector<labelled_clip> toy_set()
     return out;
 }
 
-std::string read_text(const fs::path& p) { return read_file(p); }
-
 }  // namespace
 
-TEST_CASE("rcm extension: regression as rcm eval, rcm rows scored like the others, one report")
+TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output analysed, one report section")
 {
+    // The protocol calls begin_fold() with the fold's training clips, transfer() for each (neutral input,
+    // target), score() on every method's output and end_fold(); done here by hand for two folds (the wiring
+    // through run_eval() is tested end to end by eval_rcm_cli, which counts the rows in results.csv).
     const auto clips = toy_set();
-    const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
     rcm_eval_options ro;
     ro.table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
     ro.table_name = "circumplex.json";
     ro.fit.selection.min_features = 8;
     ro.stylise.iterations = 15;
-    auto ext = std::make_shared<rcm_extension>(ro);
+    rcm_extension ext(ro);
+    CHECK(ext.options_text().find("rcm min_features 8") != std::string::npos);
+    eval_result r;
+    std::map<std::string, sample_record> real_score;  // held-out clip name -> score() of the clip itself
+    std::size_t outputs = 0;
+    for (const std::string held : {"patting", "gripping"}) {
+        std::vector<labelled_clip> train;
+        fold_context fc;
+        fc.held_out = held;
+        fc.neutral = "neutral";
+        for (const auto& c : clips) (c.content == held ? fc.test.push_back(&c) : train.push_back(c));
+        fc.train = &train;
+        ext.begin_fold(fc);
+        const labelled_clip* in = nullptr;
+        for (const auto* c : fc.test)
+            if (c->emotion == "neutral") in = c;
+        REQUIRE(in != nullptr);
+        for (const auto* real : fc.test) {
+            sample_record s;
+            s.target = real->emotion == "neutral" ? "angry" : real->emotion;
+            ext.score(s, real->motion);
+            real_score[real->path.filename().string()] = s;
+            if (real->emotion == "neutral") continue;
+            const auto out = ext.transfer(*in, real->emotion);
+            REQUIRE(out.size() == 1);
+            CHECK(out[0].first == "rcm");
+            const clip& o = out[0].second;
+            CHECK_NOTHROW(o.validate("rcm output"));
+            CHECK(o.skel.same_topology(in->motion.skel));
+            double change = 0;  // the synthesis moved the clip
+            const std::size_t n = std::min(o.angles.size(), in->motion.angles.size());
+            for (std::size_t i = 0; i < n; ++i) change = std::max(change, std::abs(o.angles[i] - in->motion.angles[i]));
+            CHECK((change > 0.1 || o.frames != in->motion.frames));
+            sample_record so;
+            so.target = real->emotion;
+            ext.score(so, o);
+            CHECK(!std::isnan(so.circumplex_quadrant_ok));
+            ++outputs;
+        }
+        r.folds.push_back({});
+        r.folds.back().held_out = held;
+        ext.end_fold(r);
+    }
+    CHECK(outputs == 8);
 
-    eval_options o = {};
-    o.train = default_train_options();
-    o.train.iters = 4;
-    o.train.threads = 1;
-    o.train.gate_folds = 0;
-    o.folds = {"patting", "gripping"};
-    o.progress_out = nullptr;
-    o.command = "test";
-    o.data = "toy";
-    o.extensions = {ext};
-    const fs::path dir = fs::temp_directory_path() / ("handemo_eval_rcm_test_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    const auto r = run_eval<hand_tiny>(clips, info, o, dir);
-    write_report(r, dir);
-
-    // (a) regression: the same numbers as `handemo rcm eval` (rcm::evaluate_loo) holding out the same contents
+    // (a) regression: the same numbers as `handemo rcm eval` (rcm::evaluate_loo) holding out the same contents,
+    // so the fold model saw the training clips only
     std::vector<rcm::training_clip> tc;
     std::vector<std::string> group;
     for (const auto& c : clips) tc.push_back({&c.motion, c.emotion, c.content, c.path.filename().string()}), group.push_back(c.content);
@@ -73,7 +98,7 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm rows scored like the other
     const auto loo = rcm::evaluate_loo(tc, group, ro.table, "circumplex.json", fo);
     std::map<std::string, rcm::eval_sample> by_name;
     for (const auto& s : loo.samples) by_name[s.name] = s;
-    const auto& reg = ext->regression();
+    const auto& reg = ext.regression();
     REQUIRE(reg.size() == 10);  // 2 folds x 5 held-out clips
     for (const auto& s : reg) {
         CAPTURE(s.name);
@@ -85,65 +110,35 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm rows scored like the other
         CHECK(s.distance == doctest::Approx(e.distance).epsilon(1e-9));
         CHECK(s.quadrant_ok == e.quadrant_ok);
         CHECK(s.baseline_distance == doctest::Approx(e.baseline_distance).epsilon(1e-9));
+        // (b) a score of the real clip (the "real" row) is the regression's analysis of that clip
+        const auto& rs = real_score[s.name];
+        CHECK(rs.circumplex_valence == doctest::Approx(s.valence).epsilon(1e-9));
+        CHECK(rs.circumplex_arousal == doctest::Approx(s.arousal).epsilon(1e-9));
+        if (s.emotion != "neutral") CHECK((rs.circumplex_quadrant_ok > 0.5) == s.quadrant_ok);
     }
-    REQUIRE(ext->folds().size() == 2);
-    for (const auto& f : ext->folds()) {
+    const auto pooled = rcm_extension::pool(reg);
+    double d = 0, q = 0;  // rcm eval's pooled numbers over the same two folds (it ran all three)
+    for (const auto& s : loo.samples)
+        if (s.held_out != "pointing") d += s.distance / 10.0, q += s.quadrant_ok / 10.0;
+    CHECK(pooled.distance == doctest::Approx(d).epsilon(1e-9));
+    CHECK(pooled.quadrant == doctest::Approx(q));
+    REQUIRE(ext.folds().size() == 2);
+    for (const auto& f : ext.folds()) {
         CHECK(f.error.empty());
         CHECK(f.selected == 8);
         CHECK(f.stylise_failed == 0);
-        CHECK(f.stylised == 4);  // the held-out neutral take to each of the 4 other emotions
+        CHECK(f.stylised == 4);
     }
 
-    // (b) the rcm rows: one per (fold, target), scored with every metric
-    std::size_t n_rcm = 0;
-    std::map<std::string, const sample_record*> real_of, identity_of;  // fold/target -> record
-    for (const auto& s : r.samples) {
-        CAPTURE(s.method);
-        CHECK(!std::isnan(s.circumplex_quadrant_ok));  // every method's output analysed by the fold model
-        if (s.method == "real") real_of[s.fold + "/" + s.target] = &s;
-        if (s.method == "identity") identity_of[s.fold + "/" + s.target] = &s;
-        if (s.method != "rcm") continue;
-        ++n_rcm;
-        CHECK(std::isfinite(s.rmse_real));
-        CHECK(s.rmse_input > 0);  // the synthesis moved the clip
-        CHECK(std::isfinite(s.rom_error));
-        CHECK(std::isfinite(s.speed_error));
-        CHECK(!s.predicted_emotion.empty());
-        CHECK(!s.predicted_content.empty());
-    }
-    CHECK(n_rcm == 8);
-    // the real row's circumplex analysis is the regression's analysis of that held-out clip; identity's is the
-    // neutral input's
-    for (const auto& s : reg) {
-        const sample_record* rec = nullptr;
-        if (s.emotion == "neutral") {
-            rec = identity_of["" + s.fold + "/angry"];
-        } else {
-            rec = real_of[s.fold + "/" + s.emotion];
-        }
-        REQUIRE(rec != nullptr);
-        CHECK(rec->circumplex_valence == doctest::Approx(s.valence).epsilon(1e-9));
-        CHECK(rec->circumplex_arousal == doctest::Approx(s.arousal).epsilon(1e-9));
-        if (s.emotion != "neutral") CHECK((rec->circumplex_quadrant_ok > 0.5) == s.quadrant_ok);
-    }
-
-    // (c) one report: the rcm row in the summary, the circumplex column, the section and its CSV
-    const std::string md = read_text(dir / "report.md");
-    CHECK(md.find("| all | rcm |") != std::string::npos);
-    CHECK(md.find("circumplex quadrant reached (%)") != std::string::npos);
-    CHECK(md.find("## Circumplex (Aristidou et al. 2017)") != std::string::npos);
-    CHECK(md.find("**vs rcm**") != std::string::npos);
-    CHECK(md.find("| patting | 5 |") != std::string::npos);
-    const std::string csv = read_text(dir / "results.csv");
-    CHECK(csv.find(",circumplex_valence,circumplex_arousal,circumplex_quadrant_ok\n") != std::string::npos);
-    CHECK(csv.find(",rcm,") != std::string::npos);
-    const std::string sum = read_text(dir / "summary.csv");
-    CHECK(sum.find("all,rcm,rmse_real,") != std::string::npos);
-    CHECK(sum.find("all,real,circumplex_quadrant,") != std::string::npos);
-    const std::string rc = read_text(dir / "rcm_regression.csv");
-    CHECK(std::count(rc.begin(), rc.end(), '\n') == 11);  // header + 10 clips
-    CHECK(read_text(dir / "summary.svg").find("circumplex quadrant reached") != std::string::npos);
-    fs::remove_all(dir);
+    // (c) one section, replaced after each fold, and its per-clip CSV
+    REQUIRE(r.sections.size() == 1);
+    const auto& sec = r.sections[0];
+    CHECK(sec.title == "Circumplex (Aristidou et al. 2017)");
+    CHECK(sec.markdown.find("| patting | 5 |") != std::string::npos);
+    CHECK(sec.markdown.find("| gripping | 5 |") != std::string::npos);
+    CHECK(sec.markdown.find("Pooled over the 10 held-out clips") != std::string::npos);
+    CHECK(sec.file == "rcm_regression.csv");
+    CHECK(std::count(sec.file_text.begin(), sec.file_text.end(), '\n') == 11);  // header + 10 clips
 }
 
 TEST_CASE("rcm extension: regression only, no rcm rows")
