@@ -194,3 +194,42 @@ TEST_CASE("rcm extension: a label without coordinates fails the fold's fit, name
     REQUIRE(r.sections.size() == 1);
     CHECK(r.sections[0].markdown.find("fit failed") != std::string::npos);
 }
+
+TEST_CASE("rcm extension: a held-out clip or target it cannot place is counted and named, the fold goes on")
+{
+    auto clips = toy_set();
+    for (auto& c : clips)
+        if (c.content == "pointing" && c.emotion == "fearful") c.emotion = "bored";  // held out only: the fit works
+    rcm_eval_options ro;
+    ro.table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
+    ro.fit.selection.min_features = 8;
+    ro.stylise.iterations = 5;
+    rcm_extension ext(ro);
+    std::vector<labelled_clip> train;
+    fold_context fc;
+    fc.held_out = "pointing";
+    for (const auto& c : clips) (c.content == "pointing" ? fc.test.push_back(&c) : train.push_back(c));
+    fc.train = &train;
+    ext.begin_fold(fc);
+    REQUIRE(ext.folds().size() == 1);
+    CHECK(ext.folds()[0].error.empty());
+    CHECK(ext.folds()[0].analyse_failed == 1);
+    CHECK(ext.folds()[0].first_analyse_error.find("hand_pointing_fearful_0.bvh: rcm: label 'bored'") != std::string::npos);
+    CHECK(ext.regression().size() == 4);
+    const labelled_clip* in = nullptr;
+    for (const auto* c : fc.test)
+        if (c->emotion == "neutral") in = c;
+    REQUIRE(in != nullptr);
+    CHECK(ext.transfer(*in, "bored").empty());
+    CHECK(ext.folds()[0].stylise_failed == 1);
+    CHECK(ext.transfer(*in, "sad").size() == 1);
+    sample_record s;
+    s.target = "bored";
+    ext.score(s, in->motion);
+    CHECK(std::isnan(s.circumplex_quadrant_ok));
+    eval_result r;
+    ext.end_fold(r);
+    REQUIRE(r.sections.size() == 1);
+    CHECK(r.sections[0].markdown.find("1 held-out clip(s) could not be analysed") != std::string::npos);
+    CHECK(r.sections[0].markdown.find("1 (input, target) pair(s) could not be stylised") != std::string::npos);
+}

@@ -51,9 +51,9 @@ struct rcm_regression_sample {
 /// @brief Per-fold facts of the circumplex rows.
 struct rcm_fold_info {
     std::string fold, error;  ///< error: why the fold's fit failed (empty when it did not)
-    std::size_t selected = 0, pca_dims = 0, stylised = 0, stylise_failed = 0;
+    std::size_t selected = 0, pca_dims = 0, stylised = 0, stylise_failed = 0, analyse_failed = 0;
     double fit_seconds = 0, stylise_seconds = 0;
-    std::string first_stylise_error;
+    std::string first_stylise_error, first_analyse_error;  ///< the first of each kind, for the report
 };
 
 /// @brief The extension that adds the circumplex method and numbers to handemo eval (see the file comment).
@@ -100,8 +100,15 @@ public:
             ba += l.arousal / static_cast<double>(tc.size());
         }
         for (const auto* c : f.test) {
-            const rcm::analysis a = model_->analyse(c->motion);
-            const auto& l = opt_.table.at(c->emotion, opt_.table_name);
+            rcm::analysis a;
+            rcm::label_point l;
+            try {  // a held-out clip the model cannot analyse is counted and named, not the end of the evaluation
+                a = model_->analyse(c->motion);
+                l = opt_.table.at(c->emotion, opt_.table_name);
+            } catch (const error& e) {
+                if (fi.analyse_failed++ == 0) fi.first_analyse_error = c->path.filename().string() + ": " + e.what();
+                continue;
+            }
             rcm_regression_sample s;
             s.fold = f.held_out, s.name = c->path.filename().string(), s.emotion = c->emotion;
             s.valence = a.valence, s.arousal = a.arousal, s.true_valence = l.valence, s.true_arousal = l.arousal;
@@ -119,9 +126,9 @@ public:
         if (!model_ || !opt_.synthesis) return {};
         const auto t0 = std::chrono::steady_clock::now();
         auto& fi = info_.back();
-        const auto& l = opt_.table.at(target, opt_.table_name);
         std::vector<std::pair<std::string, clip>> out;
         try {
+            const auto& l = opt_.table.at(target, opt_.table_name);
             out.emplace_back("rcm", rcm::stylise_to_point(*model_, input.motion, l.valence, l.arousal, opt_.stylise).synth.motion);
             ++fi.stylised;
         } catch (const error& e) {
@@ -135,13 +142,13 @@ public:
     void score(sample_record& s, const clip& out) override
     {
         if (!model_) return;
-        const auto& l = opt_.table.at(s.target, opt_.table_name);
         try {
+            const auto& l = opt_.table.at(s.target, opt_.table_name);
             const rcm::analysis a = model_->analyse(out);
             s.circumplex_valence = a.valence, s.circumplex_arousal = a.arousal;
             s.circumplex_quadrant_ok = a.quadrant == rcm::quadrant(l.valence, l.arousal) ? 1.0 : 0.0;
         } catch (const error&) {
-            // an output the features cannot be computed on stays "not measured" (NaN)
+            // an output the features cannot be computed on (or a target without coordinates) stays "not measured"
         }
     }
 
@@ -262,6 +269,10 @@ private:
             }
             s += "\n";
         }
+        for (const auto& fi : info_)
+            if (fi.analyse_failed)
+                s += "\nFold " + fi.fold + ": " + std::to_string(fi.analyse_failed) + " held-out clip(s) could not be analysed; the first: " +
+                     fi.first_analyse_error + ".\n";
         return s;
     }
 
