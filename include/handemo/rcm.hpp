@@ -18,3 +18,5 @@
 #include <handemo/rcm/rules.hpp>
 #include <handemo/rcm/features_ad.hpp>
 #include <handemo/rcm/synth.hpp>
+// A fitted model driving the synthesis: a motion to any circumplex point, or along a path of points.
+#include <handemo/rcm/control.hpp>

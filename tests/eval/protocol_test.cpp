@@ -204,3 +204,45 @@ TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed 
     CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(renamed, info, o, dir), doctest::Contains("walk_neutral_0.bvh"), value_error);
     fs::remove_all(dir);
 }
+
+TEST_CASE("report: the circumplex metric of an extension is optional")
+{
+    eval_result r;
+    r.config = "hand-tiny", r.data = "toy", r.neutral = "neutral", r.domains = {"neutral", "angry"};
+    r.folds.push_back({});
+    r.folds.back().held_out = "patting";
+    for (const char* m : {"stargan", "identity"}) {
+        sample_record s;
+        s.fold = "patting", s.target = "angry", s.take = "0", s.method = m;
+        s.rmse_real = 2, s.rom_ratio = s.speed_ratio = s.real_rom_ratio = s.real_speed_ratio = 1;
+        r.samples.push_back(s);
+    }
+    // no extension: the files are as they always were
+    CHECK(samples_csv(r).find("circumplex") == std::string::npos);
+    CHECK(markdown_report(r).find("circumplex") == std::string::npos);
+    CHECK(summary_csv(r).find("circumplex") == std::string::npos);
+    const auto& q = *std::find_if(metric_defs().begin(), metric_defs().end(), [](const metric_def& m) { return m.key == "circumplex_quadrant"; });
+    CHECK(!has_metric(r, q));
+    CHECK(over_folds(r, q, "all", "stargan").n == 0);
+    // measured for one method only: its mean skips the others' NaN, the column appears
+    r.samples[0].circumplex_quadrant_ok = 1, r.samples[0].circumplex_valence = 0.5, r.samples[0].circumplex_arousal = -0.25;
+    CHECK(has_metric(r, q));
+    CHECK(over_folds(r, q, "all", "stargan").mean == doctest::Approx(100.0));
+    CHECK(over_folds(r, q, "all", "identity").n == 0);
+    const std::string csv = samples_csv(r);
+    CHECK(csv.find(",circumplex_valence,circumplex_arousal,circumplex_quadrant_ok\n") != std::string::npos);
+    CHECK(csv.find(",0.5,-0.25,1\n") != std::string::npos);
+    CHECK(csv.find(",nan,nan,nan\n") != std::string::npos);
+    const std::string md = markdown_report(r);
+    CHECK(md.find("circumplex quadrant reached (%)") != std::string::npos);
+    CHECK(md.find("| all | identity |") != std::string::npos);
+    // an extension's section is placed before the per-fold tables and written as a file
+    r.sections.push_back({"Extra", "body text\n", "extra.csv", "a,b\n"});
+    const std::string md2 = markdown_report(r);
+    CHECK(md2.find("## Extra\n\nbody text") != std::string::npos);
+    CHECK(md2.find("## Extra") < md2.find("## Per fold"));
+    const fs::path dir = fs::temp_directory_path() / ("handemo_eval_section_test_" + std::to_string(::getpid()));
+    write_report(r, dir);
+    CHECK(read_file(dir / "extra.csv") == "a,b\n");
+    fs::remove_all(dir);
+}

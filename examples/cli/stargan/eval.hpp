@@ -1,7 +1,8 @@
 // `handemo eval --data DIR --config NAME --report OUT_DIR [...]`: the leave-one-content-out evaluation of
 // emotion transfer against captured motion and baselines (the hand paper's Section 5 future work); writes
 // report.md, results.csv, summary.csv, summary.svg and per-fold models and loss curves into OUT_DIR.
-// `--synth-seed S` (the synthetic hand set's seed) adds the "oracle" row (synthesize_as(), synth.hpp).
+// `--synth-seed S` (the synthetic hand set's seed) adds the "oracle" row (synthesize_as(), synth.hpp). Built with
+// xtensor-blas, cmd_rcm.cpp adds the circumplex method (on by default, `--no-rcm`) through eval_extensions().
 #pragma once
 
 #include "../registry.hpp"
@@ -41,6 +42,7 @@ void run_eval_cli(eval_cli& o)
         for (const auto& d : eval::metric_defs()) {
             if (d.better == 0) continue;
             const auto v = eval::over_folds(r, d, "all", m);
+            if (v.n == 0) continue;  // an optional metric no extension measured
             std::cout << "  " << d.key << " " << v.mean << " +- " << v.std;
         }
         std::cout << "\n";
@@ -71,7 +73,18 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
         ->capture_default_str()
         ->needs(seed_opt);
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
+    // methods from other translation units (cmd_rcm.cpp: --rcm, the circumplex method of Aristidou et al. 2017)
+    for (const auto& e : handemo::cli::eval_extensions()) e.add_options(sub);
+    if (!sub->get_option_no_throw("--rcm")) {  // built without it: --no-rcm is accepted, --rcm says why it is absent
+        sub->add_flag_callback("--rcm", [] {
+            throw handemo::value_error("eval: --rcm: this handemo was built without xtensor-blas (libxtensor-blas-dev), so without "
+                                       "the circumplex method");
+        }, "Circumplex method (not built here: needs xtensor-blas)");
+        sub->add_flag_callback("--no-rcm", [] {}, "Leave the circumplex method out (it is not built here)");
+    }
     sub->callback([o, sub, seed_opt] {
+        for (const auto& e : handemo::cli::eval_extensions())
+            if (auto x = e.make()) o->opt.extensions.push_back(std::move(x));
         o->has_synth_seed = seed_opt->count() > 0;
         o->command = "handemo eval";
         for (const auto* opt : sub->get_options())

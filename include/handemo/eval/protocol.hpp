@@ -13,6 +13,7 @@
 #include <handemo/core/progress.hpp>
 #include <handemo/eval/baselines.hpp>
 #include <handemo/eval/classifier.hpp>
+#include <handemo/eval/extension.hpp>
 #include <handemo/eval/metrics.hpp>
 #include <handemo/eval/report.hpp>
 #include <handemo/motion/synth.hpp>
@@ -28,6 +29,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,6 +53,9 @@ struct eval_options {
     /// name must parse with parse_file_stem() and every neutral clip must be reproduced by this seed and synth_fps.
     std::optional<std::uint64_t> synth_seed;
     double synth_fps = 60.0;  ///< frame rate the synthetic set was generated at (`handemo synth --fps`)
+    /// Methods and scores added from outside the core, in the same folds and tables (eval/extension.hpp; the
+    /// circumplex method of eval/rcm.hpp).
+    std::vector<std::shared_ptr<method_extension>> extensions;
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
@@ -110,6 +115,7 @@ inline std::string options_text(const eval_options& o)
     s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nfold seed train.seed + fold index\n";
     s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
     if (o.synth_seed) s += "synthetic set seed " + std::to_string(*o.synth_seed) + " at " + std::to_string(o.synth_fps) + " fps (oracle row)\n";
+    for (const auto& x : o.extensions) s += x->options_text();
     return s;
 }
 
@@ -309,6 +315,13 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
             fsum.seen_rmse_identity = n ? si / static_cast<double>(n) : std::nan("");
         }
 
+        // ---- extensions (eval/extension.hpp) fit on the fold's training clips only
+        if (!opt.extensions.empty()) {
+            fold_context fc{held, info.neutral, &train, {}, fi, opt.progress_out};
+            for (const auto* p : test_p) fc.test.push_back(p->src);
+            for (const auto& x : opt.extensions) x->begin_fold(fc);
+        }
+
         // ---- transfer every held-out neutral take to every other emotion
         for (const auto* in : test_p) {
             if (in->src->emotion != info.neutral) continue;
@@ -348,6 +361,10 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                     oracle = synthesize_as(l.motion, l.emo, emotion_from_string(target), l.take, *opt.synth_seed, opt.synth_fps);
                     outs.push_back({"oracle", &oracle});
                 }
+                std::vector<std::pair<std::string, clip>> extra;
+                for (const auto& x : opt.extensions)
+                    for (auto& o : x->transfer(*in->src, target)) extra.push_back(std::move(o));
+                for (const auto& [name, c] : extra) outs.push_back({name.c_str(), &c});
                 const double real_rom = ratio(real->ch.range_of_motion, in->ch.range_of_motion, "range of motion");
                 const double real_speed = ratio(real->ch.speed, in->ch.speed, "speed");
                 for (const auto& [method, out] : outs) {
@@ -366,6 +383,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                     s.real_rom_ratio = real_rom, s.real_speed_ratio = real_speed;
                     s.rom_error = log_ratio_error(s.rom_ratio, real_rom);
                     s.speed_error = log_ratio_error(s.speed_ratio, real_speed);
+                    for (const auto& x : opt.extensions) x->score(s, *out);
                     res.samples.push_back(std::move(s));
                 }
             }
@@ -374,6 +392,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
             throw value_error("eval: data set " + opt.data + ": fold '" + held + "' has no '" + info.neutral + "' clip to transfer");
         fsum.eval_seconds = std::chrono::duration<double>(clock::now() - t0).count();
         res.folds.push_back(fsum);
+        for (const auto& x : opt.extensions) x->end_fold(res);
         res.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
         if (opt.write_partial) write_report(res, out_dir);
         char status[160];

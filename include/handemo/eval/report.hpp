@@ -22,11 +22,12 @@
 namespace handemo::eval {
 
 /// @brief Method names in report order; "real" is the captured target clip (the reference row), "oracle" the
-/// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed).
+/// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed), "rcm"
+/// the circumplex synthesis of Aristidou et al. 2017 (only with the extension of eval/rcm.hpp).
 inline const std::vector<std::string>& method_names()
 {
     static const std::vector<std::string> m{"stargan", "stargan-g", "stargan-ungated", "identity", "mean-offset", "amplitude-only",
-                                            "nearest-neighbour", "real", "oracle"};
+                                            "nearest-neighbour", "rcm", "real", "oracle"};
     return m;
 }
 
@@ -41,6 +42,9 @@ struct sample_record {
     double rom_ratio = 0, speed_ratio = 0;            ///< output / input
     double real_rom_ratio = 0, real_speed_ratio = 0;  ///< real target / input
     double rom_error = 0, speed_error = 0;            ///< |log(ratio / real ratio)|
+    /// The fold's circumplex model's analysis of the output (eval/rcm.hpp; NaN when not measured) and whether it
+    /// lies in the target label's quadrant (1 or 0; NaN when not measured).
+    double circumplex_valence = std::nan(""), circumplex_arousal = std::nan(""), circumplex_quadrant_ok = std::nan("");
 };
 
 /// @brief What happened in one fold besides the samples.
@@ -58,6 +62,15 @@ struct fold_summary {
     bool reused_model = false;  ///< the fold's model was loaded (--reuse-models), not trained in this run
 };
 
+/// @brief A report section written by an extension (eval/extension.hpp): Markdown placed after the summary, and
+/// optionally a file of its own in the report folder.
+struct report_section {
+    std::string title;     ///< `## title`
+    std::string markdown;  ///< the section's body
+    std::string file;      ///< a file name in the report folder (empty: none)
+    std::string file_text;
+};
+
 /// @brief Everything one evaluation run produced.
 struct eval_result {
     std::string config, data, command;
@@ -67,6 +80,7 @@ struct eval_result {
     std::vector<fold_summary> folds;
     std::size_t planned_folds = 0;  ///< folds the run was asked for (more than folds.size() in a partial report)
     std::vector<sample_record> samples;
+    std::vector<report_section> sections;  ///< from extensions, in the order they were added
     double seconds = 0;
 };
 
@@ -81,6 +95,7 @@ struct metric_def {
     std::string key, title;
     int better;  ///< -1 lower is better, +1 higher is better, 0 descriptive
     std::function<double(const sample_record&)> get;
+    bool optional = false;  ///< measured only by an extension: a NaN is "not measured" and is left out of means
 };
 
 /// @brief The metrics in report order.
@@ -95,8 +110,25 @@ inline const std::vector<metric_def>& metric_defs()
         {"speed_ratio", "speed ratio out/in", 0, [](const sample_record& r) { return r.speed_ratio; }},
         {"rom_error", "ROM ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.rom_error; }},
         {"speed_error", "speed ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.speed_error; }},
+        {"circumplex_quadrant", "circumplex quadrant reached (%)", +1,
+         [](const sample_record& r) { return 100.0 * r.circumplex_quadrant_ok; }, true},
     };
     return m;
+}
+
+/// @brief Whether any sample of `r` has a value of `m` (an optional metric is left out of the report when not).
+inline bool has_metric(const eval_result& r, const metric_def& m)
+{
+    return !m.optional || std::any_of(r.samples.begin(), r.samples.end(), [&](const sample_record& s) { return !std::isnan(m.get(s)); });
+}
+
+/// @brief The metrics of metric_defs() that `r` has values of, in report order.
+inline std::vector<metric_def> metrics_of(const eval_result& r)
+{
+    std::vector<metric_def> out;
+    for (const auto& m : metric_defs())
+        if (has_metric(r, m)) out.push_back(m);
+    return out;
 }
 
 /// @brief Mean and sample standard deviation (n - 1; 0 for one value).
@@ -126,7 +158,11 @@ inline double fold_mean(const eval_result& r, const metric_def& m, const std::st
     double s = 0;
     std::size_t n = 0;
     for (const auto& x : r.samples)
-        if (x.fold == fold && x.method == method && (target == "all" || x.target == target)) s += m.get(x), ++n;
+        if (x.fold == fold && x.method == method && (target == "all" || x.target == target)) {
+            const double v = m.get(x);
+            if (m.optional && std::isnan(v)) continue;
+            s += v, ++n;
+        }
     return n ? s / static_cast<double>(n) : std::nan("");
 }
 
@@ -176,14 +212,21 @@ inline std::string csv_num(double v)
 /// @brief Every number: one CSV row per (fold, target, take, method).
 inline std::string samples_csv(const eval_result& r)
 {
+    // the circumplex columns only when an extension measured them (the file is unchanged otherwise)
+    const bool circ = std::any_of(r.samples.begin(), r.samples.end(), [](const sample_record& x) { return !std::isnan(x.circumplex_quadrant_ok); });
     std::string s = "fold,target,take,method,rmse_real,rmse_input,emotion_ok,predicted_emotion,content_ok,predicted_content,"
-                    "rom_ratio,speed_ratio,real_rom_ratio,real_speed_ratio,rom_error,speed_error\n";
+                    "rom_ratio,speed_ratio,real_rom_ratio,real_speed_ratio,rom_error,speed_error";
+    s += circ ? ",circumplex_valence,circumplex_arousal,circumplex_quadrant_ok\n" : "\n";
     for (const auto& x : r.samples) {
         s += x.fold + "," + x.target + "," + x.take + "," + x.method + "," + detail::csv_num(x.rmse_real) + "," +
              detail::csv_num(x.rmse_input) + "," + (x.emotion_ok ? "1" : "0") + "," + x.predicted_emotion + "," +
              (x.content_ok ? "1" : "0") + "," + x.predicted_content + "," + detail::csv_num(x.rom_ratio) + "," +
              detail::csv_num(x.speed_ratio) + "," + detail::csv_num(x.real_rom_ratio) + "," + detail::csv_num(x.real_speed_ratio) +
-             "," + detail::csv_num(x.rom_error) + "," + detail::csv_num(x.speed_error) + "\n";
+             "," + detail::csv_num(x.rom_error) + "," + detail::csv_num(x.speed_error);
+        if (circ)
+            s += "," + detail::csv_num(x.circumplex_valence) + "," + detail::csv_num(x.circumplex_arousal) + "," +
+                 (std::isnan(x.circumplex_quadrant_ok) ? std::string("nan") : x.circumplex_quadrant_ok > 0.5 ? "1" : "0");
+        s += "\n";
     }
     return s;
 }
@@ -219,8 +262,8 @@ inline std::vector<comparison> compare_with_baselines(const eval_result& r)
     std::vector<comparison> out;
     auto targets = targets_of(r);
     targets.insert(targets.begin(), "all");
-    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour"})
-        for (const auto& m : metric_defs()) {
+    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour", "rcm"})
+        for (const auto& m : metrics_of(r)) {
             if (m.better == 0) continue;
             for (const auto& t : targets) {
                 comparison c{b, m.key, t};
@@ -233,7 +276,7 @@ inline std::vector<comparison> compare_with_baselines(const eval_result& r)
                     if (m.better < 0 ? s < o : s > o) ++c.folds_better;
                 }
                 c.better = m.better < 0 ? c.stargan < c.other : c.stargan > c.other;
-                if (c.folds) out.push_back(c);
+                if (c.folds && std::isfinite(c.stargan) && std::isfinite(c.other)) out.push_back(c);
             }
         }
     return out;
@@ -279,7 +322,7 @@ inline std::string folds_svg(const eval_result& r)
 /// @brief The Markdown report (see write_report()).
 inline std::string markdown_report(const eval_result& r)
 {
-    const auto& ms = metric_defs();
+    const auto ms = metrics_of(r);
     const auto targets = targets_of(r);
     std::string s;
     s += "# handemo eval: " + r.config + " on " + r.data + "\n\n";
@@ -301,6 +344,10 @@ inline std::string markdown_report(const eval_result& r)
     if (has_method(r, "stargan-ungated"))
         s += "; **stargan-ungated** (the same model with G's whole change, without the change gate chosen on held-out "
              "training contents: what the gate buys)";
+    if (has_method(r, "rcm"))
+        s += "; **rcm** (the circumplex synthesis of Aristidou et al. 2017, no neural network: a circumplex model fitted on the "
+             "fold's training clips only, and the input moved to the target label's (valence, arousal) by its rules and IK, "
+             "`handemo rcm stylise`; see the circumplex section below)";
     if (has_method(r, "oracle"))
         s += "; **oracle** (synthetic set only: the neutral input's take synthesised again with the target emotion's "
              "style parameters and the input take's own per-take variation, synthesize_as(); its distance to the real "
@@ -312,7 +359,12 @@ inline std::string markdown_report(const eval_result& r)
          "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "
          "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio). "
          "Caveat: nearest-neighbour outputs are clips the emotion classifier was trained on, so its emotion score is "
-         "in-sample (an upper bound), and it keeps no content by construction.\n\n";
+         "in-sample (an upper bound), and it keeps no content by construction.";
+    if (std::any_of(ms.begin(), ms.end(), [](const metric_def& m) { return m.key == "circumplex_quadrant"; }))
+        s += " Circumplex quadrant reached: the fold's circumplex model (fitted on its training clips only, the one the rcm "
+             "row uses) analyses the output (`handemo rcm analyse`) into the quadrant of the target label's (valence, "
+             "arousal); the real row is how often the analysis places real held-out clips of the target emotion there.";
+    s += "\n\n";
     s += "Options:\n\n```\n" + r.options_text + "```\n\n";
 
     // summary
@@ -340,7 +392,7 @@ inline std::string markdown_report(const eval_result& r)
     s += "## Where StarGAN beats each baseline and where it does not\n\n";
     const auto cmp = compare_with_baselines(r);
     std::vector<std::string> losses;
-    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour"}) {
+    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour", "rcm"}) {
         if (!has_method(r, b)) continue;
         s += "**vs " + b + "**\n\n";
         {  // keyframe RMSE pair by pair: (fold, target emotion) pairs where StarGAN's mean is lower
@@ -365,6 +417,9 @@ inline std::string markdown_report(const eval_result& r)
         }
         s += "\n";
     }
+
+    // sections of extensions (eval/extension.hpp)
+    for (const auto& sec : r.sections) s += "## " + sec.title + "\n\n" + sec.markdown + "\n";
 
     // per-fold tables
     s += "## Per fold\n\n";
@@ -433,6 +488,8 @@ inline void write_report(const eval_result& r, const std::filesystem::path& dir)
     write_file_atomic(dir / "summary.csv", summary_csv(r));
     if (!r.samples.empty()) write_file_atomic(dir / "summary.svg", summary_svg(r));
     if (!r.samples.empty()) write_file_atomic(dir / "folds.svg", folds_svg(r));
+    for (const auto& sec : r.sections)
+        if (!sec.file.empty()) write_file_atomic(dir / sec.file, sec.file_text);
     write_file_atomic(dir / "report.md", markdown_report(r));
 }
 
