@@ -2,6 +2,8 @@
 #include <handemo/eval/protocol.hpp>
 #include <handemo/motion/synth.hpp>
 
+#include "../stargan/helpers.hpp"
+
 #include <filesystem>
 #include <set>
 #include <unistd.h>
@@ -10,29 +12,11 @@ namespace fs = std::filesystem;
 using namespace handemo;
 using namespace handemo::eval;
 using namespace handemo::stargan;
-
-namespace {
-
-/// 3 motion types x 5 emotions x 1 take of the synthetic hand set.
-std::vector<labelled_clip> toy_set()
-{
-    std::vector<labelled_clip> out;
-    for (auto& it : synthesize_dataset(1, 3)) {
-        if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing) continue;
-        labelled_clip c;
-        c.path = it.file_stem + ".bvh";
-        const auto n = parse_clip_name(it.file_stem);
-        c.content = n.content, c.emotion = n.emotion, c.take = n.take, c.motion = it.c;
-        out.push_back(std::move(c));
-    }
-    return out;
-}
-
-}  // namespace
+using handemo::test::toy_set;
 
 TEST_CASE("end to end: hand-tiny, two folds, report written")
 {
-    const auto clips = toy_set();
+    const auto clips = toy_set(3);
     const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
     eval_options o = {};
     o.train = default_train_options();
@@ -135,7 +119,7 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
 
 TEST_CASE("eval refuses an unknown held-out content and a one-content data set")
 {
-    auto clips = toy_set();
+    auto clips = toy_set(3);
     const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
     eval_options o;
     o.train.iters = 1;
@@ -151,7 +135,7 @@ TEST_CASE("eval refuses an unknown held-out content and a one-content data set")
 
 TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed is refused before training")
 {
-    const auto clips = toy_set();  // synthesize_dataset(1, 3) at 60 fps
+    const auto clips = toy_set(3);  // synthesize_dataset(1, 3) at 60 fps
     const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
     eval_options o = {};
     o.train = default_train_options();

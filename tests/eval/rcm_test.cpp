@@ -6,38 +6,22 @@
 #include <handemo/eval/rcm.hpp>
 #include <handemo/motion/synth.hpp>
 
+#include "../stargan/helpers.hpp"
+
 #include <algorithm>
 #include <map>
 
 using namespace handemo;
 using namespace handemo::eval;
 using namespace handemo::stargan;
-
-namespace {
-
-/// 3 motion types x 5 emotions x 1 take of the synthetic hand set at 30 fps (small and quick).
-std::vector<labelled_clip> toy_set()
-{
-    std::vector<labelled_clip> out;
-    for (auto& it : synthesize_dataset(1, 4, 30.0)) {
-        if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing) continue;
-        labelled_clip c;
-        c.path = it.file_stem + ".bvh";
-        const auto n = parse_clip_name(it.file_stem);
-        c.content = n.content, c.emotion = n.emotion, c.take = n.take, c.motion = it.c;
-        out.push_back(std::move(c));
-    }
-    return out;
-}
-
-}  // namespace
+using handemo::test::toy_set;
 
 TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output analysed, one report section")
 {
     // The protocol calls begin_fold() with the fold's training clips, transfer() for each (neutral input,
     // target), score() on every method's output and end_fold(); done here by hand for two folds (the wiring
     // through run_eval() is tested end to end by eval_rcm_cli, which counts the rows in results.csv).
-    const auto clips = toy_set();
+    const auto clips = toy_set(4, 30.0);
     rcm_eval_options ro;
     ro.table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
     ro.table_name = "circumplex.json";
@@ -143,7 +127,7 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
 
 TEST_CASE("rcm extension: regression only, no rcm rows")
 {
-    const auto clips = toy_set();
+    const auto clips = toy_set(4, 30.0);
     rcm_eval_options ro;
     ro.table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
     ro.fit.selection.min_features = 8;
@@ -173,7 +157,7 @@ TEST_CASE("rcm extension: regression only, no rcm rows")
 
 TEST_CASE("rcm extension: a label without coordinates fails the fold's fit, named in the report")
 {
-    auto clips = toy_set();
+    auto clips = toy_set(4, 30.0);
     for (auto& c : clips)
         if (c.emotion == "fearful") c.emotion = "bored";  // not in the table
     rcm_eval_options ro;
@@ -197,7 +181,7 @@ TEST_CASE("rcm extension: a label without coordinates fails the fold's fit, name
 
 TEST_CASE("rcm extension: a held-out clip or target it cannot place is counted and named, the fold goes on")
 {
-    auto clips = toy_set();
+    auto clips = toy_set(4, 30.0);
     for (auto& c : clips)
         if (c.content == "pointing" && c.emotion == "fearful") c.emotion = "bored";  // held out only: the fit works
     rcm_eval_options ro;

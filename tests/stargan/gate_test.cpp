@@ -29,6 +29,15 @@ train_options gate_options(long iters)
     return o;
 }
 
+/// The first gate's options: G's posture and motion only, lowest RMSE (no prior, no emotion rule).
+train_options first_gate_options(long iters)
+{
+    auto o = gate_options(iters);
+    o.gate_prior = false;
+    o.gate_margin = -1;
+    return o;
+}
+
 /// Rewrites the checkpoint's `handemo` metadata with `edit` and a recomputed checksum.
 template <class F>
 void edit_metadata(const fs::path& ck, F edit)
@@ -189,9 +198,7 @@ TEST_CASE("change gate without the prior and the emotion rule: the lowest RMSE o
 {
     const auto clips = toy_set();
     const fs::path d = fresh_dir("handemo_gate_rmse");
-    auto o = gate_options(40);
-    o.gate_prior = false;
-    o.gate_margin = -1;
+    auto o = first_gate_options(40);
     const auto g = fit_change_gate<hand_tiny>(clips, tiny_info(), o, d);
     REQUIRE(g.rows.size() == 4);
     for (const auto& r : g.rows) {
@@ -298,9 +305,7 @@ TEST_CASE("refit_gate: a new gate around a trained G, inner models reused, G unt
 {
     const auto clips = toy_set();
     const fs::path d = fresh_dir("handemo_gate_refit");
-    auto o = gate_options(30);
-    o.gate_prior = false;
-    o.gate_margin = -1;
+    auto o = first_gate_options(30);
     train_model<hand_tiny>(clips, tiny_info(), o, d);
     const auto before = read_safetensors(d / "checkpoint.safetensors");
     auto o2 = o;

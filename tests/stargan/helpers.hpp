@@ -12,11 +12,12 @@
 
 namespace handemo::test {
 
-/// A toy set: 3 motion types x 5 emotions x 1 take of the synthetic hand data, as labelled clips.
-inline std::vector<stargan::labelled_clip> toy_set()
+/// A toy set: 3 motion types (gripping, patting, pointing) x 5 emotions x 1 take of the synthetic hand data
+/// (`seed`, `fps`), as labelled clips.
+inline std::vector<stargan::labelled_clip> toy_set(std::uint64_t seed = 7, double fps = 60.0)
 {
     std::vector<stargan::labelled_clip> out;
-    for (auto& it : synthesize_dataset(1, 7)) {
+    for (auto& it : synthesize_dataset(1, seed, fps)) {
         if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing)
             continue;
         stargan::labelled_clip c;
