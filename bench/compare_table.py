@@ -38,17 +38,25 @@ def ratio(a, b):
     return "n/a" if a is None or b is None or b == 0 else f"{a/b:.2f}x"
 
 ap = argparse.ArgumentParser()
-for a in ("--peak", "--torch1", "--torch2", "--conv", "--layers", "--stargan"):
+for a in ("--isa", "--peak", "--torch1", "--torch2", "--conv", "--layers", "--stargan"):
     ap.add_argument(a, default="")
 o = ap.parse_args()
 peak = float(o.peak or 0)
 t1, t2 = torch_results(o.torch1), torch_results(o.torch2)
 conv_all = load_json(o.conv)
 conv = {b["name"]: b for b in conv_all}
-# the FMA peak measured inside bench_conv (same load as the kernels) wins over the standalone one
-inproc = [b.get("GFLOPS", 0) for b in conv_all if b["name"].startswith("peak_fma_avx2") and b.get("run_type") == "iteration"]
+try:
+    ctx = json.load(open(o.conv)).get("context", {})
+except (OSError, ValueError):
+    ctx = {}
+isa = ctx.get("simd_arch") or o.isa or "unknown"
+print(f"Kernels compiled for: {isa} ({ctx.get('simd_float_lanes', '?')} float lanes); peak below is {isa}'s")
+# the FMA peak of the kernels' ISA measured inside bench_conv (same load as the kernels) wins over the
+# standalone one
+inproc = [b.get("GFLOPS", 0) for b in conv_all if b["name"].startswith("peak_fma/") and b.get("run_type") == "iteration"]
+inproc = [g / 1e9 if g > 1e6 else g for g in inproc]
 if inproc:
-    print(f"FMA peak: standalone {peak:.1f} GFLOP/s, inside bench_conv {max(inproc):.1f} GFLOP/s (used below)")
+    print(f"FMA peak ({isa}): standalone {peak:.1f} GFLOP/s, inside bench_conv {max(inproc):.1f} GFLOP/s (used below)")
     peak = max(inproc)
 star = load_json(o.stargan) if os.path.exists(o.stargan) else []
 
@@ -59,7 +67,7 @@ def star_find(cfg_keys, kind):
             return seconds(b)
     return None
 
-print(f"FP32 FMA peak (1 core): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
+print(f"FP32 FMA peak (1 core, {isa}): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
 print()
 print("| config | measure | handemo | PyTorch 1 thr | PyTorch 2 thr | best PyTorch / handemo | fraction of peak |")
 print("|---|---|---|---|---|---|---|")
