@@ -60,10 +60,10 @@ if inproc:
     peak = max(inproc)
 star = load_json(o.stargan) if os.path.exists(o.stargan) else []
 
-def star_find(cfg_keys, kind):
+def star_find(cfg_keys, kind, extra=""):
     for b in star:
         n = b["name"].lower()
-        if any(k in n for k in cfg_keys) and kind in n and b.get("run_type", "iteration") == "iteration":
+        if any(k in n for k in cfg_keys) and kind in n and extra in n and b.get("run_type", "iteration") == "iteration":
             return seconds(b)
     return None
 
@@ -81,8 +81,12 @@ for cfg, keys, gname in (("paper", ("paper", "64"), "generator_convs/paper(64,6)
         print(f"| {cfg} | G conv stack, batch 1 (bench_conv) | {fmt_t(gs)} | {fmt_t(tp1[0])} (whole G) | | {ratio(tp1[0], gs)} | {frac} |")
     inf = star_find(keys, "infer")
     print(f"| {cfg} | G inference, batch 1 | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(best(tp1[0], tp2[0]), inf)} | |")
-    tr = star_find(keys, "train")
-    print(f"| {cfg} | train step D+G, batch 16 | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
+    tr = star_find(keys, "train", "threads:2") or star_find(keys, "train")
+    tr1 = star_find(keys, "train", "threads:1")
+    print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
+    if tr1:
+        eff = f"2-thread step = {tr/tr1:.2f}x the 1-thread step, parallel efficiency {tr1/(2*tr):.0%}" if tr else ""
+        print(f"| {cfg} | train step D+G, batch 16, 1 thread | {fmt_t(tr1)} | {fmt_t(tp1[1])} | | {ratio(tp1[1], tr1)} | {eff} |")
 print()
 layers = load_json(o.layers)
 if layers:
