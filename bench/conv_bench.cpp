@@ -121,17 +121,22 @@ void peak_fma(benchmark::State& state)
     using R = typename B::register_type;
     const long n = 1000000;
     for (auto _ : state) {
-        R a[12];
-        for (int i = 0; i < 12; i++) a[i] = static_cast<R>(B(1.0f + float(i) * 1e-3f));
+        // named locals, not an array: an array whose address escapes is stored every iteration (measured:
+        // 71 instead of 226 GFLOP/s with AVX-512 on Zen 5)
+        R a0 = B(1.000f), a1 = B(1.001f), a2 = B(1.002f), a3 = B(1.003f), a4 = B(1.004f), a5 = B(1.005f);
+        R a6 = B(1.006f), a7 = B(1.007f), a8 = B(1.008f), a9 = B(1.009f), a10 = B(1.010f), a11 = B(1.011f);
         const B b(0.9999f), c(1e-6f);
         for (long k = 0; k < n; k++) {
-            for (int i = 0; i < 12; i++) a[i] = static_cast<R>(xsimd::fma(B(a[i]), b, c));
+            for (R* r : {&a0, &a1, &a2, &a3, &a4, &a5, &a6, &a7, &a8, &a9, &a10, &a11})
+                *r = static_cast<R>(xsimd::fma(B(*r), b, c));
 #if defined(__x86_64__)
-            __asm__ volatile("" : "+v"(a[0]), "+v"(a[1]), "+v"(a[2]), "+v"(a[3]), "+v"(a[4]), "+v"(a[5]), "+v"(a[6]),
-                             "+v"(a[7]), "+v"(a[8]), "+v"(a[9]), "+v"(a[10]), "+v"(a[11]));
+            __asm__ volatile("" : "+v"(a0), "+v"(a1), "+v"(a2), "+v"(a3), "+v"(a4), "+v"(a5), "+v"(a6), "+v"(a7),
+                             "+v"(a8), "+v"(a9), "+v"(a10), "+v"(a11));
 #endif
         }
-        for (int i = 0; i < 12; i++) benchmark::DoNotOptimize(a[i]);
+        B sum = B(a0) + B(a1) + B(a2) + B(a3) + B(a4) + B(a5) + B(a6) + B(a7) + B(a8) + B(a9) + B(a10) + B(a11);
+        float out = xsimd::hadd(sum);
+        benchmark::DoNotOptimize(out);
     }
     state.counters["GFLOPS"] =
         benchmark::Counter(double(n) * 12 * B::size * 2 * 1e-9, benchmark::Counter::kIsIterationInvariantRate);

@@ -67,12 +67,12 @@ inline constexpr int micro_mr = micro_nv * simd_lanes<T>;
 #ifdef HANDEMO_DOT_NO
 inline constexpr int dot_no = HANDEMO_DOT_NO;
 #else
-inline constexpr int dot_no = wide_register_file ? 4 : 4;
+inline constexpr int dot_no = wide_register_file ? 6 : 4;
 #endif
 #ifdef HANDEMO_DOT_NP
 inline constexpr int dot_np = HANDEMO_DOT_NP;
 #else
-inline constexpr int dot_np = wide_register_file ? 3 : 3;
+inline constexpr int dot_np = wide_register_file ? 4 : 3;
 #endif
 static_assert(dot_no >= 4 && dot_np >= 3, "backward_weight_stride1 calls micro_dot with 4 x 3 tiles");
 /// Reduction block of the forward pass: the packed V block (kc x MR) stays in L1.
