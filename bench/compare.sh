@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Side-by-side: handemo's benchmarks vs the PyTorch CPU reference StarGAN vs this machine's FMA peak.
 # Builds bench_conv, peak_fma_avx2 (and bench_stargan when bench/stargan_bench.cpp exists) in Release with
-# -march=native, then in one run: the FP32 FMA peak (the shared AVX-512 program first, the AVX2 one when
-# that fails to build or run), reference_stargan.py with 1 thread (inference) and 2 threads (training),
-# the handemo benchmarks, and a table of ratios.
+# -march=native, then in one run: the instruction set the kernels were compiled for (xsimd's default_arch:
+# avx512bw, avx2, ...), the FP32 FMA peak of that instruction set (../shared/bench/peak_fma.cpp's AVX512 or
+# AVX2 line; bench/peak_fma_avx2 on a CPU without AVX-512; and the same loop inside bench_conv, which the
+# table uses), reference_stargan.py with 1 and 2 threads, the handemo benchmarks, and a table of ratios.
 # Usage: bench/compare.sh [build-dir]   (default: <repo>/build-bench)
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
@@ -24,19 +25,35 @@ for t in $targets; do
     || { tail -20 "$out/build_$t.log"; echo "compare.sh: building $t failed"; [ "$t" = bench_stargan ] || exit 1; }
 done
 
-echo "== FMA peak"
+# The instruction set xsimd picked for the kernels in this build (-march=native): the peak that counts is
+# that ISA's, not the widest the CPU has (an AVX-512 CPU running AVX2 kernels is measured against AVX2).
+read -r isa lanes < <("$build/bench/bench_conv" --simd_arch)
+echo "== kernels compiled for: ${isa:-unknown} (${lanes:-?} float lanes; xsimd default_arch of this build)"
+case "$isa" in
+  avx512*) peak_line="AVX512 FMA" ;;
+  avx2|fma3*|avx2*) peak_line="AVX2 FMA" ;;
+  *) peak_line="" ;;
+esac
+
+echo "== FMA peak (standalone, for $isa)"
 peak=""
-if g++ -O2 -march=native -mavx512f "$shared_bench/peak_fma.cpp" -o "$out/peak_fma" 2>/dev/null \
-   && { "$out/peak_fma" >"$out/peak.txt"; } 2>/dev/null; then
-  cat "$out/peak.txt"
-  peak=$(sed -n 's/^AVX2 FMA: \([0-9.]*\).*/\1/p' "$out/peak.txt")
-  avx512=$(sed -n 's/^AVX512 FMA: \([0-9.]*\).*/\1/p' "$out/peak.txt")
-  if [ -n "$avx512" ] && grep -q avx512f /proc/cpuinfo; then peak=$avx512; fi
-else
-  echo "(shared peak_fma.cpp needs AVX-512: not available here, using peak_fma_avx2)"
+if [ -z "$peak_line" ]; then
+  echo "(no standalone peak program for $isa: the in-process peak of bench_conv is used)"
+elif [ "$peak_line" = "AVX512 FMA" ] || grep -q avx512f /proc/cpuinfo; then
+  # ../shared/bench/peak_fma.cpp measures both AVX-512 and AVX2 (needs a CPU with AVX-512)
+  if g++ -O2 -march=native "$shared_bench/peak_fma.cpp" -o "$out/peak_fma" 2>"$out/peak_build.log" \
+     && "$out/peak_fma" >"$out/peak.txt" 2>&1; then
+    cat "$out/peak.txt"
+    peak=$(sed -n "s/^$peak_line: \([0-9.]*\).*/\1/p" "$out/peak.txt")
+  else
+    echo "(shared peak_fma.cpp failed to build or run)"
+  fi
+fi
+if [ -z "$peak" ] && [ "$peak_line" = "AVX2 FMA" ]; then
   "$build/bench/peak_fma_avx2" | tee "$out/peak.txt"
   peak=$(sed -n 's/^AVX2 FMA: \([0-9.]*\).*/\1/p' "$out/peak.txt")
 fi
+[ -n "$peak" ] && echo "standalone $isa peak: $peak GFLOP/s"
 
 echo "== PyTorch reference (CPU)"
 py=/usr/bin/python3
@@ -60,5 +77,5 @@ else
 fi
 
 echo "== comparison"
-"$py" "$here/compare_table.py" --peak "${peak:-0}" --torch1 "$out/torch1.txt" --torch2 "$out/torch2.txt" \
+"$py" "$here/compare_table.py" --isa "${isa:-unknown}" --peak "${peak:-0}" --torch1 "$out/torch1.txt" --torch2 "$out/torch2.txt" \
   --conv "$out/conv.json" --layers "$out/conv_layers.json" --stargan "$out/stargan.json"

@@ -38,28 +38,36 @@ def ratio(a, b):
     return "n/a" if a is None or b is None or b == 0 else f"{a/b:.2f}x"
 
 ap = argparse.ArgumentParser()
-for a in ("--peak", "--torch1", "--torch2", "--conv", "--layers", "--stargan"):
+for a in ("--isa", "--peak", "--torch1", "--torch2", "--conv", "--layers", "--stargan"):
     ap.add_argument(a, default="")
 o = ap.parse_args()
 peak = float(o.peak or 0)
 t1, t2 = torch_results(o.torch1), torch_results(o.torch2)
 conv_all = load_json(o.conv)
 conv = {b["name"]: b for b in conv_all}
-# the FMA peak measured inside bench_conv (same load as the kernels) wins over the standalone one
-inproc = [b.get("GFLOPS", 0) for b in conv_all if b["name"].startswith("peak_fma_avx2") and b.get("run_type") == "iteration"]
+try:
+    ctx = json.load(open(o.conv)).get("context", {})
+except (OSError, ValueError):
+    ctx = {}
+isa = ctx.get("simd_arch") or o.isa or "unknown"
+print(f"Kernels compiled for: {isa} ({ctx.get('simd_float_lanes', '?')} float lanes); peak below is {isa}'s")
+# the FMA peak of the kernels' ISA measured inside bench_conv (same load as the kernels) wins over the
+# standalone one
+inproc = [b.get("GFLOPS", 0) for b in conv_all if b["name"].startswith("peak_fma/") and b.get("run_type") == "iteration"]
+inproc = [g / 1e9 if g > 1e6 else g for g in inproc]
 if inproc:
-    print(f"FMA peak: standalone {peak:.1f} GFLOP/s, inside bench_conv {max(inproc):.1f} GFLOP/s (used below)")
+    print(f"FMA peak ({isa}): standalone {peak:.1f} GFLOP/s, inside bench_conv {max(inproc):.1f} GFLOP/s (used below)")
     peak = max(inproc)
 star = load_json(o.stargan) if os.path.exists(o.stargan) else []
 
-def star_find(cfg_keys, kind):
+def star_find(cfg_keys, kind, extra=""):
     for b in star:
         n = b["name"].lower()
-        if any(k in n for k in cfg_keys) and kind in n and b.get("run_type", "iteration") == "iteration":
+        if any(k in n for k in cfg_keys) and kind in n and extra in n and b.get("run_type", "iteration") == "iteration":
             return seconds(b)
     return None
 
-print(f"FP32 FMA peak (1 core): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
+print(f"FP32 FMA peak (1 core, {isa}): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
 print()
 print("| config | measure | handemo | PyTorch 1 thr | PyTorch 2 thr | best PyTorch / handemo | fraction of peak |")
 print("|---|---|---|---|---|---|---|")
@@ -73,8 +81,12 @@ for cfg, keys, gname in (("paper", ("paper", "64"), "generator_convs/paper(64,6)
         print(f"| {cfg} | G conv stack, batch 1 (bench_conv) | {fmt_t(gs)} | {fmt_t(tp1[0])} (whole G) | | {ratio(tp1[0], gs)} | {frac} |")
     inf = star_find(keys, "infer")
     print(f"| {cfg} | G inference, batch 1 | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(best(tp1[0], tp2[0]), inf)} | |")
-    tr = star_find(keys, "train")
-    print(f"| {cfg} | train step D+G, batch 16 | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
+    tr = star_find(keys, "train", "threads:2") or star_find(keys, "train")
+    tr1 = star_find(keys, "train", "threads:1")
+    print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
+    if tr1:
+        eff = f"2-thread step = {tr/tr1:.2f}x the 1-thread step, parallel efficiency {tr1/(2*tr):.0%}" if tr else ""
+        print(f"| {cfg} | train step D+G, batch 16, 1 thread | {fmt_t(tr1)} | {fmt_t(tp1[1])} | | {ratio(tp1[1], tr1)} | {eff} |")
 print()
 layers = load_json(o.layers)
 if layers:

@@ -1,6 +1,6 @@
 // Whole-StarGAN benchmarks (hand paper Sec. 3.3) side by side with reference_stargan.py: batch-1 generator
 // inference, single thread, tape-free (generator::infer); one training step (D step with WGAN-GP + G step,
-// batch 16, Adam on both) on the autodiff tape with the batch split over all cores. GFLOP/s counters are
+// batch 16, Adam on both) on the autodiff tape with the batch split over 2 threads and over 1 (threads:N). GFLOP/s counters are
 // multiply-adds x 2 / time (for training, an estimate: 7 G-forward + 14 D-forward equivalents per step).
 #include <handemo/nn/adam.hpp>
 #include <handemo/nn/init.hpp>
@@ -54,7 +54,9 @@ void bm_train(benchmark::State& st)
     opt.beta1 = 0.5;
     opt.beta2 = 0.999;
     adam<float> og(g, opt), od(d, opt);
-    kernels::thread_pool pool(std::max(1u, std::thread::hardware_concurrency()));
+    // threads = the benchmark's argument (1 and 2: the parallel efficiency of issue 13), 0 = all cores
+    const unsigned threads = st.range(0) > 0 ? unsigned(st.range(0)) : std::max(1u, std::thread::hardware_concurrency());
+    kernels::thread_pool pool(threads);
     tape<float> t(std::size_t{1} << 22, &pool);
     std::mt19937 r(3);
     std::uniform_real_distribution<float> u(-1, 1), a01(0, 1);
@@ -112,7 +114,9 @@ void bm_train(benchmark::State& st)
 
 BENCHMARK(bm_infer<hand_paper>)->Name("stargan_infer/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer<hand_embedded>)->Name("stargan_infer/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_train<hand_paper>)->Name("stargan_train/paper(64,6)/b16")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
-BENCHMARK(bm_train<hand_embedded>)->Name("stargan_train/embedded(32,3)/b16")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(bm_train<hand_paper>)->Name("stargan_train/paper(64,6)/b16")->ArgName("threads")->Arg(2)->Arg(1)
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK(bm_train<hand_embedded>)->Name("stargan_train/embedded(32,3)/b16")->ArgName("threads")->Arg(2)->Arg(1)
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 BENCHMARK_MAIN();

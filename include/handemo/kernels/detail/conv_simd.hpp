@@ -37,11 +37,44 @@ using simd_t = xsimd::batch<T>;
 template <class T>
 inline constexpr int simd_lanes = int(simd_t<T>::size);
 
-/// Vectors per micro-tile along i, broadcast rows along j (NV * NR = 12 accumulators + NV + 1 <= 16 regs).
-inline constexpr int micro_nv = 3;
-inline constexpr int micro_nr = 4;
+/// The register file the blocking is chosen for: 32 vector registers with AVX-512 (zmm0-31), 16 with AVX2
+/// and SSE (and on NEON, whose 32 registers are not used by these blockings: they were not measured there).
+#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
+inline constexpr bool wide_register_file = true;
+#else
+inline constexpr bool wide_register_file = false;
+#endif
+
+/// Vectors per micro-tile along i, broadcast rows along j. 16 registers (AVX2): NV * NR = 12 accumulators
+/// + NV + 1 <= 16. 32 registers (AVX-512): chosen by measurement, see README "Performance". Overridable
+/// with -DHANDEMO_MICRO_NV / -DHANDEMO_MICRO_NR (to measure other blockings).
+#ifdef HANDEMO_MICRO_NV
+inline constexpr int micro_nv = HANDEMO_MICRO_NV;
+#else
+inline constexpr int micro_nv = wide_register_file ? 3 : 3;
+#endif
+#ifdef HANDEMO_MICRO_NR
+inline constexpr int micro_nr = HANDEMO_MICRO_NR;
+#else
+inline constexpr int micro_nr = wide_register_file ? 4 : 4;
+#endif
+static_assert(micro_nv >= 1 && micro_nr >= 4, "micro_nr >= 4: backward_weight_stride1 and the dot path assume it");
 template <class T>
 inline constexpr int micro_mr = micro_nv * simd_lanes<T>;
+
+/// Tile of the dot-product micro-kernel (micro_dot): out channels x pixels, NO * NP accumulators + NP + 1
+/// registers. At least 4 x 3 (backward_weight_stride1 uses 4 x 3 tiles). -DHANDEMO_DOT_NO / _NP override.
+#ifdef HANDEMO_DOT_NO
+inline constexpr int dot_no = HANDEMO_DOT_NO;
+#else
+inline constexpr int dot_no = wide_register_file ? 6 : 4;
+#endif
+#ifdef HANDEMO_DOT_NP
+inline constexpr int dot_np = HANDEMO_DOT_NP;
+#else
+inline constexpr int dot_np = wide_register_file ? 4 : 3;
+#endif
+static_assert(dot_no >= 4 && dot_np >= 3, "backward_weight_stride1 calls micro_dot with 4 x 3 tiles");
 /// Reduction block of the forward pass: the packed V block (kc x MR) stays in L1.
 inline constexpr int forward_kc = 256;
 
@@ -53,8 +86,9 @@ template <class B>
 inline B keep_in_register(B a) noexcept
 {
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+    // "v": any EVEX-encodable register (xmm/ymm/zmm 0-31 with AVX-512; the same 16 as "x" without it)
     auto r = static_cast<typename B::register_type>(a);
-    __asm__("" : "+x"(r));
+    __asm__("" : "+v"(r));
     return B(r);
 #elif defined(__GNUC__) && defined(__aarch64__)
     auto r = static_cast<typename B::register_type>(a);
@@ -110,17 +144,14 @@ template <class T, int NR>
         for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
 }
 
-template <class T>
+/// micro_kernel<T, nr> for nr = 1..micro_nr.
+template <class T, int N = micro_nr>
 inline void micro_dispatch(int nr, int kc, const T* v, std::ptrdiff_t vk, const T* s, std::ptrdiff_t sj,
                            std::ptrdiff_t sk, T* tile, bool accumulate) noexcept
 {
-    static_assert(micro_nr == 4, "micro_dispatch handles nr = 1..4 (micro_nr changed)");
-    switch (nr) {
-    case 4: micro_kernel<T, 4>(kc, v, vk, s, sj, sk, tile, accumulate); break;
-    case 3: micro_kernel<T, 3>(kc, v, vk, s, sj, sk, tile, accumulate); break;
-    case 2: micro_kernel<T, 2>(kc, v, vk, s, sj, sk, tile, accumulate); break;
-    default: micro_kernel<T, 1>(kc, v, vk, s, sj, sk, tile, accumulate); break;
-    }
+    if constexpr (N <= 1) micro_kernel<T, 1>(kc, v, vk, s, sj, sk, tile, accumulate);
+    else if (nr >= N) micro_kernel<T, N>(kc, v, vk, s, sj, sk, tile, accumulate);
+    else micro_dispatch<T, N - 1>(nr, kc, v, vk, s, sj, sk, tile, accumulate);
 }
 
 /// tile[j][0..MR) = sum_{k<kc} v[koff[k] + 0..MR) * s[j*sj + k], j < NR: the V rows of the stride-1
@@ -149,16 +180,14 @@ template <class T, int NR>
         for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
 }
 
-template <class T>
+/// micro_kernel_idx<T, nr> for nr = 1..micro_nr.
+template <class T, int N = micro_nr>
 inline void micro_idx_dispatch(int nr, int kc, const T* v, const int* koff, const T* s, std::ptrdiff_t sj,
                                T* tile) noexcept
 {
-    switch (nr) {
-    case 4: micro_kernel_idx<T, 4>(kc, v, koff, s, sj, tile); break;
-    case 3: micro_kernel_idx<T, 3>(kc, v, koff, s, sj, tile); break;
-    case 2: micro_kernel_idx<T, 2>(kc, v, koff, s, sj, tile); break;
-    default: micro_kernel_idx<T, 1>(kc, v, koff, s, sj, tile); break;
-    }
+    if constexpr (N <= 1) micro_kernel_idx<T, 1>(kc, v, koff, s, sj, tile);
+    else if (nr >= N) micro_kernel_idx<T, N>(kc, v, koff, s, sj, tile);
+    else micro_idx_dispatch<T, N - 1>(nr, kc, v, koff, s, sj, tile);
 }
 
 /// Elements of the zero-padded image (plus read-past slack) of the stride-1 path.
@@ -225,7 +254,8 @@ template <class T>
 inline std::size_t dot_scratch_elements(const conv_geometry& g) noexcept
 {
     const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
-    return std::size_t(dot_max_pixels) * K + 16;
+    const std::size_t padded = std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad);
+    return std::size_t(dot_max_pixels) * K + padded + 16;
 }
 
 /// Scratch elements of the forward pass alone (any batch size).
@@ -312,52 +342,57 @@ template <class T, int NO, int NP>
         for (int p = 0; p < NP; ++p) out[o * NP + p] = xsimd::hadd(acc[o][p]);
 }
 
-template <class T, int NO>
+/// micro_dot<T, NO, np> for np = 1..N.
+template <class T, int NO, int N = dot_np>
 inline void micro_dot_np(int np, int steps, const T* w, std::ptrdiff_t ldw, const T* c, std::ptrdiff_t ldc, T* out) noexcept
 {
-    switch (np) {
-    case 3: micro_dot<T, NO, 3>(steps, w, ldw, c, ldc, out); break;
-    case 2: micro_dot<T, NO, 2>(steps, w, ldw, c, ldc, out); break;
-    default: micro_dot<T, NO, 1>(steps, w, ldw, c, ldc, out); break;
-    }
+    if constexpr (N <= 1) micro_dot<T, NO, 1>(steps, w, ldw, c, ldc, out);
+    else if (np >= N) micro_dot<T, NO, N>(steps, w, ldw, c, ldc, out);
+    else micro_dot_np<T, NO, N - 1>(np, steps, w, ldw, c, ldc, out);
 }
 
-template <class T>
+/// micro_dot<T, no, np> for no = 1..dot_no, np = 1..dot_np; out gets no x np values (row-major).
+template <class T, int N = dot_no>
 inline void micro_dot_dispatch(int no, int np, int steps, const T* w, std::ptrdiff_t ldw, const T* c,
                                std::ptrdiff_t ldc, T* out) noexcept
 {
-    switch (no) {
-    case 4: micro_dot_np<T, 4>(np, steps, w, ldw, c, ldc, out); break;
-    case 3: micro_dot_np<T, 3>(np, steps, w, ldw, c, ldc, out); break;
-    case 2: micro_dot_np<T, 2>(np, steps, w, ldw, c, ldc, out); break;
-    default: micro_dot_np<T, 1>(np, steps, w, ldw, c, ldc, out); break;
-    }
+    if constexpr (N <= 1) micro_dot_np<T, 1>(np, steps, w, ldw, c, ldc, out);
+    else if (no >= N) micro_dot_np<T, N>(np, steps, w, ldw, c, ldc, out);
+    else micro_dot_dispatch<T, N - 1>(no, np, steps, w, ldw, c, ldc, out);
 }
 
-/// Forward pass through micro_dot: col^T [pixels, K] packed once, weights read in place.
+/// Forward pass through micro_dot: col^T [pixels, K] packed once, weights read in place. The im2col reads
+/// a zero-padded copy of each image, so it has no bounds checks (it took 10% of the paper G's inference
+/// time with them, AVX-512).
 template <class T>
 inline void forward_dot(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
                         bool accumulate_out) noexcept
 {
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow, Ptot = P * g.batch;
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
-    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w;
+    const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, Ci = g.in_channels;
+    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w, HWp = std::ptrdiff_t(Hp) * Wp;
     T* col = scratch;
+    T* xp = scratch + std::ptrdiff_t(dot_max_pixels) * K;
     std::ptrdiff_t ybase[dot_max_pixels];
-    for (int p = 0; p < Ptot; ++p) {
-        const int n = p / P, r = p % P, ih0 = (r / ow) * g.stride - g.pad, iw0 = (r % ow) * g.stride - g.pad;
-        ybase[p] = std::ptrdiff_t(n) * Co * P + r;
-        const T* xn = x + std::ptrdiff_t(n) * g.in_channels * HW;
-        T* dst = col + std::ptrdiff_t(p) * K;
-        for (int c = 0; c < g.in_channels; ++c)
-            for (int u = 0; u < kh; ++u) {
-                const int ih = ih0 + u;
-                const bool row_in = unsigned(ih) < unsigned(g.in_h);
-                for (int v = 0; v < kw; ++v) {
-                    const int iw = iw0 + v;
-                    *dst++ = (row_in && unsigned(iw) < unsigned(g.in_w)) ? xn[c * HW + std::ptrdiff_t(ih) * g.in_w + iw] : T(0);
+    for (int n = 0; n < g.batch; ++n) {
+        const T* xn = x + std::ptrdiff_t(n) * Ci * HW;
+        if (g.pad > 0) std::fill(xp, xp + Ci * HWp, T(0));
+        for (int c = 0; c < Ci; ++c)
+            for (int r = 0; r < g.in_h; ++r)
+                std::copy(xn + c * HW + std::ptrdiff_t(r) * g.in_w, xn + c * HW + std::ptrdiff_t(r + 1) * g.in_w,
+                          xp + c * HWp + std::ptrdiff_t(r + g.pad) * Wp + g.pad);
+        for (int r = 0; r < P; ++r) {
+            const int p = n * P + r;
+            ybase[p] = std::ptrdiff_t(n) * Co * P + r;
+            const T* src = xp + std::ptrdiff_t((r / ow) * g.stride) * Wp + (r % ow) * g.stride;  // padded coordinates
+            T* dst = col + std::ptrdiff_t(p) * K;
+            for (int c = 0; c < Ci; ++c, src += HWp)
+                for (int u = 0; u < kh; ++u) {
+                    const T* sr = src + std::ptrdiff_t(u) * Wp;
+                    for (int v = 0; v < kw; ++v) *dst++ = sr[v];
                 }
-            }
+        }
     }
     for (int o = 0; o < Co; ++o) {
         const T b = bias ? bias[o] : T(0);
@@ -366,13 +401,13 @@ inline void forward_dot(const conv_geometry& g, const T* x, const T* w, const T*
             dst = (accumulate_out ? dst : T(0)) + b;
         }
     }
-    T out[16];
+    T out[dot_no * dot_np];
     for (int k0 = 0; k0 < K; k0 += dot_kc) {
         const int steps = std::min(dot_kc, K - k0) / simd_lanes<T>;
-        for (int o0 = 0; o0 < Co; o0 += 4) {
-            const int no = std::min(4, Co - o0);
-            for (int p0 = 0; p0 < Ptot; p0 += 3) {
-                const int np = std::min(3, Ptot - p0);
+        for (int o0 = 0; o0 < Co; o0 += dot_no) {
+            const int no = std::min(dot_no, Co - o0);
+            for (int p0 = 0; p0 < Ptot; p0 += dot_np) {
+                const int np = std::min(dot_np, Ptot - p0);
                 micro_dot_dispatch<T>(no, np, steps, w + std::ptrdiff_t(o0) * K + k0, K, col + std::ptrdiff_t(p0) * K + k0, K, out);
                 for (int o = 0; o < no; ++o)
                     for (int p = 0; p < np; ++p) y[ybase[p0 + p] + std::ptrdiff_t(o0 + o) * P] += out[o * np + p];
@@ -618,7 +653,7 @@ inline void backward_weight_stride1(const conv_geometry& g, const T* x, const T*
     T* gyw = scratch + npad;
     for (std::size_t i = 0; i < npad; ++i) xp[i] = T(0);
     for (std::ptrdiff_t i = 0; i < std::ptrdiff_t(Co) * Pwl; ++i) gyw[i] = T(0);
-    T out[16];
+    T out[dot_no * dot_np];
     for (int n = 0; n < g.batch; ++n) {
         const T* xn = x + std::ptrdiff_t(n) * g.in_channels * g.in_h * g.in_w;
         for (int c = 0; c < g.in_channels; ++c)
