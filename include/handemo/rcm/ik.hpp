@@ -282,7 +282,7 @@ public:
         double lambda = opt_.damping;
         autodiff::tape<double> tp(std::size_t{1} << 14);
         detail::fk_context ctx{&s, layout_, positions.data(), pts};
-        std::vector<double> jac(m * n), A(m * m), y(m), dq(n), qn(n), r(m);
+        std::vector<double> jac(m * n), jt(n * m), A(m * m), y(m), dq(n), qn(n), r(m);
         std::vector<char> locked(n);
         bool fresh = false;  // jac and r belong to the current q
         for (int it = 0; it < opt_.max_iterations && std::sqrt(err / wsum) > opt_.tolerance; ++it) {
@@ -300,16 +300,26 @@ public:
             }
             // Minimise |r + J dq|^2 + lambda^2 |dq|^2 over the free DOFs: dq = -J^T (J J^T + lambda^2 I)^-1 r.
             std::fill(locked.begin(), locked.end(), 0);
+            for (std::size_t a = 0; a < m; ++a)  // J's columns contiguous, for the rank-1 updates below
+                for (std::size_t c = 0; c < n; ++c) jt[c * m + a] = jac[a * n + c];
             for (int pass = 0; pass < 4; ++pass) {
-                for (std::size_t a = 0; a < m; ++a)
-                    for (std::size_t b = 0; b <= a; ++b) {
-                        double v = 0;
-                        const double* ra = jac.data() + a * n;
-                        const double* rb = jac.data() + b * n;
-                        for (std::size_t c = 0; c < n; ++c)
-                            if (!locked[c]) v += ra[c] * rb[c];
-                        A[a * m + b] = A[b * m + a] = v + (a == b ? lambda * lambda : 0.0);
+                // A = J_free J_free^T + lambda^2 I as a sum of rank-1 updates over the free DOFs, in DOF order (the
+                // same sums, element by element, as row-times-row products; the inner loop is contiguous and
+                // vectorises, where a dot product with a per-DOF test did not: 85% of a 680-frame hand synthesis)
+                std::fill(A.begin(), A.end(), 0.0);
+                for (std::size_t c = 0; c < n; ++c) {
+                    if (locked[c]) continue;
+                    const double* col = jt.data() + c * m;
+                    for (std::size_t a = 0; a < m; ++a) {
+                        const double ca = col[a];
+                        double* row = A.data() + a * m;
+                        for (std::size_t b = 0; b <= a; ++b) row[b] += ca * col[b];
                     }
+                }
+                for (std::size_t a = 0; a < m; ++a) {
+                    for (std::size_t b = 0; b < a; ++b) A[b * m + a] = A[a * m + b];
+                    A[a * m + a] += lambda * lambda;
+                }
                 for (std::size_t a = 0; a < m; ++a) y[a] = -r[a];
                 if (!detail::cholesky_solve(A, y, m)) break;
                 bool again = false;
