@@ -16,6 +16,20 @@ using namespace handemo::eval;
 using namespace handemo::stargan;
 using handemo::test::toy_set;
 
+namespace {
+
+/// The fold that holds pointing out: its held-out clips in fc.test, the others copied into `train`.
+fold_context pointing_fold(const std::vector<labelled_clip>& clips, std::vector<labelled_clip>& train)
+{
+    fold_context fc;
+    fc.held_out = "pointing";
+    for (const auto& c : clips) (c.content == "pointing" ? fc.test.push_back(&c) : train.push_back(c));
+    fc.train = &train;
+    return fc;
+}
+
+}  // namespace
+
 TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output analysed, one report section")
 {
     // The protocol calls begin_fold() with the fold's training clips, transfer() for each (neutral input,
@@ -164,10 +178,7 @@ TEST_CASE("rcm extension: a label without coordinates fails the fold's fit, name
     ro.table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
     rcm_extension ext(ro);
     std::vector<labelled_clip> train;
-    fold_context fc;
-    fc.held_out = "pointing";
-    for (const auto& c : clips) (c.content == "pointing" ? fc.test.push_back(&c) : train.push_back(c));
-    fc.train = &train;
+    const fold_context fc = pointing_fold(clips, train);
     ext.begin_fold(fc);
     REQUIRE(ext.folds().size() == 1);
     CHECK(ext.folds()[0].error.find("'bored'") != std::string::npos);
@@ -190,10 +201,7 @@ TEST_CASE("rcm extension: a held-out clip or target it cannot place is counted a
     ro.stylise.iterations = 5;
     rcm_extension ext(ro);
     std::vector<labelled_clip> train;
-    fold_context fc;
-    fc.held_out = "pointing";
-    for (const auto& c : clips) (c.content == "pointing" ? fc.test.push_back(&c) : train.push_back(c));
-    fc.train = &train;
+    const fold_context fc = pointing_fold(clips, train);
     ext.begin_fold(fc);
     REQUIRE(ext.folds().size() == 1);
     CHECK(ext.folds()[0].error.empty());

@@ -51,12 +51,12 @@ inline constexpr bool wide_register_file = false;
 #ifdef HANDEMO_MICRO_NV
 inline constexpr int micro_nv = HANDEMO_MICRO_NV;
 #else
-inline constexpr int micro_nv = wide_register_file ? 3 : 3;
+inline constexpr int micro_nv = 3;  // 3 x 4 on 16 and on 32 registers: no wider tile measured faster
 #endif
 #ifdef HANDEMO_MICRO_NR
 inline constexpr int micro_nr = HANDEMO_MICRO_NR;
 #else
-inline constexpr int micro_nr = wide_register_file ? 4 : 4;
+inline constexpr int micro_nr = 4;
 #endif
 static_assert(micro_nv >= 1 && micro_nr >= 4, "micro_nr >= 4: backward_weight_stride1 and the dot path assume it");
 template <class T>
