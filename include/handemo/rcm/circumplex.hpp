@@ -74,7 +74,10 @@ inline circumplex_table parse_circumplex(const std::string& text, const std::str
     t.source = src.get<std::string>();
     const auto& labels = need(j, "labels", "");
     if (!labels.is_object() || labels.empty()) throw format_error("rcm circumplex: " + what + ": field 'labels' is not a non-empty object");
-    for (const auto& [name, v] : labels.items()) {
+    for (const auto& item : labels.items()) {
+        // not a structured binding: clang 14 cannot capture one in the lambda below
+        const std::string& name = item.key();
+        const nlohmann::json& v = item.value();
         label_point p;
         p.name = name;
         const std::string w = "labels." + name + ".";

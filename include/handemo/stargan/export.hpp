@@ -142,7 +142,10 @@ std::string generator_header(generator<float, Config>& g, const checkpoint_info&
 inline std::string export_generator_header(const std::filesystem::path& model, header_export_options o)
 {
     const auto file = std::filesystem::is_directory(model) ? model / "checkpoint.safetensors" : model;
-    auto [f, info] = read_checkpoint(file);
+    // not a structured binding: clang 14 cannot capture one in the lambda below (C++20 allows it, clang 16 does)
+    const auto ck = read_checkpoint(file);
+    const safetensors_file& f = ck.first;
+    const checkpoint_info& info = ck.second;
     if (o.source == "<memory>") o.source = model.filename().string();
     return with_config(info.config, [&]<stargan_config Config>(const config_info&) -> std::string {
         generator<float, with_batch<Config, 1>> g;

@@ -1,0 +1,36 @@
+# The library with Debian's clang (issue 12: it must build with GCC 12 and clang; CI builds with both).
+# Compiles, with clang's full front end but no code generation (-fsyntax-only, which still instantiates every
+# template the sources use), every public header, the README's example, the CLI's StarGAN unit (training,
+# evaluation and transfer for every configuration) and the libFuzzer harnesses, with -Wall -Wextra -Werror.
+# Without clang++ at configure time the test is a one-line skip instead (tests/CMakeLists.txt).
+# -DCLANGXX=... -DSRC=<source dir> -DINCLUDES=<;-list of include dirs> -DWORK=<scratch dir>
+file(MAKE_DIRECTORY ${WORK})
+set(all "${WORK}/all_headers.cpp")
+file(GLOB headers RELATIVE ${SRC}/include ${SRC}/include/handemo/*.hpp)
+set(text "// every public header of handemo, in one unit\n#include <handemo.hpp>\n")
+foreach(h IN LISTS headers)
+  string(APPEND text "#include <${h}>\n")
+endforeach()
+string(APPEND text "#include <handemo/eval/rcm.hpp>\nint main() {}\n")
+file(WRITE ${all} "${text}")
+set(sources ${all} ${SRC}/examples/transfer.cpp ${SRC}/examples/cli/cmd_stargan.cpp)
+file(GLOB fuzz ${SRC}/tests/fuzz/*.cpp)
+list(FILTER fuzz EXCLUDE REGEX "(bounds_test|replay)\\.cpp$")
+list(APPEND sources ${fuzz})
+set(flags -std=c++20 -fsyntax-only -Wall -Wextra -Werror "-DHANDEMO_SOURCE_DIR=\"${SRC}\"" "-DHANDEMO_RCM_CIRCUMPLEX=\"\"")
+foreach(d IN LISTS INCLUDES)
+  list(APPEND flags -I${d})
+endforeach()
+set(failed "")
+foreach(s IN LISTS sources)
+  execute_process(COMMAND ${CLANGXX} ${flags} ${s} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message("${err}")
+    list(APPEND failed ${s})
+  endif()
+endforeach()
+list(LENGTH sources n)
+if(failed)
+  message(FATAL_ERROR "clang_syntax: ${CLANGXX} rejects: ${failed}")
+endif()
+message("clang_syntax: ${CLANGXX} compiles all ${n} units (-fsyntax-only -Wall -Wextra -Werror)")
