@@ -102,6 +102,18 @@ TEST_CASE("csv: malformed files are format_errors naming file, line and column")
     expect_error(replace(tiny_csv, "fps=30", "fps=fast"), 1, "fps 'fast' is not a positive number");
 }
 
+TEST_CASE("a bad skeleton is an error naming what it came with (the CSV file, the clip's source)")
+{
+    skeleton bad = parse_bvh(tiny_bvh, "tiny.bvh").skel;
+    bad.joints[1].parent = 5;  // a parent after its child
+    CHECK_THROWS_WITH_AS(parse_csv(tiny_csv, "take.csv", bad), doctest::Contains("take.csv"), format_error);
+    CHECK_THROWS_WITH_AS(parse_csv(tiny_csv, "take.csv", bad), doctest::Contains("has parent index 5"), format_error);
+    clip c = parse_bvh(tiny_bvh, "tiny.bvh");
+    c.skel.joints.clear();
+    CHECK_THROWS_WITH_AS(c.validate("walk_angry_0.bvh"), doctest::Contains("walk_angry_0.bvh"), format_error);
+    CHECK_THROWS_WITH_AS(c.validate("walk_angry_0.bvh"), doctest::Contains("no joints"), format_error);
+}
+
 TEST_CASE("csv: writer refuses names that would break the format")
 {
     clip c = parse_bvh(tiny_bvh, "tiny.bvh");

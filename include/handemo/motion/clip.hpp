@@ -51,7 +51,7 @@ struct clip {
     /// @throws shape_error or value_error naming `what` (usually the file) and the field.
     void validate(const std::string& what = "clip") const
     {
-        skel.validate();
+        skel.validate(what);
         const std::size_t n = frames * skel.size() * 3;
         if (angles.size() != n || positions.size() != n)
             throw shape_error(what + ": angle/position arrays hold " + std::to_string(angles.size()) + "/" +

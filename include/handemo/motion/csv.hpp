@@ -99,7 +99,7 @@ inline void write_csv(const std::filesystem::path& path, const clip& c) { write_
 /// fps comment, or no data rows.
 inline clip parse_csv(std::string_view text, std::string_view source_name, const skeleton& skel)
 {
-    skel.validate();
+    skel.validate(std::string(source_name));
     if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
 
     // Split into lines once (views into text), remembering 1-based numbers.
