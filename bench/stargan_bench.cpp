@@ -54,7 +54,7 @@ void bm_train(benchmark::State& st)
     opt.beta1 = 0.5;
     opt.beta2 = 0.999;
     adam<float> og(g, opt), od(d, opt);
-    kernels::thread_pool pool(std::max(1u, std::thread::hardware_concurrency()));
+    thread_pool pool(std::max(1u, std::thread::hardware_concurrency()));
     tape<float> t(std::size_t{1} << 22, &pool);
     std::mt19937 r(3);
     std::uniform_real_distribution<float> u(-1, 1), a01(0, 1);

@@ -11,7 +11,7 @@
 #include <handemo/autodiff/tape.hpp>
 
 #include <handemo/kernels/conv.hpp>
-#include <handemo/kernels/thread_pool.hpp>
+#include <handemo/core/thread_pool.hpp>
 
 #include <algorithm>
 #include <cstring>

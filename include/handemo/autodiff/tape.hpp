@@ -21,7 +21,7 @@
 #include <type_traits>
 #include <vector>
 
-namespace handemo::kernels {
+namespace handemo {
 class thread_pool;
 }
 
@@ -130,7 +130,7 @@ class tape {
 public:
     /// @param block_elems elements per arena block (a request larger than a block gets its own block)
     /// @param pool optional thread pool; convolutions split their batch over it
-    explicit tape(std::size_t block_elems = std::size_t{1} << 21, kernels::thread_pool* pool = nullptr)
+    explicit tape(std::size_t block_elems = std::size_t{1} << 21, thread_pool* pool = nullptr)
         : block_elems_(block_elems), pool_(pool)
     {
         blocks_.reserve(256);
@@ -147,8 +147,8 @@ public:
         used_ = 0;
     }
 
-    kernels::thread_pool* pool() const noexcept { return pool_; }
-    void set_pool(kernels::thread_pool* p) noexcept { pool_ = p; }
+    thread_pool* pool() const noexcept { return pool_; }
+    void set_pool(thread_pool* p) noexcept { pool_ = p; }
 
     /// @brief `n` elements of 64-byte aligned arena memory (uninitialised), valid until reset().
     T* alloc(std::size_t n)
@@ -357,7 +357,7 @@ private:
     std::vector<aligned_buffer<T>> blocks_;
     std::size_t block_ = 0, used_ = 0, block_elems_;
     std::vector<node<T>> nodes_;
-    kernels::thread_pool* pool_ = nullptr;
+    thread_pool* pool_ = nullptr;
 };
 
 namespace detail {
