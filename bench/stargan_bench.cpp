@@ -56,7 +56,7 @@ void bm_train(benchmark::State& st)
     adam<float> og(g, opt), od(d, opt);
     // threads = the benchmark's argument (1 and 2: the parallel efficiency of issue 13), 0 = all cores
     const unsigned threads = st.range(0) > 0 ? unsigned(st.range(0)) : std::max(1u, std::thread::hardware_concurrency());
-    kernels::thread_pool pool(threads);
+    thread_pool pool(threads);
     tape<float> t(std::size_t{1} << 22, &pool);
     std::mt19937 r(3);
     std::uniform_real_distribution<float> u(-1, 1), a01(0, 1);

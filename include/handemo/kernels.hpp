@@ -1,5 +1,6 @@
 // Kernels module: the convolution kernels of the StarGAN (Chan et al. 2020, Sec. 3.3) in a fast xsimd
-// version and a plain-loop reference version, and the thread pool that spreads work over cores.
+// version and a plain-loop reference version. The thread pool that spreads work over cores is in core/
+// (<handemo/core/thread_pool.hpp>); kernels/thread_pool.hpp forwards to it under its old name.
 #pragma once
 
 #include <handemo/kernels/conv.hpp>

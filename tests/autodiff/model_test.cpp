@@ -130,7 +130,7 @@ TEST_CASE("stargan: infer equals the tape forward; thread-pool batch split equal
     g.infer(x.data(), lab.data(), out.data(), ws);
     for (std::size_t i = 0; i < out.size(); ++i) REQUIRE(out[i] == doctest::Approx(y1.data()[i]).epsilon(1e-4));
 
-    kernels::thread_pool pool(2);
+    thread_pool pool(2);
     tape<float> t2(1 << 20, &pool);
     auto y2 = g.forward(t2, t2.input<shape<3, 3, 12, 24>>(x.data()), t2.input<shape<3, 5>>(lab.data()));
     for (std::size_t i = 0; i < out.size(); ++i) REQUIRE(y2.data()[i] == doctest::Approx(y1.data()[i]).epsilon(1e-5));

@@ -247,3 +247,23 @@ TEST_CASE("autodiff: grad of a piecewise-linear net is constant in its input; er
     CHECK_THROWS_AS(t.grad(o2, x), value_error);
     CHECK_THROWS_AS(t.backward(gx.id), shape_error);
 }
+
+TEST_CASE("autodiff: each op reads back only its own typed parameter record")
+{
+    tape<double> t;
+    const std::array<double, 6> v{1, -2, 3, -4, 5, -6};
+    auto x = t.input<shape<2, 3>>(v.data(), true);
+    auto y = leaky_relu(x, 0.25);
+    auto s = mean_per_sample(y);
+    const node<double>& ny = t.at(y.id);
+    REQUIRE(ny.holds_params<autodiff::detail::leaky_relu_params<double>>());
+    CHECK(ny.params<autodiff::detail::leaky_relu_params<double>>().slope == 0.25);
+    const auto r = t.at(s.id).params<autodiff::detail::row_reduce_params<double>>();
+    CHECK(r.rows == 2);
+    CHECK(r.cols == 3);
+    CHECK(r.factor == doctest::Approx(2.0 / 6.0));
+    // asking a node for another op's record (or a leaf for any) is a reported bug, not a misread value
+    CHECK_FALSE(ny.holds_params<autodiff::detail::row_reduce_params<double>>());
+    CHECK_THROWS_AS(ny.params<autodiff::detail::row_reduce_params<double>>(), value_error);
+    CHECK_THROWS_AS(t.at(x.id).params<autodiff::detail::leaky_relu_params<double>>(), value_error);
+}

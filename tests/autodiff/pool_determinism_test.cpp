@@ -7,7 +7,7 @@
 #include <doctest/doctest.h>
 
 #include <handemo/autodiff.hpp>
-#include <handemo/kernels/thread_pool.hpp>
+#include <handemo/core/thread_pool.hpp>
 #include <handemo/stargan/model.hpp>
 
 #include <cstring>
@@ -79,14 +79,14 @@ TEST_CASE("autodiff through a thread pool: a D step with the penalty is bitwise 
     randomise(g, 1);
     randomise(d, 2);
 
-    kernels::thread_pool pool3(3);
+    thread_pool pool3(3);
     tape<float> t3(1 << 22, &pool3);
     const auto first = d_step(t3, g, d);
     REQUIRE(first.size() > 1000);
     for (int rep = 0; rep < 4; ++rep) CHECK(bitwise_equal(d_step(t3, g, d), first));
 
     {  // a new pool and tape of the same size: the same bits (nothing depends on thread timing)
-        kernels::thread_pool again(3);
+        thread_pool again(3);
         tape<float> ta(1 << 22, &again);
         CHECK(bitwise_equal(d_step(ta, g, d), first));
     }

@@ -2,7 +2,7 @@
 // HANDEMO_CLI environment variable, which tests/motion/CMakeLists.txt sets to $<TARGET_FILE:handemo_cli>.
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
-#include <handemo/motion/codec_image.hpp>
+#include <handemo/image/keyframe_image.hpp>
 
 #include <doctest/doctest.h>
 

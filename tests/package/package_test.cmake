@@ -1,6 +1,7 @@
 # CTest driver for the package tests. MODE=install: configure a fresh build of handemo with tests,
 # examples and benchmarks off, install it into a temporary prefix, then configure, build and run the
-# consumer with find_package(handemo CONFIG REQUIRED). MODE=subdirectory: the same consumer with
+# consumer with find_package(handemo CONFIG REQUIRED COMPONENTS image), and configure a core-only consumer
+# with pkg-config hidden (stb not findable). MODE=subdirectory: the same consumer with
 # add_subdirectory(<handemo source>).
 # Usage: cmake -DMODE=install|subdirectory -DHANDEMO_SOURCE=<dir> -DCONSUMER=<dir> -DWORK_DIR=<dir>
 #              -DCXX=<compiler> -P package_test.cmake
@@ -36,6 +37,11 @@ if(MODE STREQUAL "install")
   endforeach()
   run("configure consumer (find_package)" ${CMAKE_COMMAND} -S "${CONSUMER}" -B "${WORK_DIR}/consumer-build"
       ${consumer_args} -DCMAKE_PREFIX_PATH=${prefix})
+  # Without stb (pkg-config hidden from the consumer) the core target is found and usable, and the image
+  # component is refused naming stb (checked inside the consumer's CMakeLists; configure only).
+  run("configure core-only consumer without stb" ${CMAKE_COMMAND} -S "${CONSUMER}" -B "${WORK_DIR}/core-build"
+      ${consumer_args} -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_DISABLE_FIND_PACKAGE_PkgConfig=TRUE
+      -DHANDEMO_CONSUMER_CORE_ONLY=ON)
 elseif(MODE STREQUAL "subdirectory")
   run("configure consumer (add_subdirectory)" ${CMAKE_COMMAND} -S "${CONSUMER}" -B "${WORK_DIR}/consumer-build"
       ${consumer_args} -DHANDEMO_SOURCE=${HANDEMO_SOURCE})

@@ -10,7 +10,7 @@
 
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
-#include <handemo/motion/codec_image.hpp>
+#include <handemo/image/keyframe_image.hpp>
 
 #include <algorithm>
 #include <cmath>

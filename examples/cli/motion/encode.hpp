@@ -11,7 +11,7 @@
 
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
-#include <handemo/motion/codec_image.hpp>
+#include <handemo/image/keyframe_image.hpp>
 
 #include <nlohmann/json.hpp>
 

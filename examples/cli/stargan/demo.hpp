@@ -10,7 +10,7 @@
 #include <handemo/eval/metrics.hpp>
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
-#include <handemo/motion/codec_image.hpp>
+#include <handemo/image/keyframe_image.hpp>
 #include <handemo/render.hpp>
 #include <handemo/stargan.hpp>
 #ifdef HANDEMO_HAVE_GIF

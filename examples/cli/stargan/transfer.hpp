@@ -6,7 +6,7 @@
 #include "../registry.hpp"
 
 #include <handemo/image.hpp>
-#include <handemo/motion/codec_image.hpp>
+#include <handemo/image/keyframe_image.hpp>
 #include <handemo/stargan.hpp>
 
 #include <filesystem>

@@ -11,7 +11,7 @@
 #include <handemo/autodiff/tape.hpp>
 
 #include <handemo/kernels/conv.hpp>
-#include <handemo/kernels/thread_pool.hpp>
+#include <handemo/core/thread_pool.hpp>
 
 #include <algorithm>
 #include <cstring>
@@ -22,14 +22,12 @@ namespace detail {
 namespace ck = handemo::kernels;
 using kernels::conv_geometry;
 
-inline void store_geometry(int* p, const conv_geometry& g) noexcept
+// The parameter record of conv2d, conv_transpose2d and conv_weight_grad is the kernels' conv_geometry
+// (conv_transpose2d and conv_weight_grad store the geometry of the conv they are the adjoints of).
+template <class T>
+conv_geometry geometry_of(const node<T>& n)
 {
-    p[0] = g.batch, p[1] = g.in_channels, p[2] = g.in_h, p[3] = g.in_w, p[4] = g.out_channels;
-    p[5] = g.kernel_h, p[6] = g.kernel_w, p[7] = g.stride, p[8] = g.pad;
-}
-inline conv_geometry load_geometry(const int* p) noexcept
-{
-    return {p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8]};
+    return n.template params<conv_geometry>();
 }
 
 /// Number of batch chunks to run in parallel (1 without a pool).
@@ -117,7 +115,7 @@ template <class T>
 void conv_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
-    const conv_geometry g = load_geometry(n.p);
+    const conv_geometry g = geometry_of(n);
     if (T* gx = t.adj(n.in[0])) conv_bwd_data(t, g, n.adjoint, t.at(n.in[1]).value, gx);
     if (T* gw = t.adj(n.in[1])) conv_bwd_weight(t, g, t.at(n.in[0]).value, n.adjoint, gw);
     if (T* gb = t.adj(n.in[2])) ck::conv2d_backward_bias<T>(g, n.adjoint, gb);
@@ -127,7 +125,7 @@ template <class T>
 void conv_graph(tape<T>& t, int self)
 {
     const node<T> n = t.at(self);
-    const conv_geometry g = load_geometry(n.p);
+    const conv_geometry g = geometry_of(n);
     if (t.at(n.in[0]).mark) t.accumulate_grad(n.in[0], conv_transpose_raw(t, n.grad, n.in[1], g));
     if (t.at(n.in[1]).mark) t.accumulate_grad(n.in[1], conv_weight_grad_raw(t, n.in[0], n.grad, g));
     if (n.in[2] >= 0 && t.at(n.in[2]).mark)
@@ -137,8 +135,7 @@ void conv_graph(tape<T>& t, int self)
 template <class T>
 int conv_raw(tape<T>& t, int x, int w, int b, const conv_geometry& g)
 {
-    const int id = t.make("conv2d", g.y_size(), {x, w, b}, &conv_backward<T>, &conv_graph<T>);
-    store_geometry(t.at(id).p, g);
+    const int id = t.make("conv2d", g.y_size(), {x, w, b}, &conv_backward<T>, &conv_graph<T>, g);
     conv_fwd(t, g, t.at(x).value, t.at(w).value, b >= 0 ? t.at(b).value : static_cast<const T*>(nullptr),
              t.at(id).value);
     return id;
@@ -151,7 +148,7 @@ template <class T>
 void conv_transpose_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
-    const conv_geometry g = load_geometry(n.p);
+    const conv_geometry g = geometry_of(n);
     if (T* gx = t.adj(n.in[0])) {
         T* tmp = t.alloc(g.y_size());
         conv_fwd(t, g, n.adjoint, t.at(n.in[1]).value, static_cast<const T*>(nullptr), tmp);
@@ -163,7 +160,7 @@ template <class T>
 void conv_transpose_graph(tape<T>& t, int self)
 {
     const node<T> n = t.at(self);
-    const conv_geometry g = load_geometry(n.p);
+    const conv_geometry g = geometry_of(n);
     if (t.at(n.in[0]).mark) t.accumulate_grad(n.in[0], conv_raw(t, n.grad, n.in[1], -1, g));
     if (t.at(n.in[1]).mark) t.accumulate_grad(n.in[1], conv_weight_grad_raw(t, n.grad, n.in[0], g));
 }
@@ -171,8 +168,7 @@ template <class T>
 int conv_transpose_raw(tape<T>& t, int x, int w, const conv_geometry& g)
 {
     const int id = t.make("conv_transpose2d", g.x_size(), {x, w}, &conv_transpose_backward<T>,
-                          &conv_transpose_graph<T>);
-    store_geometry(t.at(id).p, g);
+                          &conv_transpose_graph<T>, g);
     T* z = t.at(id).value;
     std::memset(z, 0, g.x_size() * sizeof(T));
     conv_bwd_data(t, g, t.at(x).value, t.at(w).value, z);
@@ -186,7 +182,7 @@ template <class T>
 void conv_weight_grad_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
-    const conv_geometry g = load_geometry(n.p);
+    const conv_geometry g = geometry_of(n);
     if (T* gx = t.adj(n.in[0])) conv_bwd_data(t, g, t.at(n.in[1]).value, n.adjoint, gx);
     if (T* ggy = t.adj(n.in[1])) {
         T* tmp = t.alloc(g.y_size());
@@ -198,7 +194,7 @@ template <class T>
 void conv_weight_grad_graph(tape<T>& t, int self)
 {
     const node<T> n = t.at(self);
-    const conv_geometry g = load_geometry(n.p);
+    const conv_geometry g = geometry_of(n);
     if (t.at(n.in[0]).mark) t.accumulate_grad(n.in[0], conv_transpose_raw(t, n.in[1], n.grad, g));
     if (t.at(n.in[1]).mark) t.accumulate_grad(n.in[1], conv_raw(t, n.in[0], n.grad, -1, g));
 }
@@ -206,8 +202,7 @@ template <class T>
 int conv_weight_grad_raw(tape<T>& t, int x, int gy, const conv_geometry& g)
 {
     const int id = t.make("conv_weight_grad", g.w_size(), {x, gy}, &conv_weight_grad_backward<T>,
-                          &conv_weight_grad_graph<T>);
-    store_geometry(t.at(id).p, g);
+                          &conv_weight_grad_graph<T>, g);
     T* gw = t.at(id).value;
     std::memset(gw, 0, g.w_size() * sizeof(T));
     conv_bwd_weight(t, g, t.at(x).value, t.at(gy).value, gw);

@@ -15,11 +15,20 @@ namespace detail {
 // xh = (x - mu) r, y = gamma[c] xh + beta[c].
 // d/dbeta[c] = sum_{n,m} g;   d/dgamma[c] = sum_{n,m} g xh;
 // d/dx = gamma[c] r (g - mean_m g - xh mean_m (g xh))
+// The record holds the layout [N, C, M] and eps; aux holds (mu, r) per (n, c).
+template <class T>
+struct instance_norm_params {
+    int batch;
+    int channels;
+    int spatial;  ///< M = H W
+    T eps;
+};
 template <class T>
 void instance_norm_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
-    const int N = n.p[0], C = n.p[1], M = n.p[2];
+    const auto prm = n.template params<instance_norm_params<T>>();
+    const int N = prm.batch, C = prm.channels, M = prm.spatial;
     const T* x = t.at(n.in[0]).value;
     const T* gamma = t.at(n.in[1]).value;
     T* gx = t.adj(n.in[0]);
@@ -47,12 +56,10 @@ template <class T>
 int instance_norm_raw(tape<T>& t, int x, int gamma, int beta, int N, int C, int M, T eps)
 {
     const int id = t.make("instance_norm", std::size_t(N) * C * M, {x, gamma, beta}, &instance_norm_backward<T>,
-                          nullptr);
+                          nullptr, instance_norm_params<T>{N, C, M, eps});
     T* aux = t.alloc(std::size_t(2) * N * C);
     node<T>& n = t.at(id);
     n.aux = aux;
-    n.p[0] = N, n.p[1] = C, n.p[2] = M;
-    n.s[0] = eps;
     const T *xv = t.at(x).value, *gv = t.at(gamma).value, *bv = t.at(beta).value;
     for (int b = 0; b < N; ++b)
         for (int c = 0; c < C; ++c) {

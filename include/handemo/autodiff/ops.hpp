@@ -75,13 +75,19 @@ int mul_raw(tape<T>& t, int a, int b)
     return id;
 }
 
-// y = c a + d  (s[0] = c, s[1] = d).  d/da = c g.
+// y = c a + d  (c = scale, d = offset).  d/da = c g.
+template <class T>
+struct affine_params {
+    T scale;
+    T offset;
+};
 template <class T>
 void affine_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
+    const T c = n.template params<affine_params<T>>().scale;
     if (T* ga = t.adj(n.in[0]))
-        for (std::size_t i = 0; i < n.size; ++i) ga[i] += n.s[0] * n.adjoint[i];
+        for (std::size_t i = 0; i < n.size; ++i) ga[i] += c * n.adjoint[i];
 }
 template <class T>
 int affine_raw(tape<T>& t, int a, T c, T d);
@@ -89,15 +95,13 @@ template <class T>
 void affine_graph(tape<T>& t, int self)
 {
     const int g = t.at(self).grad, a = t.at(self).in[0];
-    const T c = t.at(self).s[0];
+    const T c = t.at(self).template params<affine_params<T>>().scale;
     t.accumulate_grad(a, c == T(1) ? g : affine_raw(t, g, c, T(0)));
 }
 template <class T>
 int affine_raw(tape<T>& t, int a, T c, T d)
 {
-    const int id = t.make("affine", t.at(a).size, {a}, &affine_backward<T>, &affine_graph<T>);
-    t.at(id).s[0] = c;
-    t.at(id).s[1] = d;
+    const int id = t.make("affine", t.at(a).size, {a}, &affine_backward<T>, &affine_graph<T>, affine_params<T>{c, d});
     const T* x = t.at(a).value;
     T* z = t.at(id).value;
     for (std::size_t i = 0; i < t.at(id).size; ++i) z[i] = c * x[i] + d;
@@ -110,45 +114,55 @@ int scale_raw(tape<T>& t, int a, T c)
 }
 
 // ---------------------------------------------------------------- relu / leaky_relu and their masks
-// y = g * m(x), m(x) = 1 if x > 0 else s  (p[0] = id of x, used only for its values; s[0] = slope).
+// y = g * m(x), m(x) = 1 if x > 0 else s  (x: a node used only for its values; s: the slope).
 // This is the derivative of leaky_relu (s = 0.01) and relu (s = 0) recorded by a graph backward.
 // m is piecewise constant, so d/dx = 0 (almost everywhere) and d/dg = G m(x).
+template <class T>
+struct mask_mul_params {
+    int x;  ///< id of the node whose sign selects 1 or the slope
+    T slope;
+};
 template <class T>
 int mask_mul_raw(tape<T>& t, int g, int x, T slope);
 template <class T>
 void mask_mul_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
-    const T* x = t.at(n.p[0]).value;
-    const T s = n.s[0];
+    const auto prm = n.template params<mask_mul_params<T>>();
+    const T* x = t.at(prm.x).value;
+    const T s = prm.slope;
     if (T* gg = t.adj(n.in[0]))
         for (std::size_t i = 0; i < n.size; ++i) gg[i] += x[i] > T(0) ? n.adjoint[i] : s * n.adjoint[i];
 }
 template <class T>
 void mask_mul_graph(tape<T>& t, int self)
 {
-    const int g = t.at(self).grad, a = t.at(self).in[0], x = t.at(self).p[0];
-    t.accumulate_grad(a, mask_mul_raw(t, g, x, t.at(self).s[0]));
+    const int g = t.at(self).grad, a = t.at(self).in[0];
+    const auto prm = t.at(self).template params<mask_mul_params<T>>();
+    t.accumulate_grad(a, mask_mul_raw(t, g, prm.x, prm.slope));
 }
 template <class T>
 int mask_mul_raw(tape<T>& t, int g, int x, T slope)
 {
-    const int id = t.make("leaky_relu_grad", t.at(g).size, {g}, &mask_mul_backward<T>, &mask_mul_graph<T>);
-    t.at(id).p[0] = x;
-    t.at(id).s[0] = slope;
+    const int id = t.make("leaky_relu_grad", t.at(g).size, {g}, &mask_mul_backward<T>, &mask_mul_graph<T>,
+                          mask_mul_params<T>{x, slope});
     const T *gv = t.at(g).value, *xv = t.at(x).value;
     T* z = t.at(id).value;
     for (std::size_t i = 0; i < t.at(id).size; ++i) z[i] = xv[i] > T(0) ? gv[i] : slope * gv[i];
     return id;
 }
 
-// y = x if x > 0 else s x  (s[0] = s; relu is s = 0).  d/dx = g m(x), m(x) = 1 if x > 0 else s.
+// y = x if x > 0 else s x  (s: the slope; relu is s = 0).  d/dx = g m(x), m(x) = 1 if x > 0 else s.
+template <class T>
+struct leaky_relu_params {
+    T slope;
+};
 template <class T>
 void leaky_relu_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
     const T* x = t.at(n.in[0]).value;
-    const T s = n.s[0];
+    const T s = n.template params<leaky_relu_params<T>>().slope;
     if (T* gx = t.adj(n.in[0]))
         for (std::size_t i = 0; i < n.size; ++i) gx[i] += x[i] > T(0) ? n.adjoint[i] : s * n.adjoint[i];
 }
@@ -156,14 +170,13 @@ template <class T>
 void leaky_relu_graph(tape<T>& t, int self)
 {
     const int g = t.at(self).grad, a = t.at(self).in[0];
-    t.accumulate_grad(a, mask_mul_raw(t, g, a, t.at(self).s[0]));
+    t.accumulate_grad(a, mask_mul_raw(t, g, a, t.at(self).template params<leaky_relu_params<T>>().slope));
 }
 template <class T>
 int leaky_relu_raw(tape<T>& t, int a, T slope)
 {
     const int id = t.make(slope == T(0) ? "relu" : "leaky_relu", t.at(a).size, {a}, &leaky_relu_backward<T>,
-                          &leaky_relu_graph<T>);
-    t.at(id).s[0] = slope;
+                          &leaky_relu_graph<T>, leaky_relu_params<T>{slope});
     const T* x = t.at(a).value;
     T* z = t.at(id).value;
     for (std::size_t i = 0; i < t.at(id).size; ++i) z[i] = x[i] > T(0) ? x[i] : slope * x[i];
@@ -172,8 +185,11 @@ int leaky_relu_raw(tape<T>& t, int a, T slope)
 
 // ---------------------------------------------------------------- unary maps (first order)
 // tanh: y = tanh x, dy/dx = 1 - y^2.   square: y = x^2, dy/dx = 2x.   sqrt: y = sqrt x, dy/dx = 1/(2y).
-// abs: y = |x|, dy/dx = sign(x) (0 at 0).   p[0] selects the map.
+// abs: y = |x|, dy/dx = sign(x) (0 at 0).   The node's unary_params select the map.
 enum class unary : int { tanh_, square_, sqrt_, abs_ };
+struct unary_params {
+    unary map;
+};
 template <class T>
 int unary_raw(tape<T>& t, int a, unary k);
 template <class T>
@@ -183,7 +199,7 @@ void unary_backward(tape<T>& t, int self)
     T* gx = t.adj(n.in[0]);
     if (!gx) return;
     const T *x = t.at(n.in[0]).value, *y = n.value, *g = n.adjoint;
-    switch (static_cast<unary>(n.p[0])) {
+    switch (n.template params<unary_params>().map) {
     case unary::tanh_:
         for (std::size_t i = 0; i < n.size; ++i) gx[i] += g[i] * (T(1) - y[i] * y[i]);
         break;
@@ -210,8 +226,7 @@ int unary_raw(tape<T>& t, int a, unary k)
 {
     static constexpr const char* names[] = {"tanh", "square", "sqrt", "abs"};
     const int id = t.make(names[static_cast<int>(k)], t.at(a).size, {a}, &unary_backward<T>,
-                          k == unary::square_ ? &square_graph<T> : nullptr);
-    t.at(id).p[0] = static_cast<int>(k);
+                          k == unary::square_ ? &square_graph<T> : nullptr, unary_params{k});
     const T* x = t.at(a).value;
     T* z = t.at(id).value;
     const std::size_t m = t.at(id).size;
@@ -233,9 +248,16 @@ int unary_raw(tape<T>& t, int a, unary k)
 }
 
 // ---------------------------------------------------------------- reductions and broadcasts
-// Rows of a [R, M] view (p[0] = R, p[1] = M), factor c = s[0].
+// Rows of a [R, M] view (rows = R, cols = M), factor c. row_sum and row_broadcast, each the other's
+// adjoint, share the record:
 // row_sum:       y[r] = c sum_m a[r, m].      d/da[r, m] = c g[r]      (a row_broadcast)
 // row_broadcast: y[r, m] = c a[r].            d/da[r]    = c sum_m g[r, m]  (a row_sum)
+template <class T>
+struct row_reduce_params {
+    int rows;
+    int cols;
+    T factor;
+};
 template <class T>
 int row_sum_raw(tape<T>& t, int a, int rows, T c);
 template <class T>
@@ -246,9 +268,10 @@ void row_sum_backward(tape<T>& t, int self)
     const node<T>& n = t.at(self);
     T* ga = t.adj(n.in[0]);
     if (!ga) return;
-    const std::size_t R = n.p[0], M = n.p[1];
+    const auto prm = n.template params<row_reduce_params<T>>();
+    const std::size_t R = prm.rows, M = prm.cols;
     for (std::size_t r = 0; r < R; ++r) {
-        const T v = n.s[0] * n.adjoint[r];
+        const T v = prm.factor * n.adjoint[r];
         for (std::size_t m = 0; m < M; ++m) ga[r * M + m] += v;
     }
 }
@@ -256,17 +279,16 @@ template <class T>
 void row_sum_graph(tape<T>& t, int self)
 {
     const node<T> n = t.at(self);
-    t.accumulate_grad(n.in[0], row_broadcast_raw(t, n.grad, n.p[1], n.s[0]));
+    const auto prm = n.template params<row_reduce_params<T>>();
+    t.accumulate_grad(n.in[0], row_broadcast_raw(t, n.grad, prm.cols, prm.factor));
 }
 template <class T>
 int row_sum_raw(tape<T>& t, int a, int rows, T c)
 {
-    const int id = t.make("sum", std::size_t(rows), {a}, &row_sum_backward<T>, &row_sum_graph<T>);
-    node<T>& n = t.at(id);
     const std::size_t M = t.at(a).size / std::size_t(rows);
-    n.p[0] = rows;
-    n.p[1] = static_cast<int>(M);
-    n.s[0] = c;
+    const int id = t.make("sum", std::size_t(rows), {a}, &row_sum_backward<T>, &row_sum_graph<T>,
+                          row_reduce_params<T>{rows, static_cast<int>(M), c});
+    node<T>& n = t.at(id);
     const T* x = t.at(a).value;
     for (std::size_t r = 0; r < std::size_t(rows); ++r) {
         T acc = 0;
@@ -281,36 +303,42 @@ void row_broadcast_backward(tape<T>& t, int self)
     const node<T>& n = t.at(self);
     T* ga = t.adj(n.in[0]);
     if (!ga) return;
-    const std::size_t R = n.p[0], M = n.p[1];
+    const auto prm = n.template params<row_reduce_params<T>>();
+    const std::size_t R = prm.rows, M = prm.cols;
     for (std::size_t r = 0; r < R; ++r) {
         T acc = 0;
         for (std::size_t m = 0; m < M; ++m) acc += n.adjoint[r * M + m];
-        ga[r] += n.s[0] * acc;
+        ga[r] += prm.factor * acc;
     }
 }
 template <class T>
 void row_broadcast_graph(tape<T>& t, int self)
 {
     const node<T> n = t.at(self);
-    t.accumulate_grad(n.in[0], row_sum_raw(t, n.grad, n.p[0], n.s[0]));
+    const auto prm = n.template params<row_reduce_params<T>>();
+    t.accumulate_grad(n.in[0], row_sum_raw(t, n.grad, prm.rows, prm.factor));
 }
 template <class T>
 int row_broadcast_raw(tape<T>& t, int a, int cols, T c)
 {
     const std::size_t R = t.at(a).size, M = std::size_t(cols);
-    const int id = t.make("broadcast", R * M, {a}, &row_broadcast_backward<T>, &row_broadcast_graph<T>);
+    const int id = t.make("broadcast", R * M, {a}, &row_broadcast_backward<T>, &row_broadcast_graph<T>,
+                          row_reduce_params<T>{static_cast<int>(R), cols, c});
     node<T>& n = t.at(id);
-    n.p[0] = static_cast<int>(R);
-    n.p[1] = cols;
-    n.s[0] = c;
     const T* x = t.at(a).value;
     for (std::size_t r = 0; r < R; ++r)
         for (std::size_t m = 0; m < M; ++m) n.value[r * M + m] = c * x[r];
     return id;
 }
 
-// Per-channel sum over batch and space of [N, C, S] (p = N, C, S): y[c] = sum_{n,s} a[n, c, s];
+// Per-channel sum over batch and space of [N, C, S]: y[c] = sum_{n,s} a[n, c, s];
 // d/da[n, c, s] = g[c] (a channel_broadcast). channel_broadcast: y[n, c, s] = a[c]; d/da[c] = sum g.
+// Both record the layout [N, C, S] of their larger side.
+struct channel_layout {
+    int batch;
+    int channels;
+    int spatial;
+};
 template <class T>
 int channel_sum_raw(tape<T>& t, int a, int N, int C, int S);
 template <class T>
@@ -321,7 +349,8 @@ void channel_sum_backward(tape<T>& t, int self)
     const node<T>& n = t.at(self);
     T* ga = t.adj(n.in[0]);
     if (!ga) return;
-    const std::size_t N = n.p[0], C = n.p[1], S = n.p[2];
+    const auto l = n.template params<channel_layout>();
+    const std::size_t N = l.batch, C = l.channels, S = l.spatial;
     for (std::size_t b = 0; b < N; ++b)
         for (std::size_t c = 0; c < C; ++c)
             for (std::size_t s = 0; s < S; ++s) ga[(b * C + c) * S + s] += n.adjoint[c];
@@ -330,14 +359,15 @@ template <class T>
 void channel_sum_graph(tape<T>& t, int self)
 {
     const node<T> n = t.at(self);
-    t.accumulate_grad(n.in[0], channel_broadcast_raw(t, n.grad, n.p[0], n.p[1], n.p[2]));
+    const auto l = n.template params<channel_layout>();
+    t.accumulate_grad(n.in[0], channel_broadcast_raw(t, n.grad, l.batch, l.channels, l.spatial));
 }
 template <class T>
 int channel_sum_raw(tape<T>& t, int a, int N, int C, int S)
 {
-    const int id = t.make("channel_sum", std::size_t(C), {a}, &channel_sum_backward<T>, &channel_sum_graph<T>);
+    const int id = t.make("channel_sum", std::size_t(C), {a}, &channel_sum_backward<T>, &channel_sum_graph<T>,
+                          channel_layout{N, C, S});
     node<T>& n = t.at(id);
-    n.p[0] = N, n.p[1] = C, n.p[2] = S;
     const T* x = t.at(a).value;
     for (int c = 0; c < C; ++c) {
         T acc = 0;
@@ -353,7 +383,8 @@ void channel_broadcast_backward(tape<T>& t, int self)
     const node<T>& n = t.at(self);
     T* ga = t.adj(n.in[0]);
     if (!ga) return;
-    const std::size_t N = n.p[0], C = n.p[1], S = n.p[2];
+    const auto l = n.template params<channel_layout>();
+    const std::size_t N = l.batch, C = l.channels, S = l.spatial;
     for (std::size_t b = 0; b < N; ++b)
         for (std::size_t c = 0; c < C; ++c)
             for (std::size_t s = 0; s < S; ++s) ga[c] += n.adjoint[(b * C + c) * S + s];
@@ -362,15 +393,15 @@ template <class T>
 void channel_broadcast_graph(tape<T>& t, int self)
 {
     const node<T> n = t.at(self);
-    t.accumulate_grad(n.in[0], channel_sum_raw(t, n.grad, n.p[0], n.p[1], n.p[2]));
+    const auto l = n.template params<channel_layout>();
+    t.accumulate_grad(n.in[0], channel_sum_raw(t, n.grad, l.batch, l.channels, l.spatial));
 }
 template <class T>
 int channel_broadcast_raw(tape<T>& t, int a, int N, int C, int S)
 {
     const int id = t.make("channel_broadcast", std::size_t(N) * C * S, {a}, &channel_broadcast_backward<T>,
-                          &channel_broadcast_graph<T>);
+                          &channel_broadcast_graph<T>, channel_layout{N, C, S});
     node<T>& n = t.at(id);
-    n.p[0] = N, n.p[1] = C, n.p[2] = S;
     const T* x = t.at(a).value;
     for (std::size_t b = 0; b < std::size_t(N); ++b)
         for (std::size_t c = 0; c < std::size_t(C); ++c)
@@ -379,7 +410,11 @@ int channel_broadcast_raw(tape<T>& t, int a, int N, int C, int S)
 }
 
 // ---------------------------------------------------------------- per-row L2 norm (first order)
-// y[r] = sqrt(sum_m a[r, m]^2).  d/da[r, m] = g[r] a[r, m] / y[r]  (0 where y = 0).
+// y[r] = sqrt(sum_m a[r, m]^2) over a [R, M] view.  d/da[r, m] = g[r] a[r, m] / y[r]  (0 where y = 0).
+struct row_layout {
+    int rows;
+    int cols;
+};
 template <class T>
 void row_norm_backward(tape<T>& t, int self)
 {
@@ -387,7 +422,8 @@ void row_norm_backward(tape<T>& t, int self)
     T* ga = t.adj(n.in[0]);
     if (!ga) return;
     const T* a = t.at(n.in[0]).value;
-    const std::size_t R = n.p[0], M = n.p[1];
+    const auto l = n.template params<row_layout>();
+    const std::size_t R = l.rows, M = l.cols;
     for (std::size_t r = 0; r < R; ++r) {
         if (!(n.value[r] > T(0))) continue;
         const T f = n.adjoint[r] / n.value[r];
@@ -397,11 +433,10 @@ void row_norm_backward(tape<T>& t, int self)
 template <class T>
 int row_norm_raw(tape<T>& t, int a, int rows)
 {
-    const int id = t.make("l2_norm", std::size_t(rows), {a}, &row_norm_backward<T>, nullptr);
-    node<T>& n = t.at(id);
     const std::size_t M = t.at(a).size / std::size_t(rows);
-    n.p[0] = rows;
-    n.p[1] = static_cast<int>(M);
+    const int id = t.make("l2_norm", std::size_t(rows), {a}, &row_norm_backward<T>, nullptr,
+                          row_layout{rows, static_cast<int>(M)});
+    node<T>& n = t.at(id);
     const T* x = t.at(a).value;
     for (std::size_t r = 0; r < std::size_t(rows); ++r) {
         T acc = 0;
@@ -425,6 +460,10 @@ std::pair<T, T> max_and_sum_exp(const T* z, int C) noexcept
 
 // Softmax cross-entropy, mean over the batch (PyTorch F.cross_entropy): logits z [N, C], labels y_n
 // (stored in aux as T). L = 1/N sum_n (logsumexp(z_n) - z_n[y_n]);  dL/dz[n, c] = g/N (softmax(z_n)[c] - [c = y_n]).
+struct cross_entropy_params {
+    int batch;
+    int classes;
+};
 template <class T>
 void cross_entropy_backward(tape<T>& t, int self)
 {
@@ -432,7 +471,8 @@ void cross_entropy_backward(tape<T>& t, int self)
     T* gz = t.adj(n.in[0]);
     if (!gz) return;
     const T* z = t.at(n.in[0]).value;
-    const int N = n.p[0], C = n.p[1];
+    const auto prm = n.template params<cross_entropy_params>();
+    const int N = prm.batch, C = prm.classes;
     const T f = n.adjoint[0] / T(N);
     for (int b = 0; b < N; ++b) {
         const T* zb = z + std::size_t(b) * C;
@@ -450,11 +490,11 @@ int cross_entropy_raw(tape<T>& t, int logits, int N, int C, const int* labels)
         if (labels[b] < 0 || labels[b] >= C)
             throw value_error("autodiff::cross_entropy: label[" + std::to_string(b) + "] = " +
                               std::to_string(labels[b]) + " is outside [0, " + std::to_string(C) + ")");
-    const int id = t.make("cross_entropy", 1, {logits}, &cross_entropy_backward<T>, nullptr);
+    const int id = t.make("cross_entropy", 1, {logits}, &cross_entropy_backward<T>, nullptr,
+                          cross_entropy_params{N, C});
     T* aux = t.alloc(std::size_t(N));
     node<T>& n = t.at(id);
     n.aux = aux;
-    n.p[0] = N, n.p[1] = C;
     const T* z = t.at(logits).value;
     T loss = 0;
     for (int b = 0; b < N; ++b) {
@@ -498,13 +538,21 @@ int bce_raw(tape<T>& t, int logits, const T* targets)
 }
 
 // ---------------------------------------------------------------- layout: concat, tile, pad/crop
-// Channel concat of a [N, Ca, S] and b [N, Cb, S] (p = N, Ca, Cb, S): y[n] = (a[n], b[n]).
+// Channel concat of a [N, Ca, S] and b [N, Cb, S]: y[n] = (a[n], b[n]).
 // d/da = g[:, :Ca], d/db = g[:, Ca:].
+struct concat_params {
+    int batch;
+    int channels_a;
+    int channels_b;
+    int spatial;
+};
 template <class T>
 void concat_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
-    const std::size_t N = n.p[0], A = std::size_t(n.p[1]) * n.p[3], B = std::size_t(n.p[2]) * n.p[3];
+    const auto prm = n.template params<concat_params>();
+    const std::size_t N = prm.batch, A = std::size_t(prm.channels_a) * prm.spatial,
+                      B = std::size_t(prm.channels_b) * prm.spatial;
     T* ga = t.adj(n.in[0]);
     T* gb = t.adj(n.in[1]);
     for (std::size_t b = 0; b < N; ++b) {
@@ -518,9 +566,9 @@ void concat_backward(tape<T>& t, int self)
 template <class T>
 int concat_raw(tape<T>& t, int a, int b, int N, int Ca, int Cb, int S)
 {
-    const int id = t.make("concat", std::size_t(N) * (Ca + Cb) * S, {a, b}, &concat_backward<T>, nullptr);
+    const int id = t.make("concat", std::size_t(N) * (Ca + Cb) * S, {a, b}, &concat_backward<T>, nullptr,
+                          concat_params{N, Ca, Cb, S});
     node<T>& n = t.at(id);
-    n.p[0] = N, n.p[1] = Ca, n.p[2] = Cb, n.p[3] = S;
     const std::size_t A = std::size_t(Ca) * S, B = std::size_t(Cb) * S;
     for (std::size_t k = 0; k < std::size_t(N); ++k) {
         std::memcpy(n.value + k * (A + B), t.at(a).value + k * A, A * sizeof(T));
@@ -530,8 +578,15 @@ int concat_raw(tape<T>& t, int a, int b, int N, int Ca, int Cb, int S)
 }
 
 // Spatial zero pad (bottom/right) of [R, H, W] to [R, H2, W2] when H2 >= H, W2 >= W, or crop (top-left)
-// when H2 <= H, W2 <= W (p = R, H, W, H2, W2). The two are each other's adjoint:
+// when H2 <= H, W2 <= W. The two are each other's adjoint:
 // d/da of pad = crop(g), d/da of crop = pad(g).
+struct pad_params {
+    int planes;  ///< R
+    int in_h;    ///< H
+    int in_w;    ///< W
+    int out_h;   ///< H2
+    int out_w;   ///< W2
+};
 template <class T>
 void pad_copy(const T* x, T* y, int R, int H, int W, int H2, int W2, bool accumulate) noexcept
 {
@@ -547,14 +602,15 @@ template <class T>
 void pad_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
-    if (T* ga = t.adj(n.in[0])) pad_copy(n.adjoint, ga, n.p[0], n.p[3], n.p[4], n.p[1], n.p[2], true);
+    const auto prm = n.template params<pad_params>();
+    if (T* ga = t.adj(n.in[0])) pad_copy(n.adjoint, ga, prm.planes, prm.out_h, prm.out_w, prm.in_h, prm.in_w, true);
 }
 template <class T>
 int pad_raw(tape<T>& t, int a, int R, int H, int W, int H2, int W2)
 {
-    const int id = t.make(H2 >= H ? "pad" : "crop", std::size_t(R) * H2 * W2, {a}, &pad_backward<T>, nullptr);
+    const int id = t.make(H2 >= H ? "pad" : "crop", std::size_t(R) * H2 * W2, {a}, &pad_backward<T>, nullptr,
+                          pad_params{R, H, W, H2, W2});
     node<T>& n = t.at(id);
-    n.p[0] = R, n.p[1] = H, n.p[2] = W, n.p[3] = H2, n.p[4] = W2;
     std::memset(n.value, 0, n.size * sizeof(T));
     pad_copy(t.at(a).value, n.value, R, H, W, H2, W2, false);
     return id;

@@ -2,8 +2,8 @@
 // StarGAN, Choi et al. 2018, Eq. 1-7 there, including the WGAN-GP term that needs double backward).
 // Values and adjoints of every node live in an arena of 64-byte aligned blocks that is bump-allocated
 // and rewound by reset() without freeing, so a training step after the first allocates nothing. Nodes
-// are flat records {op name, backward function pointers, value/adjoint pointers, operand ids, integer
-// and scalar parameters}; backward() is a plain reverse loop over them. grad(out, in) records the
+// are flat records {op name, backward function pointers, value/adjoint pointers, operand ids, the op's
+// typed parameter record}; backward() is a plain reverse loop over them. grad(out, in) records the
 // backward computation itself as new nodes (create_graph), so the gradient of a gradient is exact.
 // Typed handles `var<T, shape<...>>` carry the shape in the type; the ops (ops.hpp, conv.hpp,
 // norm.hpp) compute output shapes with constexpr functions and call the untyped node builders here.
@@ -18,9 +18,10 @@
 #include <cstring>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
-namespace handemo::kernels {
+namespace handemo {
 class thread_pool;
 }
 
@@ -29,15 +30,28 @@ namespace handemo::autodiff {
 template <class T>
 class tape;
 
-/// @brief One tape record. Ops fill `in` (differentiable operands), `p` (integer parameters, e.g. a
-/// convolution geometry, or ids of operands used only for their values), `s` (scalar parameters) and
-/// `aux` (arena memory saved for backward).
+/// @brief A type an op may store as its parameter record in a node: a small trivially copyable struct
+/// (a convolution geometry, a slope, a row layout) of at most node<T>::params_capacity bytes.
+template <class P>
+concept op_params = std::is_trivially_copyable_v<P> && std::is_default_constructible_v<P>;
+
+namespace detail {
+/// One object per parameter type; its address identifies the type a node's record holds.
+template <class P>
+inline constexpr char op_params_tag = 0;
+}  // namespace detail
+
+/// @brief One tape record. Ops fill `in` (differentiable operands), their own typed parameter record
+/// (set_params / params: each op declares a struct, e.g. `affine_params<T>{scale, offset}`, and reads
+/// back only that struct) and `aux` (arena memory saved for backward).
 template <class T>
 struct node {
     /// First-order backward: reads this node's adjoint, accumulates (+=) into its operands' adjoints.
     using backward_fn = void (*)(tape<T>&, int self);
     /// Graph backward: reads this node's grad node id and records nodes for its operands' grads.
     using graph_fn = void (*)(tape<T>&, int self);
+    /// Bytes available to an op's parameter record (a conv2d geometry is 36).
+    static constexpr std::size_t params_capacity = 48;
 
     const char* op = "leaf";
     backward_fn backward = nullptr;
@@ -46,13 +60,43 @@ struct node {
     T* adjoint = nullptr;
     std::size_t size = 0;
     int in[3] = {-1, -1, -1};
-    int p[12] = {};
-    T s[2] = {};
     T* aux = nullptr;
     int grad = -1;                  ///< grad(): id of the node holding d out / d this, or -1
     bool requires_grad = false;
     bool external_adjoint = false;  ///< adjoint is caller memory (a parameter's grad): never zeroed
     bool mark = false;              ///< scratch flag of backward()/grad()
+
+    /// @brief Stores `p` as this node's parameter record (replacing any earlier one).
+    template <op_params P>
+    void set_params(const P& p) noexcept
+    {
+        static_assert(sizeof(P) <= params_capacity, "autodiff::node: parameter record larger than params_capacity");
+        std::memcpy(params_, &p, sizeof(P));
+        params_type_ = &detail::op_params_tag<P>;
+    }
+    /// @brief This node's parameter record, which must have been stored as a `P`.
+    /// @throws value_error if the node holds no record or one of another type (a bug in an op).
+    template <op_params P>
+    P params() const
+    {
+        if (params_type_ != &detail::op_params_tag<P>)
+            throw value_error(std::string("autodiff::node::params: node '") + op +
+                              (params_type_ ? "' holds the parameter record of another type"
+                                            : "' holds no parameter record"));
+        P p;
+        std::memcpy(&p, params_, sizeof(P));
+        return p;
+    }
+    /// @brief True when the node's parameter record is a `P`.
+    template <op_params P>
+    bool holds_params() const noexcept
+    {
+        return params_type_ == &detail::op_params_tag<P>;
+    }
+
+private:
+    alignas(8) unsigned char params_[params_capacity] = {};
+    const void* params_type_ = nullptr;
 };
 
 /// @brief Typed handle of a tape node: element type and compile-time shape.
@@ -86,7 +130,7 @@ class tape {
 public:
     /// @param block_elems elements per arena block (a request larger than a block gets its own block)
     /// @param pool optional thread pool; convolutions split their batch over it
-    explicit tape(std::size_t block_elems = std::size_t{1} << 21, kernels::thread_pool* pool = nullptr)
+    explicit tape(std::size_t block_elems = std::size_t{1} << 21, thread_pool* pool = nullptr)
         : block_elems_(block_elems), pool_(pool)
     {
         blocks_.reserve(256);
@@ -103,8 +147,8 @@ public:
         used_ = 0;
     }
 
-    kernels::thread_pool* pool() const noexcept { return pool_; }
-    void set_pool(kernels::thread_pool* p) noexcept { pool_ = p; }
+    thread_pool* pool() const noexcept { return pool_; }
+    void set_pool(thread_pool* p) noexcept { pool_ = p; }
 
     /// @brief `n` elements of 64-byte aligned arena memory (uninitialised), valid until reset().
     T* alloc(std::size_t n)
@@ -167,6 +211,15 @@ public:
         if (n.requires_grad) n.adjoint = alloc(size);
         nodes_.push_back(n);
         return static_cast<int>(nodes_.size() - 1);
+    }
+    /// @brief As make() above, with the op's parameter record `params` (read back by node::params<P>()).
+    template <op_params P>
+    int make(const char* op, std::size_t size, std::initializer_list<int> inputs,
+             typename node<T>::backward_fn bw, typename node<T>::graph_fn gbw, const P& params)
+    {
+        const int id = make(op, size, inputs, bw, gbw);
+        at(id).set_params(params);
+        return id;
     }
 
     /// @brief A leaf holding a copy of `data` (or zeros when `data` is null).
@@ -304,7 +357,7 @@ private:
     std::vector<aligned_buffer<T>> blocks_;
     std::size_t block_ = 0, used_ = 0, block_elems_;
     std::vector<node<T>> nodes_;
-    kernels::thread_pool* pool_ = nullptr;
+    thread_pool* pool_ = nullptr;
 };
 
 namespace detail {

@@ -150,6 +150,297 @@ inline std::vector<stem_labels> synth_labels(const std::vector<stargan::labelled
     return out;
 }
 
+/// The contents to hold out, in order: opt.folds, or every content of the data set.
+/// @throws value_error for a data set with a single content or a fold naming an unknown content.
+inline std::vector<std::string> fold_contents(const std::vector<std::string>& contents, const eval_options& opt)
+{
+    if (contents.size() < 2)
+        throw value_error("eval: data set " + opt.data + " has " + std::to_string(contents.size()) + " content(s); leave-one-content-out needs at least 2");
+    std::vector<std::string> folds = opt.folds.empty() ? contents : opt.folds;
+    for (const auto& f : folds)
+        if (std::find(contents.begin(), contents.end(), f) == contents.end()) {
+            std::string known;
+            for (const auto& c : contents) known += (known.empty() ? "" : ", ") + c;
+            throw value_error("eval: --folds: content '" + f + "' is not in the data set (contents: " + known + ")");
+        }
+    return folds;
+}
+
+/// The report's header fields, before any fold has run.
+inline eval_result new_result(const stargan::config_info& info, const eval_options& opt, std::size_t planned_folds)
+{
+    eval_result res;
+    res.config = info.name;
+    res.data = opt.data;
+    res.command = opt.command;
+    res.domains = info.domain_names;
+    res.neutral = info.neutral;
+    res.options_text = options_text(opt);
+    res.planned_folds = planned_folds;
+    return res;
+}
+
+/// Every clip's keyframes and characteristics, once.
+template <std::size_t K>
+std::vector<prepared_clip<K>> prepare_clips(const std::vector<stargan::labelled_clip>& clips)
+{
+    std::vector<prepared_clip<K>> all;
+    all.reserve(clips.size());
+    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), measure<K>(c.motion)});
+    return all;
+}
+
+/// The content a clip shows, as the content of the nearest neutral clip of the whole data set (keyframe RMSE).
+template <std::size_t K>
+class content_recogniser {
+public:
+    content_recogniser(const std::vector<prepared_clip<K>>& all, const std::string& neutral)
+    {
+        for (const auto& p : all)
+            if (p.src->emotion == neutral) refs_.push_back(&p);
+    }
+    std::string operator()(const keyframes<K>& kf) const
+    {
+        double best = std::numeric_limits<double>::infinity();
+        std::string c;
+        for (const auto* r : refs_) {
+            const double d = keyframe_rmse(kf, r->kf);
+            if (d < best) best = d, c = r->src->content;
+        }
+        return c;
+    }
+
+private:
+    std::vector<const prepared_clip<K>*> refs_;
+};
+
+/// One fold's clips: the held-out content's (test) and every other (train, also as copies to train on).
+template <std::size_t K>
+struct fold_split {
+    std::vector<stargan::labelled_clip> train;
+    std::vector<const prepared_clip<K>*> train_p, test_p;
+};
+template <std::size_t K>
+fold_split<K> split_fold(const std::vector<prepared_clip<K>>& all, const std::string& held)
+{
+    fold_split<K> s;
+    for (const auto& p : all) {
+        if (p.src->content == held) {
+            s.test_p.push_back(&p);
+        } else {
+            s.train.push_back(*p.src);
+            s.train_p.push_back(&p);
+        }
+    }
+    return s;
+}
+
+/// The training options of the fold holding out `held`.
+inline stargan::train_options fold_train_options(const eval_options& opt, const std::vector<std::string>& contents,
+                                                 const std::string& held)
+{
+    auto to = opt.train;
+    // the seed follows the content's place among all contents, so `--folds X` trains X as the full run does
+    to.seed = opt.train.seed + static_cast<std::uint64_t>(std::find(contents.begin(), contents.end(), held) - contents.begin());
+    to.progress_out = opt.progress_out;
+    return to;
+}
+
+/// --reuse-models: takes the fold's model in `fold_dir` (refitting its change gate when only the gate's options
+/// differ) and its training numbers from log.csv.
+/// @throws value_error when the checkpoint was trained for another configuration, step count or options.
+template <stargan::stargan_config Config>
+void reuse_fold_model(const std::vector<stargan::labelled_clip>& train, const stargan::config_info& info,
+                      const stargan::train_options& to, const eval_options& opt, const std::filesystem::path& fold_dir,
+                      fold_summary& fsum)
+{
+    namespace fs = std::filesystem;
+    const fs::path ck_path = fold_dir / "checkpoint.safetensors";
+    const auto ck = stargan::read_checkpoint(ck_path).second;
+    // only the gate's options differ: G is the same, the gate is fitted again (inner models reused)
+    if (ck.config == info.name && ck.step == to.iters && ck.options != to.to_json() &&
+        stargan::detail::options_without_gate(ck.options) == stargan::detail::options_without_gate(to.to_json())) {
+        if (opt.progress_out)
+            std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate options: refitting the gate\n",
+                         ck_path.string().c_str());
+        stargan::refit_gate<Config>(train, info, to, fold_dir);
+    }
+    if (ck.config != info.name || ck.step != to.iters || stargan::read_checkpoint(ck_path).second.options != to.to_json())
+        throw value_error("eval: --reuse-models: " + ck_path.string() + " is a " + ck.config + " model of " +
+                          std::to_string(ck.step) + " steps with options " + ck.options.dump() + ", this run wants " +
+                          info.name + ", " + std::to_string(to.iters) + " steps, " + to.to_json().dump() +
+                          " (remove the folder or drop --reuse-models)");
+    const std::string log = fs::exists(fold_dir / "log.csv") ? read_file(fold_dir / "log.csv") : std::string();
+    fsum.train_d_acc = csv_tail_mean(log, "D/acc");
+    fsum.train_g_cls = csv_tail_mean(log, "G/cls");
+    fsum.reused_model = true;
+}
+
+/// Trains the fold's model into `fold_dir` (checkpoint, log, losses.svg) and records its training numbers.
+template <stargan::stargan_config Config>
+void train_fold_model(const std::vector<stargan::labelled_clip>& train, const stargan::config_info& info,
+                      const stargan::train_options& to, const std::string& held, const std::filesystem::path& fold_dir,
+                      fold_summary& fsum)
+{
+    const auto trp = stargan::train_model<Config>(train, info, to, fold_dir);
+    auto& tr = *trp;
+    fsum.train_d_acc = tail_mean(tr.log(), 5);
+    fsum.train_g_cls = tail_mean(tr.log(), 7);
+    write_file_atomic(fold_dir / "losses.svg",
+                      plot_losses_svg(stargan::loss_log_csv(tr.log()), {.title = "eval " + info.name + ": fold without " + held}));
+}
+
+/// The fold's trained model and its two ablations, built from one checkpoint.
+template <stargan::stargan_config Config>
+struct fold_models {
+    using model_type = stargan::detail::emotion_model_impl<Config>;
+    fold_models(const safetensors_file& f, const stargan::checkpoint_info& info)
+        : model(f, info),
+          has_amp(model.amplitude_stage()),
+          g_only(f, without_amplitude(info, has_amp)),
+          gated(has_gate(info)),
+          ungated(f, without_gate(info))
+    {
+    }
+    model_type model;
+    bool has_amp;          ///< the model has a learned amplitude stage
+    model_type g_only;     ///< the model without the amplitude stage: what G alone does (an ablation row)
+    bool gated;            ///< the change gate is not all "G's whole change"
+    model_type ungated;    ///< the model with G's whole change: what the change gate buys (an ablation row)
+
+private:
+    static stargan::checkpoint_info without_amplitude(stargan::checkpoint_info info, bool has_amp)
+    {
+        if (has_amp) info.options["amplitude"] = false;
+        return info;
+    }
+    static bool has_gate(const stargan::checkpoint_info& info)
+    {
+        bool gated = false;
+        for (std::size_t d = 0; d < info.gate_posture.size(); ++d)
+            gated |= info.gate_posture[d] != 1.0 || info.gate_motion[d] != 1.0 || info.gate_prior[d] != 0.0;
+        return gated;
+    }
+    static stargan::checkpoint_info without_gate(stargan::checkpoint_info info)
+    {
+        info.gate_posture.assign(info.gate_posture.size(), 1.0);
+        info.gate_motion.assign(info.gate_motion.size(), 1.0);
+        info.gate_prior.assign(info.gate_prior.size(), 0.0);
+        return info;
+    }
+};
+
+/// The independent emotion classifier of a fold, fitted on its training clips; records its training accuracy.
+template <std::size_t K>
+nearest_centroid_classifier fit_classifier(const std::vector<const prepared_clip<K>*>& train_p, double shrinkage,
+                                           fold_summary& fsum)
+{
+    nearest_centroid_classifier clf;
+    std::vector<std::vector<double>> x;
+    std::vector<std::string> y;
+    for (const auto* p : train_p) x.push_back(motion_features(p->kf, p->ch.duration)), y.push_back(p->src->emotion);
+    clf.fit(x, y, shrinkage);
+    std::size_t ok = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) ok += clf.predict(x[i]) == y[i];
+    fsum.classifier_train_acc = static_cast<double>(ok) / static_cast<double>(x.size());
+    return clf;
+}
+
+/// Seen-content diagnostic: the training contents' neutral takes transferred to their real targets (StarGAN
+/// and identity RMSE).
+template <std::size_t K, class Model>
+void seen_content_rmse(const Model& model, const std::vector<const prepared_clip<K>*>& train_p, const std::string& neutral,
+                       fold_summary& fsum)
+{
+    double ss = 0, si = 0;
+    std::size_t n = 0;
+    for (const auto* in : train_p) {
+        if (in->src->emotion != neutral) continue;
+        for (const auto* t : train_p) {
+            if (t->src->content != in->src->content || t->src->take != in->src->take || t->src->emotion == neutral) continue;
+            ss += keyframe_rmse(extract_keyframes<K>(model.transfer(in->src->motion, t->src->emotion).motion), t->kf);
+            si += keyframe_rmse(in->kf, t->kf);
+            ++n;
+        }
+    }
+    fsum.seen_rmse_stargan = n ? ss / static_cast<double>(n) : std::nan("");
+    fsum.seen_rmse_identity = n ? si / static_cast<double>(n) : std::nan("");
+}
+
+/// The held-out clip of `target` with the input's take, or nullptr.
+template <std::size_t K>
+const prepared_clip<K>* real_target(const std::vector<const prepared_clip<K>*>& test_p, const prepared_clip<K>& in,
+                                    const std::string& target)
+{
+    const prepared_clip<K>* real = nullptr;
+    for (const auto* p : test_p)
+        if (p->src->emotion == target && p->src->take == in.src->take) real = p;
+    return real;
+}
+
+/// What every method makes of one held-out neutral input for one target emotion; rows() lists them, with the
+/// clips that are not outputs (identity, nearest neighbour, real), in the order of the report.
+struct method_outputs {
+    stargan::transfer_result stargan;
+    clip g_only, ungated, amp_only, mean_offset, oracle;
+    const clip* input = nullptr;
+    const clip* nearest = nullptr;
+    const clip* real = nullptr;
+    bool has_amp = false, gated = false, has_oracle = false;
+    std::vector<std::pair<std::string, clip>> extra;
+
+    std::vector<std::pair<const char*, const clip*>> rows() const
+    {
+        std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &stargan.motion},
+                                                                 {"identity", input},
+                                                                 {"mean-offset", &mean_offset},
+                                                                 {"nearest-neighbour", nearest},
+                                                                 {"real", real}};
+        if (has_amp) outs.push_back({"stargan-g", &g_only}), outs.push_back({"amplitude-only", &amp_only});
+        if (gated) outs.push_back({"stargan-ungated", &ungated});
+        if (has_oracle) outs.push_back({"oracle", &oracle});
+        for (const auto& [name, c] : extra) outs.push_back({name.c_str(), &c});
+        return outs;
+    }
+};
+
+/// Identity with the learned amplitude and tempo of a transfer, no G: what the amplitude stage alone buys.
+template <std::size_t K>
+clip amplitude_only(const clip& in, const stargan::transfer_result& tr)
+{
+    auto k = extract_keyframes<dynamic_keyframes>(in, K);
+    stargan::scale_keyframe_excursions(k, tr.amplitude);
+    clip out = reconstruct(k, in.skel, tr.motion.frames, in.fps);
+    out.positions = stargan::stretch_positions(in, tr.motion.frames);
+    return out;
+}
+
+/// Scores one method's output against the real target clip and the input (the columns of results.csv).
+template <std::size_t K>
+sample_record score_output(const clip& out, const prepared_clip<K>& in, const prepared_clip<K>& real, const std::string& held,
+                           const std::string& target, const char* method, const nearest_centroid_classifier& clf,
+                           const content_recogniser<K>& content_of, double real_rom, double real_speed,
+                           const std::vector<std::shared_ptr<method_extension>>& extensions)
+{
+    const auto kf = extract_keyframes<K>(out);
+    const auto ch = measure<K>(out);
+    sample_record s;
+    s.fold = held, s.target = target, s.take = in.src->take, s.method = method;
+    s.rmse_real = keyframe_rmse(kf, real.kf);
+    s.rmse_input = keyframe_rmse(kf, in.kf);
+    s.predicted_emotion = clf.predict(motion_features(kf, ch.duration));
+    s.emotion_ok = s.predicted_emotion == target;
+    s.predicted_content = content_of(kf);
+    s.content_ok = s.predicted_content == held;
+    s.rom_ratio = ratio(ch.range_of_motion, in.ch.range_of_motion, "range of motion");
+    s.speed_ratio = ratio(ch.speed, in.ch.speed, "speed");
+    s.real_rom_ratio = real_rom, s.real_speed_ratio = real_speed;
+    s.rom_error = log_ratio_error(s.rom_ratio, real_rom);
+    s.speed_error = log_ratio_error(s.speed_ratio, real_speed);
+    for (const auto& x : extensions) x->score(s, out);
+    return s;
+}
+
 }  // namespace detail
 
 /// @brief Runs the leave-one-content-out evaluation for one configuration.
@@ -169,223 +460,87 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
     const auto t_start = clock::now();
     opt.train.validate();
     const auto contents = stargan::contents_of(clips);
-    if (contents.size() < 2)
-        throw value_error("eval: data set " + opt.data + " has " + std::to_string(contents.size()) + " content(s); leave-one-content-out needs at least 2");
-    std::vector<std::string> folds = opt.folds.empty() ? contents : opt.folds;
-    for (const auto& f : folds)
-        if (std::find(contents.begin(), contents.end(), f) == contents.end()) {
-            std::string known;
-            for (const auto& c : contents) known += (known.empty() ? "" : ", ") + c;
-            throw value_error("eval: --folds: content '" + f + "' is not in the data set (contents: " + known + ")");
-        }
+    const std::vector<std::string> folds = detail::fold_contents(contents, opt);
     for (const auto& c : clips) (void)stargan::domain_index(info, c.emotion);  // unknown emotion: error naming it
     // labels of the synthetic set, parallel to clips (empty without synth_seed)
     const std::vector<stem_labels> synth =
         opt.synth_seed ? detail::synth_labels(clips, info.neutral, *opt.synth_seed, opt.synth_fps) : std::vector<stem_labels>{};
 
-    eval_result res;
-    res.config = info.name;
-    res.data = opt.data;
-    res.command = opt.command;
-    res.domains = info.domain_names;
-    res.neutral = info.neutral;
-    res.options_text = detail::options_text(opt);
-    res.planned_folds = folds.size();
-
-    // every clip's keyframes and characteristics, once
-    std::vector<detail::prepared_clip<K>> all;
-    all.reserve(clips.size());
-    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), measure<K>(c.motion)});
-    // content references: every neutral clip of every content
-    std::vector<const detail::prepared_clip<K>*> neutral_refs;
-    for (const auto& p : all)
-        if (p.src->emotion == info.neutral) neutral_refs.push_back(&p);
-    auto content_of = [&](const keyframes<K>& kf) -> std::string {
-        double best = std::numeric_limits<double>::infinity();
-        std::string c;
-        for (const auto* r : neutral_refs) {
-            const double d = keyframe_rmse(kf, r->kf);
-            if (d < best) best = d, c = r->src->content;
-        }
-        return c;
-    };
+    eval_result res = detail::new_result(info, opt, folds.size());
+    const auto all = detail::prepare_clips<K>(clips);
+    const detail::content_recogniser<K> content_of(all, info.neutral);  // content references: every neutral clip
 
     progress overall("eval " + info.name, static_cast<long>(folds.size()), opt.progress_out, 0.0);
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         const std::string& held = folds[fi];
+        const auto split = detail::split_fold(all, held);
+        const auto& train = split.train;
         fold_summary fsum;
         fsum.held_out = held;
-        std::vector<stargan::labelled_clip> train;
-        std::vector<const detail::prepared_clip<K>*> train_p, test_p;
-        for (const auto& p : all) {
-            if (p.src->content == held) {
-                test_p.push_back(&p);
-            } else {
-                train.push_back(*p.src);
-                train_p.push_back(&p);
-            }
-        }
         fsum.train_clips = train.size();
         if (opt.progress_out)
             std::fprintf(opt.progress_out, "eval: fold %zu/%zu: holding out '%s' (%zu training clips, %zu held-out clips)\n", fi + 1,
-                         folds.size(), held.c_str(), train.size(), test_p.size()),
+                         folds.size(), held.c_str(), train.size(), split.test_p.size()),
                 std::fflush(opt.progress_out);
 
-        // ---- train StarGAN on the other contents
+        // ---- train StarGAN on the other contents (or take the model a previous run trained)
         const fs::path fold_dir = out_dir / "folds" / held;
         auto t0 = clock::now();
-        auto to = opt.train;
-        // the seed follows the content's place among all contents, so `--folds X` trains X as the full run does
-        to.seed = opt.train.seed + static_cast<std::uint64_t>(std::find(contents.begin(), contents.end(), held) - contents.begin());
-        to.progress_out = opt.progress_out;
-        const fs::path ck_path = fold_dir / "checkpoint.safetensors";
-        if (opt.reuse_models && fs::exists(ck_path)) {
-            const auto ck = stargan::read_checkpoint(ck_path).second;
-            // only the gate's options differ: G is the same, the gate is fitted again (inner models reused)
-            if (ck.config == info.name && ck.step == to.iters && ck.options != to.to_json() &&
-                stargan::detail::options_without_gate(ck.options) == stargan::detail::options_without_gate(to.to_json())) {
-                if (opt.progress_out)
-                    std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate options: refitting the gate\n",
-                                 ck_path.string().c_str());
-                stargan::refit_gate<Config>(train, info, to, fold_dir);
-            }
-            if (ck.config != info.name || ck.step != to.iters || stargan::read_checkpoint(ck_path).second.options != to.to_json())
-                throw value_error("eval: --reuse-models: " + ck_path.string() + " is a " + ck.config + " model of " +
-                                  std::to_string(ck.step) + " steps with options " + ck.options.dump() + ", this run wants " +
-                                  info.name + ", " + std::to_string(to.iters) + " steps, " + to.to_json().dump() +
-                                  " (remove the folder or drop --reuse-models)");
-            const std::string log = fs::exists(fold_dir / "log.csv") ? read_file(fold_dir / "log.csv") : std::string();
-            fsum.train_d_acc = detail::csv_tail_mean(log, "D/acc");
-            fsum.train_g_cls = detail::csv_tail_mean(log, "G/cls");
-            fsum.reused_model = true;
-        } else {
-            const auto trp = stargan::train_model<Config>(train, info, to, fold_dir);
-            auto& tr = *trp;
-            fsum.train_d_acc = detail::tail_mean(tr.log(), 5);
-            fsum.train_g_cls = detail::tail_mean(tr.log(), 7);
-            write_file_atomic(fold_dir / "losses.svg",
-                              plot_losses_svg(stargan::loss_log_csv(tr.log()), {.title = "eval " + info.name + ": fold without " + held}));
-        }
+        const auto to = detail::fold_train_options(opt, contents, held);
+        if (opt.reuse_models && fs::exists(fold_dir / "checkpoint.safetensors"))
+            detail::reuse_fold_model<Config>(train, info, to, opt, fold_dir, fsum);
+        else
+            detail::train_fold_model<Config>(train, info, to, held, fold_dir, fsum);
         fsum.train_seconds = std::chrono::duration<double>(clock::now() - t0).count();
         t0 = clock::now();
         auto [ckf, ckinfo] = stargan::read_checkpoint(fold_dir / "checkpoint.safetensors");
-        const stargan::detail::emotion_model_impl<Config> model(ckf, ckinfo);
-        // the same model without the learned amplitude stage: what G alone does (an ablation row)
-        const bool has_amp = model.amplitude_stage();
-        auto g_info = ckinfo;
-        if (has_amp) g_info.options["amplitude"] = false;
-        const stargan::detail::emotion_model_impl<Config> model_g(ckf, g_info);
-        // the same model with G's whole change: what the change gate buys (an ablation row)
-        bool gated = false;
-        for (std::size_t d = 0; d < ckinfo.gate_posture.size(); ++d)
-            gated |= ckinfo.gate_posture[d] != 1.0 || ckinfo.gate_motion[d] != 1.0 || ckinfo.gate_prior[d] != 0.0;
-        auto u_info = ckinfo;
-        u_info.gate_posture.assign(u_info.gate_posture.size(), 1.0);
-        u_info.gate_motion.assign(u_info.gate_motion.size(), 1.0);
-        u_info.gate_prior.assign(u_info.gate_prior.size(), 0.0);
-        const stargan::detail::emotion_model_impl<Config> model_u(ckf, u_info);
+        const detail::fold_models<Config> models(ckf, ckinfo);
 
         // ---- baselines and the independent emotion classifier, from the training clips only
         const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
-        nearest_centroid_classifier clf;
-        {
-            std::vector<std::vector<double>> x;
-            std::vector<std::string> y;
-            for (const auto* p : train_p) x.push_back(motion_features(p->kf, p->ch.duration)), y.push_back(p->src->emotion);
-            clf.fit(x, y, opt.shrinkage);
-            std::size_t ok = 0;
-            for (std::size_t i = 0; i < x.size(); ++i) ok += clf.predict(x[i]) == y[i];
-            fsum.classifier_train_acc = static_cast<double>(ok) / static_cast<double>(x.size());
-        }
-
-        // ---- seen-content diagnostic: the training contents' neutral takes to their real targets
-        {
-            double ss = 0, si = 0;
-            std::size_t n = 0;
-            for (const auto* in : train_p) {
-                if (in->src->emotion != info.neutral) continue;
-                for (const auto* t : train_p) {
-                    if (t->src->content != in->src->content || t->src->take != in->src->take || t->src->emotion == info.neutral) continue;
-                    ss += keyframe_rmse(extract_keyframes<K>(model.transfer(in->src->motion, t->src->emotion).motion), t->kf);
-                    si += keyframe_rmse(in->kf, t->kf);
-                    ++n;
-                }
-            }
-            fsum.seen_rmse_stargan = n ? ss / static_cast<double>(n) : std::nan("");
-            fsum.seen_rmse_identity = n ? si / static_cast<double>(n) : std::nan("");
-        }
+        const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
+        detail::seen_content_rmse<K>(models.model, split.train_p, info.neutral, fsum);
 
         // ---- extensions (eval/extension.hpp) fit on the fold's training clips only
         if (!opt.extensions.empty()) {
             fold_context fc{held, info.neutral, &train, {}, fi, opt.progress_out};
-            for (const auto* p : test_p) fc.test.push_back(p->src);
+            for (const auto* p : split.test_p) fc.test.push_back(p->src);
             for (const auto& x : opt.extensions) x->begin_fold(fc);
         }
 
-        // ---- transfer every held-out neutral take to every other emotion
-        for (const auto* in : test_p) {
+        // ---- transfer every held-out neutral take to every other emotion and score every method's output
+        for (const auto* in : split.test_p) {
             if (in->src->emotion != info.neutral) continue;
             ++fsum.test_inputs;
+            const clip& input = in->src->motion;
             for (const auto& target : info.domain_names) {
                 if (target == info.neutral) continue;
-                const detail::prepared_clip<K>* real = nullptr;
-                for (const auto* p : test_p)
-                    if (p->src->emotion == target && p->src->take == in->src->take) real = p;
+                const detail::prepared_clip<K>* real = detail::real_target(split.test_p, *in, target);
                 if (!real) {
                     ++fsum.missing_targets;
                     continue;
                 }
-                const auto tr_res = model.transfer(in->src->motion, target);
-                const clip g_only = has_amp ? model_g.transfer(in->src->motion, target).motion : clip{};
-                const clip ungated = gated ? model_u.transfer(in->src->motion, target).motion : clip{};
-                // identity with the same learned amplitude and tempo, no G: what the amplitude stage alone buys
-                clip amp_only;
-                if (has_amp) {
-                    auto k = extract_keyframes<dynamic_keyframes>(in->src->motion, K);
-                    stargan::scale_keyframe_excursions(k, tr_res.amplitude);
-                    amp_only = reconstruct(k, in->src->motion.skel, tr_res.motion.frames, in->src->motion.fps);
-                    amp_only.positions = stargan::stretch_positions(in->src->motion, tr_res.motion.frames);
-                }
-                const std::size_t nn = nearest_neighbour<K>(in->src->motion, train, target);
-                const clip mo = offset.transfer(in->src->motion, target, tr_res.tempo);
-                std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &tr_res.motion},
-                                                                         {"identity", &in->src->motion},
-                                                                         {"mean-offset", &mo},
-                                                                         {"nearest-neighbour", &train[nn].motion},
-                                                                         {"real", &real->src->motion}};
-                if (has_amp) outs.push_back({"stargan-g", &g_only}), outs.push_back({"amplitude-only", &amp_only});
-                if (gated) outs.push_back({"stargan-ungated", &ungated});
-                clip oracle;
+                detail::method_outputs o;
+                o.stargan = models.model.transfer(input, target);
+                o.has_amp = models.has_amp, o.gated = models.gated;
+                if (o.has_amp) o.g_only = models.g_only.transfer(input, target).motion;
+                if (o.gated) o.ungated = models.ungated.transfer(input, target).motion;
+                if (o.has_amp) o.amp_only = detail::amplitude_only<K>(input, o.stargan);
+                o.nearest = &train[nearest_neighbour<K>(input, train, target)].motion;
+                o.mean_offset = offset.transfer(input, target, o.stargan.tempo);
+                o.input = &input, o.real = &real->src->motion;
                 if (opt.synth_seed) {
                     const stem_labels& l = synth[static_cast<std::size_t>(in->src - clips.data())];
-                    oracle = synthesize_as(l.motion, l.emo, emotion_from_string(target), l.take, *opt.synth_seed, opt.synth_fps);
-                    outs.push_back({"oracle", &oracle});
+                    o.oracle = synthesize_as(l.motion, l.emo, emotion_from_string(target), l.take, *opt.synth_seed, opt.synth_fps);
+                    o.has_oracle = true;
                 }
-                std::vector<std::pair<std::string, clip>> extra;
                 for (const auto& x : opt.extensions)
-                    for (auto& o : x->transfer(*in->src, target)) extra.push_back(std::move(o));
-                for (const auto& [name, c] : extra) outs.push_back({name.c_str(), &c});
+                    for (auto& e : x->transfer(*in->src, target)) o.extra.push_back(std::move(e));
                 const double real_rom = ratio(real->ch.range_of_motion, in->ch.range_of_motion, "range of motion");
                 const double real_speed = ratio(real->ch.speed, in->ch.speed, "speed");
-                for (const auto& [method, out] : outs) {
-                    const auto kf = extract_keyframes<K>(*out);
-                    const auto ch = measure<K>(*out);
-                    sample_record s;
-                    s.fold = held, s.target = target, s.take = in->src->take, s.method = method;
-                    s.rmse_real = keyframe_rmse(kf, real->kf);
-                    s.rmse_input = keyframe_rmse(kf, in->kf);
-                    s.predicted_emotion = clf.predict(motion_features(kf, ch.duration));
-                    s.emotion_ok = s.predicted_emotion == target;
-                    s.predicted_content = content_of(kf);
-                    s.content_ok = s.predicted_content == held;
-                    s.rom_ratio = ratio(ch.range_of_motion, in->ch.range_of_motion, "range of motion");
-                    s.speed_ratio = ratio(ch.speed, in->ch.speed, "speed");
-                    s.real_rom_ratio = real_rom, s.real_speed_ratio = real_speed;
-                    s.rom_error = log_ratio_error(s.rom_ratio, real_rom);
-                    s.speed_error = log_ratio_error(s.speed_ratio, real_speed);
-                    for (const auto& x : opt.extensions) x->score(s, *out);
-                    res.samples.push_back(std::move(s));
-                }
+                for (const auto& [method, out] : o.rows())
+                    res.samples.push_back(detail::score_output<K>(*out, *in, *real, held, target, method, clf, content_of, real_rom,
+                                                                  real_speed, opt.extensions));
             }
         }
         if (fsum.test_inputs == 0)

@@ -215,30 +215,33 @@ inline bool is_blank_line(std::string_view s) noexcept
     return true;
 }
 
-}  // namespace detail
+/// Reads the HIERARCHY section of a BVH file into a skeleton: the ROOT/JOINT/End Site blocks, each with its
+/// OFFSET and (joints) CHANNELS, up to and including the MOTION keyword. Open blocks are an explicit stack.
+class bvh_hierarchy_reader {
+public:
+    bvh_hierarchy_reader(bvh_cursor& cur, std::string_view source_name) : cur_(cur) { sk_.name = std::string(source_name); }
 
-/// @brief Parses BVH text into a clip.
-/// @param text the whole file (LF or CRLF line ends, spaces or tabs).
-/// @param source_name the file name used in error messages.
-/// @return a clip with angles [frames, J, 3] (x, y, z degrees), positions [frames, J, 3] (position
-/// channel values, or the joint's OFFSET where it has none) and fps = 1 / Frame Time (snapped to the
-/// nearest integer when within 1e-4 relative of it, so `Frame Time: 0.0333333` gives 30 fps).
-/// @throws format_error naming the file, 1-based line and field for any malformed, truncated,
-/// non-finite, inconsistent (Frames vs rows, values per row) or absurdly large input. Never returns a
-/// partial clip.
-inline clip parse_bvh(std::string_view text, std::string_view source_name)
-{
-    using detail::bvh_cursor;
-    bvh_cursor cur(text, source_name);
+    skeleton read()
+    {
+        auto t = cur_.next();
+        if (t.text != "HIERARCHY")
+            cur_.fail(t.line, t.text.empty() ? std::string("empty file, expected HIERARCHY")
+                                             : "found '" + std::string(t.text) + "', expected HIERARCHY");
+        for (t = cur_.next();; t = cur_.next()) {
+            if (t.text.empty()) cur_.fail(cur_.line(), "unexpected end of file " + context());
+            if (stack_.empty()) {
+                if (top_level_item(t)) break;  // MOTION
+            } else if (stack_.back().end_site) {
+                end_site_item(t);
+            } else {
+                joint_item(t);
+            }
+        }
+        return std::move(sk_);
+    }
 
-    auto t = cur.next();
-    if (t.text != "HIERARCHY")
-        cur.fail(t.line, t.text.empty() ? std::string("empty file, expected HIERARCHY")
-                                        : "found '" + std::string(t.text) + "', expected HIERARCHY");
-
-    skeleton sk;
-    sk.name = std::string(source_name);
-    // Explicit stack of open blocks: a joint index, or -1 - joint for that joint's End Site block.
+private:
+    /// An open block: a joint, or that joint's End Site.
     struct open_block {
         int joint;
         bool end_site;
@@ -246,131 +249,158 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
         bool has_channels;
         long line;
     };
-    std::vector<open_block> stack;
-    std::size_t total_channels = 0;
+    using token = bvh_cursor::token;
 
-    auto joint_name = [&](int j) { return "'" + sk.joints[static_cast<std::size_t>(j)].name + "'"; };
-    auto context = [&]() -> std::string {
-        if (stack.empty()) return "in HIERARCHY";
-        const auto& b = stack.back();
+    std::string joint_name(int j) const { return "'" + sk_.joints[static_cast<std::size_t>(j)].name + "'"; }
+
+    /// "in HIERARCHY", naming the innermost open block (for "unexpected end of file ...").
+    std::string context() const
+    {
+        if (stack_.empty()) return "in HIERARCHY";
+        const auto& b = stack_.back();
         return std::string("in HIERARCHY (") + (b.end_site ? "End Site of joint " : "joint ") + joint_name(b.joint) +
                " opened on line " + std::to_string(b.line) + " is not closed)";
-    };
-    auto read_offset = [&](const std::string& what) {
+    }
+
+    vec3 read_offset(const std::string& what)
+    {
         vec3 v{};
-        for (std::size_t k = 0; k < 3; ++k) v[k] = cur.number(cur.require(context()), "OFFSET of " + what);
+        for (std::size_t k = 0; k < 3; ++k) v[k] = cur_.number(cur_.require(context()), "OFFSET of " + what);
         return v;
-    };
-    auto open_joint = [&](long line, bool root) {
-        if (sk.joints.size() >= bvh_max_joints)
-            cur.fail(line, "more than " + std::to_string(bvh_max_joints) + " joints (corrupt file?)");
-        std::string_view name = cur.rest_of_line();
+    }
+
+    /// After ROOT or JOINT: the name (rest of the line, an optional trailing "{") and the opening brace.
+    void open_joint(long line, bool root)
+    {
+        if (sk_.joints.size() >= bvh_max_joints)
+            cur_.fail(line, "more than " + std::to_string(bvh_max_joints) + " joints (corrupt file?)");
+        std::string_view name = cur_.rest_of_line();
         bool brace = false;
         if (!name.empty() && name.back() == '{') {
             brace = true;
             name.remove_suffix(1);
-            while (!name.empty() && detail::is_blank(name.back())) name.remove_suffix(1);
+            while (!name.empty() && is_blank(name.back())) name.remove_suffix(1);
         }
-        if (name.empty()) cur.fail(line, std::string(root ? "ROOT" : "JOINT") + " has no name");
+        if (name.empty()) cur_.fail(line, std::string(root ? "ROOT" : "JOINT") + " has no name");
         if (name.find_first_of("{}") != std::string_view::npos)
-            cur.fail(line, "joint name '" + std::string(name) + "' contains a brace");
+            cur_.fail(line, "joint name '" + std::string(name) + "' contains a brace");
         joint j;
         j.name = std::string(name);
-        j.parent = root ? -1 : stack.back().joint;
+        j.parent = root ? -1 : stack_.back().joint;
         j.channels.clear();
-        sk.joints.push_back(std::move(j));
-        const int idx = static_cast<int>(sk.joints.size() - 1);
+        sk_.joints.push_back(std::move(j));
+        const int idx = static_cast<int>(sk_.joints.size() - 1);
         if (!brace) {
-            auto b = cur.require(context());
+            auto b = cur_.require(context());
             if (b.text != "{")
-                cur.fail(b.line, "found '" + std::string(b.text) + "' after joint '" + std::string(name) + "', expected {");
+                cur_.fail(b.line, "found '" + std::string(b.text) + "' after joint '" + std::string(name) + "', expected {");
         }
-        stack.push_back({idx, false, false, false, line});
-    };
-
-    t = cur.next();
-    for (;;) {
-        if (t.text.empty()) cur.fail(cur.line(), "unexpected end of file " + context());
-        if (stack.empty()) {
-            if (t.text == "ROOT") {
-                open_joint(t.line, true);
-            } else if (t.text == "MOTION") {
-                if (sk.joints.empty()) cur.fail(t.line, "MOTION before any ROOT joint");
-                break;
-            } else {
-                cur.fail(t.line, "found '" + std::string(t.text) + "', expected ROOT or MOTION");
-            }
-        } else if (stack.back().end_site) {
-            auto& b = stack.back();
-            if (t.text == "OFFSET") {
-                if (b.has_offset) cur.fail(t.line, "second OFFSET in End Site of joint " + joint_name(b.joint));
-                sk.joints[static_cast<std::size_t>(b.joint)].end_site =
-                    read_offset("End Site of joint " + joint_name(b.joint));
-                b.has_offset = true;
-            } else if (t.text == "}") {
-                if (!b.has_offset) cur.fail(t.line, "End Site of joint " + joint_name(b.joint) + " has no OFFSET");
-                stack.pop_back();
-            } else {
-                cur.fail(t.line, "found '" + std::string(t.text) + "' in End Site of joint " + joint_name(b.joint) +
-                                     ", expected OFFSET or }");
-            }
-        } else {
-            auto& b = stack.back();
-            joint& jt = sk.joints[static_cast<std::size_t>(b.joint)];
-            if (t.text == "OFFSET") {
-                if (b.has_offset) cur.fail(t.line, "second OFFSET in joint " + joint_name(b.joint));
-                jt.offset = read_offset("joint " + joint_name(b.joint));
-                b.has_offset = true;
-            } else if (t.text == "CHANNELS") {
-                if (b.has_channels) cur.fail(t.line, "second CHANNELS in joint " + joint_name(b.joint));
-                const auto n = cur.require(context());
-                unsigned count = 0;
-                const auto [p, ec] = std::from_chars(n.text.data(), n.text.data() + n.text.size(), count);
-                if (ec != std::errc() || p != n.text.data() + n.text.size())
-                    cur.fail(n.line, "CHANNELS count '" + std::string(n.text) + "' of joint " + joint_name(b.joint) +
-                                         " is not a number");
-                if (count != 3 && count != 6)
-                    cur.fail(n.line, "CHANNELS " + std::string(n.text) + " is not 3 or 6 (joint " +
-                                         joint_name(b.joint) + ")");
-                for (unsigned k = 0; k < count; ++k) {
-                    const auto c = cur.require(context());
-                    channel ch{};
-                    if (!detail::parse_channel(c.text, ch))
-                        cur.fail(c.line, "unknown channel '" + std::string(c.text) + "' in joint " + joint_name(b.joint) +
-                                             ", expected Xposition, Yposition, Zposition, Xrotation, Yrotation or "
-                                             "Zrotation");
-                    jt.channels.push_back(ch);
-                }
-                if (auto msg = detail::check_channels(jt.channels); !msg.empty())
-                    cur.fail(n.line, msg + " (joint " + joint_name(b.joint) + ")");
-                total_channels += count;
-                b.has_channels = true;
-            } else if (t.text == "JOINT") {
-                if (!b.has_channels) cur.fail(t.line, "joint " + joint_name(b.joint) + " has no CHANNELS before JOINT");
-                open_joint(t.line, false);
-            } else if (t.text == "End") {
-                const auto s = cur.require(context());
-                if (s.text != "Site")
-                    cur.fail(s.line, "found 'End " + std::string(s.text) + "', expected End Site");
-                if (jt.end_site) cur.fail(t.line, "second End Site in joint " + joint_name(b.joint));
-                const auto br = cur.require(context());
-                if (br.text != "{") cur.fail(br.line, "found '" + std::string(br.text) + "' after End Site, expected {");
-                stack.push_back({b.joint, true, false, false, t.line});
-            } else if (t.text == "}") {
-                if (!b.has_offset) cur.fail(t.line, "joint " + joint_name(b.joint) + " has no OFFSET");
-                if (!b.has_channels) cur.fail(t.line, "joint " + joint_name(b.joint) + " has no CHANNELS");
-                stack.pop_back();
-            } else {
-                cur.fail(t.line, "found '" + std::string(t.text) + "' in joint " + joint_name(b.joint) +
-                                     ", expected OFFSET, CHANNELS, JOINT, End Site or }");
-            }
-        }
-        t = cur.next();
+        stack_.push_back({idx, false, false, false, line});
     }
 
-    // MOTION header: "Frames: N" and "Frame Time: T" (the number may be glued to the colon).
+    /// Outside any block: ROOT opens one; MOTION ends the hierarchy (returns true).
+    bool top_level_item(const token& t)
+    {
+        if (t.text == "ROOT") {
+            open_joint(t.line, true);
+        } else if (t.text == "MOTION") {
+            if (sk_.joints.empty()) cur_.fail(t.line, "MOTION before any ROOT joint");
+            return true;
+        } else {
+            cur_.fail(t.line, "found '" + std::string(t.text) + "', expected ROOT or MOTION");
+        }
+        return false;
+    }
+
+    /// Inside an End Site: one OFFSET, then "}".
+    void end_site_item(const token& t)
+    {
+        auto& b = stack_.back();
+        if (t.text == "OFFSET") {
+            if (b.has_offset) cur_.fail(t.line, "second OFFSET in End Site of joint " + joint_name(b.joint));
+            sk_.joints[static_cast<std::size_t>(b.joint)].end_site = read_offset("End Site of joint " + joint_name(b.joint));
+            b.has_offset = true;
+        } else if (t.text == "}") {
+            if (!b.has_offset) cur_.fail(t.line, "End Site of joint " + joint_name(b.joint) + " has no OFFSET");
+            stack_.pop_back();
+        } else {
+            cur_.fail(t.line, "found '" + std::string(t.text) + "' in End Site of joint " + joint_name(b.joint) +
+                                  ", expected OFFSET or }");
+        }
+    }
+
+    /// Inside a joint: OFFSET, CHANNELS, child JOINTs (after CHANNELS), one End Site, "}".
+    void joint_item(const token& t)
+    {
+        auto& b = stack_.back();
+        joint& jt = sk_.joints[static_cast<std::size_t>(b.joint)];
+        if (t.text == "OFFSET") {
+            if (b.has_offset) cur_.fail(t.line, "second OFFSET in joint " + joint_name(b.joint));
+            jt.offset = read_offset("joint " + joint_name(b.joint));
+            b.has_offset = true;
+        } else if (t.text == "CHANNELS") {
+            if (b.has_channels) cur_.fail(t.line, "second CHANNELS in joint " + joint_name(b.joint));
+            read_channels(b.joint, jt);
+            b.has_channels = true;
+        } else if (t.text == "JOINT") {
+            if (!b.has_channels) cur_.fail(t.line, "joint " + joint_name(b.joint) + " has no CHANNELS before JOINT");
+            open_joint(t.line, false);  // b and jt are invalid from here
+        } else if (t.text == "End") {
+            const auto s = cur_.require(context());
+            if (s.text != "Site") cur_.fail(s.line, "found 'End " + std::string(s.text) + "', expected End Site");
+            if (jt.end_site) cur_.fail(t.line, "second End Site in joint " + joint_name(b.joint));
+            const auto br = cur_.require(context());
+            if (br.text != "{") cur_.fail(br.line, "found '" + std::string(br.text) + "' after End Site, expected {");
+            stack_.push_back({b.joint, true, false, false, t.line});
+        } else if (t.text == "}") {
+            if (!b.has_offset) cur_.fail(t.line, "joint " + joint_name(b.joint) + " has no OFFSET");
+            if (!b.has_channels) cur_.fail(t.line, "joint " + joint_name(b.joint) + " has no CHANNELS");
+            stack_.pop_back();
+        } else {
+            cur_.fail(t.line, "found '" + std::string(t.text) + "' in joint " + joint_name(b.joint) +
+                                  ", expected OFFSET, CHANNELS, JOINT, End Site or }");
+        }
+    }
+
+    /// After CHANNELS: the count (3 or 6) and that many channel names, checked by check_channels().
+    void read_channels(int j, joint& jt)
+    {
+        const auto n = cur_.require(context());
+        unsigned count = 0;
+        const auto [p, ec] = std::from_chars(n.text.data(), n.text.data() + n.text.size(), count);
+        if (ec != std::errc() || p != n.text.data() + n.text.size())
+            cur_.fail(n.line, "CHANNELS count '" + std::string(n.text) + "' of joint " + joint_name(j) + " is not a number");
+        if (count != 3 && count != 6)
+            cur_.fail(n.line, "CHANNELS " + std::string(n.text) + " is not 3 or 6 (joint " + joint_name(j) + ")");
+        for (unsigned k = 0; k < count; ++k) {
+            const auto c = cur_.require(context());
+            channel ch{};
+            if (!parse_channel(c.text, ch))
+                cur_.fail(c.line, "unknown channel '" + std::string(c.text) + "' in joint " + joint_name(j) +
+                                      ", expected Xposition, Yposition, Zposition, Xrotation, Yrotation or "
+                                      "Zrotation");
+            jt.channels.push_back(ch);
+        }
+        if (auto msg = check_channels(jt.channels); !msg.empty()) cur_.fail(n.line, msg + " (joint " + joint_name(j) + ")");
+    }
+
+    bvh_cursor& cur_;
+    skeleton sk_;
+    std::vector<open_block> stack_;
+};
+
+/// The MOTION header: "Frames: N" and "Frame Time: T".
+struct bvh_motion_header {
+    std::uint64_t frames = 0;
+    long frames_line = 0;  ///< for the messages about the frame count
+    double frame_time = 0;
+};
+
+/// Reads "Frames: N" (N >= 1; the number may be glued to the colon).
+inline void read_bvh_frames(bvh_cursor& cur, bvh_motion_header& h)
+{
     auto f = cur.require("after MOTION, expected Frames:");
-    const long frames_line = f.line;
+    h.frames_line = f.line;
     std::string_view frames_text;
     if (f.text.substr(0, 7) == "Frames:") {
         frames_text = f.text.substr(7);
@@ -378,14 +408,15 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
     } else {
         cur.fail(f.line, "found '" + std::string(f.text) + "', expected Frames:");
     }
-    std::uint64_t frames = 0;
-    {
-        const auto [p, ec] = std::from_chars(frames_text.data(), frames_text.data() + frames_text.size(), frames);
-        if (ec != std::errc() || p != frames_text.data() + frames_text.size())
-            cur.fail(frames_line, "Frames: '" + std::string(frames_text) + "' is not a non-negative integer");
-    }
-    if (frames == 0) cur.fail(frames_line, "Frames: 0, a clip needs at least one frame");
+    const auto [p, ec] = std::from_chars(frames_text.data(), frames_text.data() + frames_text.size(), h.frames);
+    if (ec != std::errc() || p != frames_text.data() + frames_text.size())
+        cur.fail(h.frames_line, "Frames: '" + std::string(frames_text) + "' is not a non-negative integer");
+    if (h.frames == 0) cur.fail(h.frames_line, "Frames: 0, a clip needs at least one frame");
+}
 
+/// Reads "Frame Time: T" (T > 0 with a finite 1 / T; the number may be glued to the colon), alone on its line.
+inline void read_bvh_frame_time(bvh_cursor& cur, bvh_motion_header& h)
+{
     auto ft = cur.require("after Frames, expected Frame Time:");
     if (ft.text != "Frame") cur.fail(ft.line, "found '" + std::string(ft.text) + "', expected Frame Time:");
     auto tm = cur.require("after Frame, expected Time:");
@@ -399,79 +430,120 @@ inline clip parse_bvh(std::string_view text, std::string_view source_name)
     } else {
         cur.fail(tm.line, "found 'Frame " + std::string(tm.text) + "', expected Frame Time:");
     }
-    const double frame_time = cur.number({time_text, tm.line}, "Frame Time");
-    if (!(frame_time > 0)) cur.fail(tm.line, "Frame Time " + std::string(time_text) + " is not positive");
-    if (!std::isfinite(1.0 / frame_time))  // a subnormal such as 1e-310
+    h.frame_time = cur.number({time_text, tm.line}, "Frame Time");
+    if (!(h.frame_time > 0)) cur.fail(tm.line, "Frame Time " + std::string(time_text) + " is not positive");
+    if (!std::isfinite(1.0 / h.frame_time))  // a subnormal such as 1e-310
         cur.fail(tm.line, "Frame Time " + std::string(time_text) + " gives a frame rate of " +
-                              std::to_string(1.0 / frame_time) + ", expected a finite one");
+                              std::to_string(1.0 / h.frame_time) + ", expected a finite one");
     if (auto rest = cur.rest_of_line(); !rest.empty())
         cur.fail(cur.line(), "unexpected '" + std::string(rest) + "' after Frame Time");
+}
+
+/// Column k of a data row: (joint, channel).
+using bvh_column = std::pair<std::size_t, channel>;
+
+inline std::vector<bvh_column> bvh_columns(const skeleton& sk)
+{
+    std::size_t total = 0;
+    for (const auto& j : sk.joints) total += j.channels.size();
+    std::vector<bvh_column> columns;
+    columns.reserve(total);
+    for (std::size_t j = 0; j < sk.joints.size(); ++j)
+        for (channel c : sk.joints[j].channels) columns.emplace_back(j, c);
+    return columns;
+}
+
+/// Parses the values of one data row (line `line`, frame `frame`) into `values`, one per column.
+/// @throws format_error for a row with too few or too many values or a value that is not a finite number.
+inline void parse_bvh_row(const bvh_cursor& cur, std::string_view row, long line, std::size_t frame, const skeleton& sk,
+                          const std::vector<bvh_column>& columns, std::vector<double>& values)
+{
+    std::size_t k = 0, p = 0;
+    for (;;) {
+        while (p < row.size() && is_blank(row[p])) ++p;
+        if (p >= row.size()) break;
+        const std::size_t b = p;
+        while (p < row.size() && !is_blank(row[p])) ++p;
+        if (k >= columns.size()) {
+            std::size_t n = k + 1;  // count all values for the message
+            for (;;) {
+                while (p < row.size() && is_blank(row[p])) ++p;
+                if (p >= row.size()) break;
+                while (p < row.size() && !is_blank(row[p])) ++p;
+                ++n;
+            }
+            cur.fail(line, "row has " + std::to_string(n) + " values, expected " + std::to_string(columns.size()));
+        }
+        const auto [j, ch] = columns[k];
+        double v = 0;
+        const std::string_view tok = row.substr(b, p - b);
+        if (parse_number(tok, v) != number_status::ok)  // slow path: name the field
+            (void)cur.number({tok, line}, "frame " + std::to_string(frame) + " joint '" + sk.joints[j].name + "' " +
+                                              std::string(channel_name(ch)));
+        values[k] = v;
+        ++k;
+    }
+    if (k != columns.size())
+        cur.fail(line, "row has " + std::to_string(k) + " values, expected " + std::to_string(columns.size()));
+}
+
+/// Appends one frame to `out`: the row's values in their joints' angles or positions, the OFFSET where a joint has
+/// no position channels.
+inline void append_bvh_frame(clip& out, const std::vector<bvh_column>& columns, const std::vector<double>& values)
+{
+    const std::size_t J = out.skel.joints.size(), frame = out.frames;
+    out.angles.resize(out.angles.size() + J * 3, 0.0);
+    for (std::size_t jj = 0; jj < J; ++jj)
+        for (std::size_t a = 0; a < 3; ++a) out.positions.push_back(out.skel.joints[jj].offset[a]);
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+        const auto [j, ch] = columns[c];
+        const auto a = static_cast<std::size_t>(channel_axis(ch));
+        (is_rotation(ch) ? out.angles : out.positions)[(frame * J + j) * 3 + a] = values[c];
+    }
+    out.frames = frame + 1;
+}
+
+}  // namespace detail
+
+/// @brief Parses BVH text into a clip.
+/// @param text the whole file (LF or CRLF line ends, spaces or tabs).
+/// @param source_name the file name used in error messages.
+/// @return a clip with angles [frames, J, 3] (x, y, z degrees), positions [frames, J, 3] (position
+/// channel values, or the joint's OFFSET where it has none) and fps = 1 / Frame Time (snapped to the
+/// nearest integer when within 1e-4 relative of it, so `Frame Time: 0.0333333` gives 30 fps).
+/// @throws format_error naming the file, 1-based line and field for any malformed, truncated,
+/// non-finite, inconsistent (Frames vs rows, values per row) or absurdly large input. Never returns a
+/// partial clip.
+inline clip parse_bvh(std::string_view text, std::string_view source_name)
+{
+    detail::bvh_cursor cur(text, source_name);
+    skeleton sk = detail::bvh_hierarchy_reader(cur, source_name).read();
+    detail::bvh_motion_header h;
+    detail::read_bvh_frames(cur, h);
+    detail::read_bvh_frame_time(cur, h);
 
     // Count the data rows before allocating anything sized by Frames.
     const std::size_t rows = cur.count_rows_after();
-    if (rows != frames)
-        cur.fail(frames_line, "Frames: " + std::to_string(frames) + " but the file has " + std::to_string(rows) +
-                                  " data row" + (rows == 1 ? "" : "s") +
-                                  (rows < frames ? " (truncated motion?)" : " (extra rows?)"));
-
-    // Column k of a row -> (joint, channel).
-    std::vector<std::pair<std::size_t, channel>> columns;
-    columns.reserve(total_channels);
-    for (std::size_t j = 0; j < sk.joints.size(); ++j)
-        for (channel c : sk.joints[j].channels) columns.emplace_back(j, c);
+    if (rows != h.frames)
+        cur.fail(h.frames_line, "Frames: " + std::to_string(h.frames) + " but the file has " + std::to_string(rows) +
+                                    " data row" + (rows == 1 ? "" : "s") +
+                                    (rows < h.frames ? " (truncated motion?)" : " (extra rows?)"));
 
     // The clip grows one frame per parsed row (never sized from Frames or the row count: a row that is
     // one short token must not reserve J*3 values), and its frame count is checked against Frames at the end.
-    const std::size_t J = sk.joints.size();
-    clip out = clip::make(std::move(sk), 0, 1.0 / frame_time);
+    const std::vector<detail::bvh_column> columns = detail::bvh_columns(sk);
+    clip out = clip::make(std::move(sk), 0, 1.0 / h.frame_time);
     if (const double r = std::round(out.fps); r >= 1 && std::abs(out.fps - r) <= 1e-4 * r) out.fps = r;
     std::vector<double> values(columns.size());
-
-    std::size_t frame = 0;
-    while (frame < frames && !cur.at_end()) {
+    while (out.frames < h.frames && !cur.at_end()) {
         const std::string_view row = cur.next_line();
         if (detail::is_blank_line(row)) continue;
-        const long line = cur.line();
-        std::size_t k = 0, p = 0;
-        for (;;) {
-            while (p < row.size() && detail::is_blank(row[p])) ++p;
-            if (p >= row.size()) break;
-            const std::size_t b = p;
-            while (p < row.size() && !detail::is_blank(row[p])) ++p;
-            if (k >= columns.size()) {
-                std::size_t n = k + 1;  // count all values for the message
-                for (;;) {
-                    while (p < row.size() && detail::is_blank(row[p])) ++p;
-                    if (p >= row.size()) break;
-                    while (p < row.size() && !detail::is_blank(row[p])) ++p;
-                    ++n;
-                }
-                cur.fail(line, "row has " + std::to_string(n) + " values, expected " + std::to_string(columns.size()));
-            }
-            const auto [j, ch] = columns[k];
-            double v = 0;
-            const std::string_view tok = row.substr(b, p - b);
-            if (detail::parse_number(tok, v) != detail::number_status::ok)  // slow path: name the field
-                (void)cur.number({tok, line}, "frame " + std::to_string(frame) + " joint '" + out.skel.joints[j].name +
-                                                  "' " + std::string(channel_name(ch)));
-            values[k] = v;
-            ++k;
-        }
-        if (k != columns.size())
-            cur.fail(line, "row has " + std::to_string(k) + " values, expected " + std::to_string(columns.size()));
-        out.angles.resize(out.angles.size() + J * 3, 0.0);
-        for (std::size_t jj = 0; jj < J; ++jj)
-            for (std::size_t a = 0; a < 3; ++a) out.positions.push_back(out.skel.joints[jj].offset[a]);
-        for (std::size_t c = 0; c < columns.size(); ++c) {
-            const auto [j, ch] = columns[c];
-            const auto a = static_cast<std::size_t>(channel_axis(ch));
-            (is_rotation(ch) ? out.angles : out.positions)[(frame * J + j) * 3 + a] = values[c];
-        }
-        out.frames = ++frame;
+        detail::parse_bvh_row(cur, row, cur.line(), out.frames, out.skel, columns, values);
+        detail::append_bvh_frame(out, columns, values);
     }
-    if (frame != frames)
-        cur.fail(frames_line, "Frames: " + std::to_string(frames) + " but the file has " + std::to_string(frame) +
-                                  " data row" + (frame == 1 ? "" : "s") + " (truncated motion?)");
+    if (out.frames != h.frames)
+        cur.fail(h.frames_line, "Frames: " + std::to_string(h.frames) + " but the file has " + std::to_string(out.frames) +
+                                    " data row" + (out.frames == 1 ? "" : "s") + " (truncated motion?)");
     return out;
 }
 

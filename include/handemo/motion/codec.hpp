@@ -4,7 +4,7 @@
 // and are decoded by Eq. 6, p = v / 255 (p_max - p_min) + p_min, so one angle's round-trip error is at most
 // (p_max - p_min) / 510. p_min/p_max are the extremes over the whole dataset (angle_range, saved as JSON).
 // The network works on tanh-range images: x = v / 127.5 - 1 (to_network / from_network), laid out [3, K, J]
-// (channel-first, as PyTorch's StarGAN). Conversions to handemo::rgb_image are in codec_image.hpp so this
+// (channel-first, as PyTorch's StarGAN). Conversions to handemo::rgb_image are in image/keyframe_image.hpp so this
 // header needs no stb.
 // Beyond the paper (range format handemo-range/2, `compute_channel_range`): one range per channel (joint x
 // axis) instead of one for the whole data set, each angle first wrapped against the channel's reference

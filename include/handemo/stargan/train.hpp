@@ -15,7 +15,7 @@
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
 #include <handemo/core/progress.hpp>
-#include <handemo/kernels/thread_pool.hpp>
+#include <handemo/core/thread_pool.hpp>
 #include <handemo/motion/bvh.hpp>
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/keyframes.hpp>
@@ -970,7 +970,7 @@ private:
     config_info info_;
     prepared_data data_;
     train_options opt_;
-    kernels::thread_pool pool_;
+    thread_pool pool_;
     autodiff::tape<float> tape_;
     rng gen_;
     generator<float, cfg> g_;

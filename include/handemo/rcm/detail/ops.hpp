@@ -61,13 +61,17 @@ struct stencil_entry {
     int source;
     double weight;
 };
+struct stencil_params {
+    std::size_t rows;  ///< R_out
+    std::size_t cols;  ///< C
+};
 template <class T>
 void stencil_backward(tape<T>& t, int self)
 {
     const auto& n = t.at(self);
     T* gx = t.adj(n.in[0]);
     if (!gx) return;
-    const std::size_t R = static_cast<std::size_t>(n.p[0]), C = static_cast<std::size_t>(n.p[1]);
+    const auto [R, C] = n.template params<stencil_params>();
     const T* off = n.aux;
     const T* pairs = n.aux + R + 1;
     for (std::size_t r = 0; r < R; ++r)
@@ -92,11 +96,9 @@ int stencil(tape<T>& t, int x, std::size_t cols, const std::vector<std::vector<s
                                   std::to_string(R_in) + ")");
     }
     T* aux = t.alloc(R + 1 + 2 * nnz);
-    const int id = t.make("stencil", R * cols, {x}, &stencil_backward<T>, nullptr);
+    const int id = t.make("stencil", R * cols, {x}, &stencil_backward<T>, nullptr, stencil_params{R, cols});
     auto& n = t.at(id);
     n.aux = aux;
-    n.p[0] = static_cast<int>(R);
-    n.p[1] = static_cast<int>(cols);
     const T* xv = t.at(x).value;
     std::size_t e = 0;
     for (std::size_t r = 0; r < R; ++r) {
@@ -137,13 +139,18 @@ int exp(tape<T>& t, int x)
 // x is [R, Q, 3] (Q points per row), y[r] = prod_a (max_q x[r, q, a] - min_q x[r, q, a]).
 // d/dx[r, q*, a] = +g[r] prod_{b != a} e_b at the arg max q*, and -g[r] prod_{b != a} e_b at the arg min
 // (the extent e_a has these two sub-gradients; ties go to the first point, as in the forward pass).
+// aux holds, per row, e[3], arg max[3], arg min[3].
+struct bbox_volume_params {
+    std::size_t rows;    ///< R
+    std::size_t points;  ///< Q
+};
 template <class T>
 void bbox_volume_backward(tape<T>& t, int self)
 {
     const auto& n = t.at(self);
     T* gx = t.adj(n.in[0]);
     if (!gx) return;
-    const std::size_t R = static_cast<std::size_t>(n.p[0]), Q = static_cast<std::size_t>(n.p[1]);
+    const auto [R, Q] = n.template params<bbox_volume_params>();
     for (std::size_t r = 0; r < R; ++r) {
         const T* a = n.aux + r * 9;  // e[3], arg max[3], arg min[3]
         for (std::size_t ax = 0; ax < 3; ++ax) {
@@ -162,11 +169,9 @@ int bbox_volume(tape<T>& t, int x, std::size_t points)
 {
     const std::size_t R = t.at(x).size / (points * 3);
     T* aux = t.alloc(R * 9);
-    const int id = t.make("bbox_volume", R, {x}, &bbox_volume_backward<T>, nullptr);
+    const int id = t.make("bbox_volume", R, {x}, &bbox_volume_backward<T>, nullptr, bbox_volume_params{R, points});
     auto& n = t.at(id);
     n.aux = aux;
-    n.p[0] = static_cast<int>(R);
-    n.p[1] = static_cast<int>(points);
     const T* xv = t.at(x).value;
     for (std::size_t r = 0; r < R; ++r) {
         T vol = T(1);

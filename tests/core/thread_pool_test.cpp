@@ -3,14 +3,16 @@
 // bitwise repeatable is tested on the library code itself: tests/autodiff/pool_determinism_test.cpp.
 #include <doctest/doctest.h>
 
-#include <handemo/kernels/thread_pool.hpp>
+#include <handemo/core/thread_pool.hpp>
+#include <handemo/kernels/thread_pool.hpp>  // the forwarding header of the old path
 
 #include <atomic>
+#include <type_traits>
 #include <stdexcept>
 #include <thread>
 #include <vector>
 
-namespace hk = handemo::kernels;
+namespace hk = handemo;
 
 TEST_CASE("thread_pool runs each index once, on a fixed thread")
 {
@@ -44,4 +46,13 @@ TEST_CASE("thread_pool rethrows the exception of an iteration and stays usable")
     std::atomic<int> n{0};
     pool.parallel_for(0, 100, [&](int) { ++n; });
     CHECK(n == 100);
+}
+
+TEST_CASE("thread_pool: the old header path and name still work")
+{
+    static_assert(std::is_same_v<handemo::kernels::thread_pool, handemo::thread_pool>);
+    handemo::kernels::thread_pool pool(2);
+    std::atomic<int> n{0};
+    pool.parallel_for(0, 10, [&](int) { ++n; });
+    CHECK(n == 10);
 }

@@ -1,4 +1,4 @@
-#include <handemo/motion/codec_image.hpp>
+#include <handemo/image/keyframe_image.hpp>
 #include <handemo/motion/synth.hpp>
 
 #include <doctest/doctest.h>
@@ -7,7 +7,7 @@
 
 using namespace handemo;
 
-TEST_CASE("codec_image: keyframes -> BMP/PNG -> keyframes is lossless on pixels; wrong sizes are refused")
+TEST_CASE("keyframe_image: keyframes -> BMP/PNG -> keyframes is lossless on pixels; wrong sizes are refused")
 {
     namespace fs = std::filesystem;
     const fs::path dir = fs::temp_directory_path() / ("handemo_codec_image_test_" + std::to_string(::getpid()));

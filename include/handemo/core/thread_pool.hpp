@@ -1,0 +1,115 @@
+// A small fixed-size thread pool with one primitive, parallel_for over an integer range with static
+// chunking: iteration i always runs on the same worker for the same (begin, end, size()), so a reduction
+// written per chunk is bit-for-bit deterministic. Used to spread a batch (or output channels) of the
+// StarGAN convolutions (Chan et al. 2020, Sec. 3.3) over cores; the kernels themselves stay single-threaded.
+// It lives in core/ because the autodiff tape and the StarGAN trainer hold one, not only the kernels;
+// <handemo/kernels/thread_pool.hpp> still names it handemo::kernels::thread_pool for existing users.
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <exception>
+#include <memory>
+#include <type_traits>
+#include <mutex>
+#include <thread>
+#include <utility>
+#include <vector>
+
+namespace handemo {
+
+/// @brief Fixed pool of `n - 1` worker threads plus the calling thread; parallel_for blocks until done.
+class thread_pool {
+public:
+    /// @brief Starts n - 1 workers (n = 0 is treated as 1: everything runs on the caller).
+    explicit thread_pool(unsigned n) : size_(n == 0 ? 1u : n)
+    {
+        workers_.reserve(size_ - 1);
+        for (unsigned t = 1; t < size_; ++t) workers_.emplace_back([this, t] { worker_loop(t); });
+    }
+    thread_pool(const thread_pool&) = delete;
+    thread_pool& operator=(const thread_pool&) = delete;
+    ~thread_pool()
+    {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            stop_ = true;
+        }
+        start_cv_.notify_all();
+        for (auto& w : workers_) w.join();
+    }
+
+    /// @brief Number of threads that run iterations (workers + the caller).
+    unsigned size() const { return size_; }
+
+    /// @brief Calls f(i) for every i in [begin, end). Static chunking: thread t gets the contiguous chunk
+    /// [begin + t*len/size, begin + (t+1)*len/size). Not reentrant (do not call from inside f).
+    /// @throws whatever f throws (the first exception, after every chunk finished).
+    template <class F>
+    void parallel_for(int begin, int end, F&& f)
+    {
+        if (end <= begin) return;
+        if (size_ == 1 || end - begin == 1) {
+            for (int i = begin; i < end; ++i) f(i);
+            return;
+        }
+        using fn_t = std::remove_reference_t<F>;
+        job_fn_ = [](void* ctx, int i) { (*static_cast<fn_t*>(ctx))(i); };
+        job_ctx_ = const_cast<void*>(static_cast<const void*>(std::addressof(f)));
+        job_begin_ = begin;
+        job_end_ = end;
+        error_ = nullptr;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            pending_ = size_ - 1;
+            ++generation_;
+        }
+        start_cv_.notify_all();
+        run_chunk(0);
+        std::unique_lock<std::mutex> lock(mutex_);
+        done_cv_.wait(lock, [this] { return pending_ == 0; });
+        if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
+    }
+
+private:
+    void run_chunk(unsigned t)
+    {
+        const long len = long(job_end_) - job_begin_;
+        const int lo = int(job_begin_ + len * t / size_), hi = int(job_begin_ + len * (t + 1) / size_);
+        try {
+            for (int i = lo; i < hi; ++i) job_fn_(job_ctx_, i);
+        } catch (...) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (!error_) error_ = std::current_exception();
+        }
+    }
+    void worker_loop(unsigned t)
+    {
+        unsigned long seen = 0;
+        for (;;) {
+            {
+                std::unique_lock<std::mutex> lock(mutex_);
+                start_cv_.wait(lock, [&] { return stop_ || generation_ != seen; });
+                if (stop_) return;
+                seen = generation_;
+            }
+            run_chunk(t);
+            std::lock_guard<std::mutex> lock(mutex_);
+            if (--pending_ == 0) done_cv_.notify_one();
+        }
+    }
+
+    unsigned size_;
+    std::vector<std::thread> workers_;
+    std::mutex mutex_;
+    std::condition_variable start_cv_, done_cv_;
+    bool stop_ = false;
+    unsigned long generation_ = 0;
+    unsigned pending_ = 0;
+    void (*job_fn_)(void*, int) = nullptr;
+    void* job_ctx_ = nullptr;
+    int job_begin_ = 0, job_end_ = 0;
+    std::exception_ptr error_;
+};
+
+}  // namespace handemo
