@@ -258,14 +258,14 @@ void reuse_fold_model(const std::vector<stargan::labelled_clip>& train, const st
     const fs::path ck_path = fold_dir / "checkpoint.safetensors";
     const auto ck = stargan::read_checkpoint(ck_path).second;
     // only the gate's options differ: G is the same, the gate is fitted again (inner models reused)
-    if (ck.config == info.name && ck.step == to.iters && ck.options != to.to_json() &&
-        stargan::detail::options_without_gate(ck.options) == stargan::detail::options_without_gate(to.to_json())) {
+    const bool regate = ck.config == info.name && ck.options != to.to_json() && stargan::detail::trained_same_g(ck, to);
+    if (regate) {
         if (opt.progress_out)
             std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate options: refitting the gate\n",
                          ck_path.string().c_str());
-        stargan::refit_gate<Config>(train, info, to, fold_dir);
+        stargan::refit_gate<Config>(train, info, to, fold_dir);  // rewrites the checkpoint's options to `to`
     }
-    if (ck.config != info.name || ck.step != to.iters || stargan::read_checkpoint(ck_path).second.options != to.to_json())
+    if (ck.config != info.name || ck.step != to.iters || (!regate && ck.options != to.to_json()))
         throw value_error("eval: --reuse-models: " + ck_path.string() + " is a " + ck.config + " model of " +
                           std::to_string(ck.step) + " steps with options " + ck.options.dump() + ", this run wants " +
                           info.name + ", " + std::to_string(to.iters) + " steps, " + to.to_json().dump() +

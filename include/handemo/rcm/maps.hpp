@@ -150,6 +150,31 @@ inline double rbf_phi(rbf_kernel k, double r, double sigma) noexcept
     return k == rbf_kernel::gaussian ? std::exp(-0.5 * q) : std::sqrt(1.0 + q);
 }
 
+namespace detail {
+
+/// The [K, K] kernel matrix phi(|c_k - c_l|) of the centres, as both fits solve with it.
+inline matrix rbf_gram(const matrix& centres, rbf_kernel kernel, double sigma)
+{
+    const std::size_t K = centres.shape()[0], d = centres.shape()[1];
+    matrix phi = xt::zeros<double>({K, K});
+    for (std::size_t k = 0; k < K; ++k)
+        for (std::size_t l = 0; l < K; ++l) {
+            double r2 = 0;
+            for (std::size_t i = 0; i < d; ++i) r2 += (centres(k, i) - centres(l, i)) * (centres(k, i) - centres(l, i));
+            phi(k, l) = rbf_phi(kernel, std::sqrt(r2), sigma);
+        }
+    return phi;
+}
+
+/// Refuses a solve whose result is not finite (a singular system that LAPACK did not report).
+inline void require_finite_solution(const matrix& sol, const std::string& who)
+{
+    for (double v : sol)
+        if (!std::isfinite(v)) throw value_error(who + ": the solution is not finite (singular system)");
+}
+
+}  // namespace detail
+
 /// @brief y(x) = w_0 + W^T x + sum_k lambda_k phi(|x - c_k|) for m outputs at once (Eq. 1 and 3).
 struct rbf_map {
     rbf_kernel kernel = rbf_kernel::gaussian;
@@ -198,20 +223,15 @@ inline rbf_map fit_rbf_interpolant(const matrix& centres, const matrix& values, 
     const std::size_t n = K + d + 1;
     matrix a = xt::zeros<double>({n, n});
     matrix b = xt::zeros<double>({n, m});
+    xt::view(a, xt::range(0, K), xt::range(0, K)) = detail::rbf_gram(centres, kernel, sigma);
     for (std::size_t k = 0; k < K; ++k) {
-        for (std::size_t l = 0; l < K; ++l) {
-            double r2 = 0;
-            for (std::size_t i = 0; i < d; ++i) r2 += (centres(k, i) - centres(l, i)) * (centres(k, i) - centres(l, i));
-            a(k, l) = rbf_phi(kernel, std::sqrt(r2), sigma);
-        }
         a(k, K) = a(K, k) = 1.0;
         for (std::size_t i = 0; i < d; ++i) a(k, K + 1 + i) = a(K + 1 + i, k) = centres(k, i);
         for (std::size_t o = 0; o < m; ++o) b(k, o) = values(k, o);
     }
     detail::check_conditioning(a, who, "centres coincide or are affinely dependent");
     const matrix sol = xt::linalg::solve(a, b);
-    for (double v : sol)
-        if (!std::isfinite(v)) throw value_error(who + ": the solution is not finite (singular system)");
+    detail::require_finite_solution(sol, who);
     rbf_map r;
     r.kernel = kernel;
     r.sigma = sigma;
@@ -240,14 +260,9 @@ inline rbf_map fit_rbf_regression(const matrix& samples, const matrix& targets, 
     xt::view(design, xt::all(), xt::range(1, d + 1)) = samples;
     detail::check_conditioning(design, who, "the samples do not span their dimensions (duplicate or collinear feature vectors)");
     const matrix w = std::get<0>(xt::linalg::lstsq(design, targets));
-    matrix phi = xt::zeros<double>({K, K});
+    const matrix phi = detail::rbf_gram(centres, kernel, sigma);
     matrix resid = xt::zeros<double>({K, m});
     for (std::size_t k = 0; k < K; ++k) {
-        for (std::size_t l = 0; l < K; ++l) {
-            double r2 = 0;
-            for (std::size_t i = 0; i < d; ++i) r2 += (centres(k, i) - centres(l, i)) * (centres(k, i) - centres(l, i));
-            phi(k, l) = rbf_phi(kernel, std::sqrt(r2), sigma);
-        }
         for (std::size_t o = 0; o < m; ++o) {
             double lin = w(0, o);
             for (std::size_t i = 0; i < d; ++i) lin += w(i + 1, o) * centres(k, i);
@@ -256,8 +271,7 @@ inline rbf_map fit_rbf_regression(const matrix& samples, const matrix& targets, 
     }
     detail::check_conditioning(phi, who, "two centres coincide");
     const matrix lambda = xt::linalg::solve(phi, resid);
-    for (double v : lambda)
-        if (!std::isfinite(v)) throw value_error(who + ": the solution is not finite (singular system)");
+    detail::require_finite_solution(lambda, who);
     rbf_map r;
     r.kernel = kernel;
     r.sigma = sigma;

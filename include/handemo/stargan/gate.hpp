@@ -36,6 +36,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <set>
 #include <string>
 #include <vector>
@@ -115,11 +116,9 @@ inline nlohmann::json options_without_gate(nlohmann::json o)
     return o;
 }
 
-/// Whether the checkpoint at `path` was trained with `opt` (gate options aside) for opt.iters steps.
-inline bool checkpoint_matches(const std::filesystem::path& path, const train_options& opt)
+/// Whether a checkpoint holds the G that `opt` trains: the same options (the gate's aside) and opt.iters steps.
+inline bool trained_same_g(const checkpoint_info& ck, const train_options& opt)
 {
-    if (!std::filesystem::exists(path)) return false;
-    const auto ck = read_checkpoint(path).second;
     return ck.step == opt.iters && options_without_gate(ck.options) == options_without_gate(opt.to_json());
 }
 
@@ -184,20 +183,26 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         inner.checkpoint_every = inner.iters;
         inner.stop_at = -1;
         const auto dir = work_dir / ("inner" + std::to_string(f + 1));
-        if (reuse && detail::checkpoint_matches(dir / "checkpoint.safetensors", inner)) {
+        const auto ck_path = dir / "checkpoint.safetensors";
+        std::optional<std::pair<safetensors_file, checkpoint_info>> ck;
+        if (reuse && std::filesystem::exists(ck_path))
+            if (auto stored = read_checkpoint(ck_path); detail::trained_same_g(stored.second, inner)) ck = std::move(stored);
+        if (ck) {
             if (opt.progress_out)
                 std::fprintf(opt.progress_out, "gate %zu/%zu: reusing the G trained without %s (%s)\n", f + 1, F, names.c_str(),
-                             (dir / "checkpoint.safetensors").string().c_str());
+                             ck_path.string().c_str());
             ++g.reused_folds;
         } else {
             if (opt.progress_out)
                 std::fprintf(opt.progress_out, "gate %zu/%zu: training G without %s (%zu clips) to choose the change gate\n", f + 1, F,
                              names.c_str(), train.size());
-            trainer<Config> tr(info, prepare_data<Config>(train, info, inner), inner);
-            tr.run(dir);
+            {
+                trainer<Config> tr(info, prepare_data<Config>(train, info, inner), inner);
+                tr.run(dir);
+            }
+            ck = read_checkpoint(ck_path);
         }
-        auto [file, ckinfo] = read_checkpoint(dir / "checkpoint.safetensors");
-        detail::emotion_model_impl<Config> model(file, ckinfo);
+        detail::emotion_model_impl<Config> model(ck->first, ck->second);
         if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
         // the independent emotion classifier of the evaluation, fitted on this inner training set only
         eval::nearest_centroid_classifier clf;
@@ -281,12 +286,12 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
                     const std::filesystem::path& out_dir)
 {
     const auto ck_path = out_dir / "checkpoint.safetensors";
-    if (!detail::checkpoint_matches(ck_path, opt))
+    auto [f, stored] = read_checkpoint(ck_path);
+    if (!detail::trained_same_g(stored, opt))
         throw value_error("train: " + ck_path.string() + " was not trained with these options (the gate's aside) and " +
                           std::to_string(opt.iters) + " steps: its gate cannot be refitted");
     gate_fit g;
     if (opt.gate_folds > 0) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", true);
-    auto f = read_safetensors(ck_path);
     auto j = nlohmann::json::parse(f.metadata.at("handemo"));
     const std::size_t C = info.domains;
     j["gate"] = {{"posture", g.posture.empty() ? std::vector<double>(C, 1.0) : g.posture},
