@@ -58,6 +58,40 @@ TEST_CASE("nearest centroid separates separable classes despite a large within-c
     CHECK(euclid_ok < 30);
 }
 
+TEST_CASE("nearest centroid posterior: the linear-discriminant reading of its distances")
+{
+    std::vector<std::vector<double>> x;
+    std::vector<std::string> y;
+    const std::string names[] = {"a", "b", "c"};
+    for (std::size_t i = 0; i < 60; ++i) {
+        const std::size_t c = i % 3;
+        x.push_back({20 * noise(i), 3.0 * static_cast<double>(c) + 0.9 * noise(i + 1000), noise(i + 2000)});
+        y.push_back(names[c]);
+    }
+    nearest_centroid_classifier clf;
+    clf.fit(x, y);
+    for (std::size_t i = 0; i < 20; ++i) {
+        const std::vector<double> q{20 * noise(i + 500), 1.5 * static_cast<double>(i % 5) + 0.3 * noise(i + 1500), noise(i + 2500)};
+        const auto d = clf.distances(q);
+        double z = 0, total = 0, best = -1;
+        std::string arg;
+        for (double v : d) z += std::exp(-0.5 * v);
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double p = clf.posterior(q, names[c]);
+            CHECK(p == doctest::Approx(std::exp(-0.5 * d[c]) / z).epsilon(1e-12));  // exp(-d/2) / sum
+            total += p;
+            if (p > best) best = p, arg = names[c];
+        }
+        CHECK(total == doctest::Approx(1.0).epsilon(1e-12));
+        CHECK(arg == clf.predict(q));  // the most probable class is the nearest one
+    }
+    // far from every centroid (distances ~1e4, exp underflows without the shift) it stays a probability
+    const std::vector<double> far{0.0, 300.0, 0.0};
+    CHECK(clf.posterior(far, "c") == doctest::Approx(1.0).epsilon(1e-9));
+    CHECK(clf.posterior(far, "a") >= 0.0);
+    CHECK(clf.posterior(far, "no such class") == 0.0);
+}
+
 TEST_CASE("nearest centroid: bad input is refused")
 {
     nearest_centroid_classifier clf;

@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 
@@ -212,10 +214,101 @@ TEST_CASE("change gate without the prior and the emotion rule: the lowest RMSE o
     const auto again = fit_change_gate<hand_tiny>(clips, tiny_info(), o, d, true);
     CHECK(again.reused_folds == 2);
     CHECK(again.csv() == g.csv());
+
+    // the rule checked inside the training set: per target, the setting of the lowest RMSE on one group's pairs,
+    // scored on the other group's (gripping and pointing were held out of inner1, patting out of inner2)
+    const auto inner1 = load_model(d / "inner1"), inner2 = load_model(d / "inner2");
+    for (const auto& r : g.rows) {
+        // summed RMSE per (posture, motion) setting on each group's pairs
+        std::vector<double> g1(gate_grid.size() * gate_grid.size(), 0.0), g2 = g1;
+        for (const auto& [content, group] : {std::pair{"gripping", 1}, {"pointing", 1}, {"patting", 2}}) {
+            const auto& model = group == 1 ? *inner1 : *inner2;
+            const labelled_clip *in = nullptr, *real = nullptr;
+            for (const auto& c : clips)
+                if (c.content == content) {
+                    if (c.emotion == "neutral") in = &c;
+                    if (c.emotion == r.target) real = &c;
+                }
+            REQUIRE(in);
+            REQUIRE(real);
+            const auto parts = model.parts(in->motion, r.target);
+            for (std::size_t a = 0; a < gate_grid.size(); ++a)
+                for (std::size_t b = 0; b < gate_grid.size(); ++b)
+                    (group == 1 ? g1 : g2)[a * gate_grid.size() + b] += eval::keyframe_rmse(
+                        extract_keyframes<9>(model.finish(in->motion, parts, gate_grid[a], gate_grid[b], 0.0)), extract_keyframes<9>(real->motion));
+        }
+        const auto s1 = static_cast<std::size_t>(std::min_element(g1.begin(), g1.end()) - g1.begin());
+        const auto s2 = static_cast<std::size_t>(std::min_element(g2.begin(), g2.end()) - g2.begin());
+        CHECK(r.rmse_cross == doctest::Approx((g1[s2] + g2[s1]) / 3).epsilon(1e-9));
+        CHECK(r.rmse_cross >= r.rmse_gated - 1e-9);  // the chosen setting is the best on the pooled pairs
+    }
+    CHECK(g.csv().find("rmse_cross,emotion_cross") != std::string::npos);
+
     // reuse refuses an inner model trained with other options (here another seed): it is trained again
     auto o2 = o;
     o2.seed += 1;
     CHECK(fit_change_gate<hand_tiny>(clips, tiny_info(), o2, d, true).reused_folds == 0);
+}
+
+TEST_CASE("change gate, margin chosen inside the training set (gate_auto_margin)")
+{
+    const auto near = [](const std::vector<double>& a, const std::vector<double>& b) {
+        bool same = a.size() == b.size();
+        for (std::size_t i = 0; same && i < a.size(); ++i) same = std::abs(a[i] - b[i]) < 1e-12;
+        return same;
+    };
+    CHECK(near(gate_margin_candidates(0.1), {0.1, 0.0, -0.1, -0.2, -0.99}));
+    CHECK(near(gate_margin_candidates(-0.8), {-0.8, -0.9, -0.99}));
+    CHECK(handemo_options().gate_auto_margin);
+
+    const auto clips = toy_set();
+    const fs::path d = fresh_dir("handemo_gate_auto");
+    auto o = gate_options(30);
+    o.gate_auto_margin = true;
+    const auto g = fit_change_gate<hand_tiny>(clips, tiny_info(), o, d);
+    REQUIRE(g.rows.size() == 4);
+    // the table of candidates: the chosen one is the first whose checked recognition is at most gate_margin below
+    // the real clips' (pooled over the targets), else the best checked one
+    const auto text = read_file(d / "gate_margins.csv");
+    std::vector<std::array<double, 6>> rows;
+    std::size_t pos = text.find('\n') + 1;
+    while (pos < text.size()) {
+        std::array<double, 6> v{};
+        REQUIRE(std::sscanf(text.c_str() + pos, "%lf,%lf,%lf,%lf,%lf,%lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5]) == 6);
+        rows.push_back(v);
+        pos = text.find('\n', pos) + 1;
+    }
+    REQUIRE(rows.size() == 5);
+    std::size_t expect = rows.size(), top = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        CHECK(rows[i][0] == doctest::Approx(gate_margin_candidates(0.1)[i]).epsilon(1e-9));
+        CHECK(rows[i][4] == 12);  // 4 targets x 3 held-out pairs
+        if (expect == rows.size() && rows[i][2] >= rows[i][3] - o.gate_margin - 1e-4) expect = i;
+        if (rows[i][2] > rows[top][2] + 1e-4) top = i;
+    }
+    if (expect == rows.size()) expect = top;
+    for (std::size_t i = 0; i < rows.size(); ++i) CHECK(rows[i][5] == (i == expect ? 1 : 0));
+    CHECK(g.margin == doctest::Approx(rows[expect][0]).epsilon(1e-9));
+    // the gate is the one the fixed rule gives with that margin (inner models reused)
+    auto fixed = o;
+    fixed.gate_auto_margin = false;
+    fixed.gate_margin = g.margin;
+    const auto same = fit_change_gate<hand_tiny>(clips, tiny_info(), fixed, d, true);
+    CHECK(same.reused_folds == 2);
+    CHECK(same.posture == g.posture);
+    CHECK(same.motion == g.motion);
+    CHECK(same.prior == g.prior);
+    // the options record it only when on, so checkpoints trained before it keep equal options
+    CHECK(o.to_json().value("gate_auto_margin", false));
+    CHECK_FALSE(fixed.to_json().contains("gate_auto_margin"));
+    // scoring recognition by the classifier's posterior keeps the reported shares hard (the evaluation's measure)
+    auto post = fixed;
+    post.gate_posterior = true;
+    const auto gp = fit_change_gate<hand_tiny>(clips, tiny_info(), post, d, true);
+    for (const auto& r : gp.rows) {
+        CHECK(r.emotion_real * 3 == doctest::Approx(std::round(r.emotion_real * 3)));
+        CHECK(r.emotion_gated * 3 == doctest::Approx(std::round(r.emotion_gated * 3)));
+    }
 }
 
 TEST_CASE("posture prior: the keyframe mean of the training pairs' difference emotion - neutral")

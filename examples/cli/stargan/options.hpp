@@ -19,7 +19,7 @@ struct train_overrides {
     std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
         lambda_delta, ema, augment;
     std::optional<int> n_critic, gate_folds;
-    std::optional<bool> residual, amplitude, gate_prior;
+    std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin;
     std::optional<double> gate_margin;
     std::optional<std::string> range;
 };
@@ -60,7 +60,14 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "(handemo true)");
     sub->add_option("--gate-margin", o.gate_margin,
                     "Change gate: choose the lowest-RMSE setting whose held-out outputs the emotion classifier recognises at most "
-                    "this share below the real clips; < 0 = lowest RMSE only (handemo 0.10)");
+                    "this share below the real clips (negative: above them); <= -1 = lowest RMSE only (handemo 0.10)");
+    sub->add_option("--gate-posterior", o.gate_posterior,
+                    "Change gate: score recognition for --gate-margin by the classifier's mean posterior of the target instead "
+                    "of the share recognised (finer on few held-out pairs) (handemo false)");
+    sub->add_option("--gate-auto-margin", o.gate_auto_margin,
+                    "Change gate: choose the margin inside the training set: the least strict of --gate-margin, 0.1, 0.2, 0.3 "
+                    "stricter and 'most recognised' whose choices, checked across the gate's own groups, are recognised at "
+                    "most --gate-margin below the real clips; no effect with --gate-margin <= -1 (handemo true)");
     sub->add_option("--range", o.range, "Eq. 3 range: 'channel' (per channel, wrapped against a reference) or 'global' (the paper's)");
 }
 
@@ -90,6 +97,8 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.gate_folds = o.gate_folds.value_or(p.gate_folds);
     t.gate_prior = o.gate_prior.value_or(p.gate_prior);
     t.gate_margin = o.gate_margin.value_or(p.gate_margin);
+    t.gate_posterior = o.gate_posterior.value_or(p.gate_posterior);
+    t.gate_auto_margin = o.gate_auto_margin.value_or(p.gate_auto_margin);
     t.validate();
 }
 

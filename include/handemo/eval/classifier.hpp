@@ -15,6 +15,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace handemo::eval {
@@ -164,6 +165,22 @@ public:
             out.push_back(s2);
         }
         return out;
+    }
+
+    /// @brief The posterior probability of class `label` for `x` when every class is a Gaussian with the shared
+    /// (shrunk) covariance and equal priors, the probabilistic reading of predict() (linear discriminant
+    /// analysis): exp(-d_label / 2) / sum_c exp(-d_c / 2) with d the distances(). 0 for a label not fitted.
+    double posterior(const std::vector<double>& x, std::string_view label) const
+    {
+        const auto d = distances(x);
+        const double dmin = *std::min_element(d.begin(), d.end());
+        double z = 0, p = 0;
+        for (std::size_t c = 0; c < d.size(); ++c) {
+            const double e = std::exp(-0.5 * (d[c] - dmin));
+            z += e;
+            if (classes_[c] == label) p = e;
+        }
+        return p / z;
     }
 
     /// Class labels, sorted.

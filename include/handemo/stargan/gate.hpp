@@ -14,7 +14,14 @@
 // train_options::gate_margin >= 0, by how often the independent emotion classifier (nearest centroid, trained
 // on the inner training clips, as the evaluation's) recognises the target. Each target emotion gets the
 // lowest-RMSE setting whose recognition rate is at most gate_margin below the real held-out clips' rate (when
-// none is, the most recognised one); with gate_margin < 0 simply the lowest-RMSE one (the first gate).
+// none is, the most recognised one); with gate_margin <= -1 simply the lowest-RMSE one (the first gate).
+// The rule is also checked inside the training set: for each group, the setting it chooses from the other
+// groups' pairs alone, scored on this group's pairs (gate_fit::row::rmse_cross, emotion_cross); choosing on
+// 7 pairs and scoring on the same 7 is optimistic (on Bandai, 76% recognised inside against 60% checked).
+// With train_options::gate_auto_margin that check chooses the margin too: the least strict of
+// gate_margin_candidates() whose checked recognition, pooled over the targets, is at most gate_margin below
+// the real clips' (work_dir/gate_margins.csv). train_options::gate_posterior scores recognition by the
+// classifier's posterior of the target instead of hits (finer on few pairs; the reported shares stay hits).
 // (1, 1, 0) is G's whole change, as StarGAN; (0, 0, 0) leaves the input as it is, with the amplitude stage
 // and tempo. The final G is then trained on every training content and the gate (and the prior, from every
 // training content) is stored in its checkpoint; transfer applies it (emotion_model::transfer).
@@ -56,24 +63,46 @@ struct gate_fit {
         /// real held-out clips' share (NaN when gate_margin < 0: no classifier)
         double emotion_gated = std::nan(""), emotion_full = std::nan(""), emotion_real = std::nan("");
         std::size_t pairs = 0;  ///< (held-out neutral take, real target take) pairs
+        /// The rule checked inside the training set: for each inner group, the setting the same rule chooses
+        /// from the other groups' pairs alone, scored on this group's pairs (pooled over the groups). Unlike
+        /// rmse_gated and emotion_gated, which score the setting on the pairs that chose it and so are
+        /// optimistic, these estimate what the rule gives on contents it did not choose on (with fewer pairs
+        /// to choose from than the final gate has, so if anything pessimistic). NaN without a second group.
+        double rmse_cross = std::nan(""), emotion_cross = std::nan("");
     };
     std::vector<row> rows;
+    double margin = std::nan("");   ///< the recognition margin used (train_options::gate_margin, or the one gate_auto_margin chose)
     std::size_t folds = 0;          ///< inner trainings run or reused
     std::size_t reused_folds = 0;   ///< inner models reused (fit_change_gate(..., reuse = true))
 
-    /// @brief The rows as CSV (target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs).
+    /// @brief The rows as CSV (target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs,
+    /// rmse_cross,emotion_cross).
     std::string csv() const
     {
-        std::string s = "target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs\n";
-        char b[320];
+        std::string s =
+            "target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs,rmse_cross,emotion_cross\n";
+        char b[400];
         for (const auto& r : rows) {
-            std::snprintf(b, sizeof b, "%s,%.2f,%.2f,%.2f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%zu\n", r.target.c_str(), r.posture, r.motion, r.prior,
-                          r.rmse_gated, r.rmse_full, r.rmse_none, r.emotion_gated, r.emotion_full, r.emotion_real, r.pairs);
+            std::snprintf(b, sizeof b, "%s,%.2f,%.2f,%.2f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%zu,%.6f,%.4f\n", r.target.c_str(), r.posture, r.motion,
+                          r.prior, r.rmse_gated, r.rmse_full, r.rmse_none, r.emotion_gated, r.emotion_full, r.emotion_real, r.pairs, r.rmse_cross,
+                          r.emotion_cross);
             s += b;
         }
         return s;
     }
 };
+
+/// @brief The margins train_options::gate_auto_margin chooses from, least strict first: `margin`, then 0.1,
+/// 0.2 and 0.3 stricter (a negative margin asks for more than the real clips' rate), then -0.99 (in effect: the
+/// most recognised setting, then the lowest RMSE).
+inline std::vector<double> gate_margin_candidates(double margin)
+{
+    std::vector<double> m;
+    for (int i = 0; i < 4; ++i)
+        if (margin - 0.1 * i > -0.99) m.push_back(margin - 0.1 * i);
+    m.push_back(-0.99);
+    return m;
+}
 
 /// The weights fit_change_gate() chooses from, for the posture and for the motion part of G's change (and the prior).
 inline constexpr std::array<double, 5> gate_grid{1.0, 0.75, 0.5, 0.25, 0.0};
@@ -112,7 +141,7 @@ namespace detail {
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin"}) o.erase(k);
     return o;
 }
 
@@ -159,10 +188,14 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
     constexpr std::size_t G = gate_grid.size();
     const std::size_t P = opt.gate_prior ? G : 1;  // prior weights tried: the grid, or only 0
     const auto prior_weight = [&](std::size_t c) { return opt.gate_prior ? gate_grid[c] : 0.0; };
-    const bool use_emotion = opt.gate_margin >= 0;
+    const bool use_emotion = opt.gate_margin > -1;  // margins in (-1, 0) ask for more than the real rate
+    if (use_emotion) g.margin = opt.gate_margin;
     const std::size_t S = G * G * P;  // settings, index (a * G + b) * P + c
-    std::vector<std::vector<double>> sum(C, std::vector<double>(S, 0.0)), ok(C, std::vector<double>(S, 0.0));
-    std::vector<std::size_t> count(C, 0), real_ok(C, 0);
+    // per inner group f: summed RMSE and recognised outputs per target and setting, pairs, recognised real clips
+    // and what the rule scores recognition by (ok, or the classifier's posterior with gate_posterior) for outputs and real clips
+    std::vector<std::vector<std::vector<double>>> sum(F, std::vector<std::vector<double>>(C, std::vector<double>(S, 0.0))), ok = sum, score = sum;
+    std::vector<std::vector<std::size_t>> count(F, std::vector<std::size_t>(C, 0)), real_ok = count;
+    std::vector<std::vector<double>> real_score(F, std::vector<double>(C, 0.0));
     std::filesystem::create_directories(work_dir);
     for (std::size_t f = 0; f < F; ++f) {
         std::vector<labelled_clip> train;
@@ -222,7 +255,12 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                     if (r->content == in->content && r->emotion == target && r->take == in->take) real = r;
                 if (!real) continue;
                 const auto real_kf = extract_keyframes<K>(real->motion);
-                if (use_emotion) real_ok[t] += clf.predict(eval::motion_features(real_kf, real->motion.duration())) == target;
+                if (use_emotion) {
+                    const auto x = eval::motion_features(real_kf, real->motion.duration());
+                    const bool hit = clf.predict(x) == target;
+                    real_ok[f][t] += hit;
+                    real_score[f][t] += opt.gate_posterior ? clf.posterior(x, target) : static_cast<double>(hit);
+                }
                 const auto parts = model.parts(in->motion, target);
                 for (std::size_t a = 0; a < G; ++a)
                     for (std::size_t b = 0; b < G; ++b)
@@ -230,40 +268,122 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                             const clip out = model.finish(in->motion, parts, gate_grid[a], gate_grid[b], prior_weight(c));
                             const auto kf = extract_keyframes<K>(out);
                             const std::size_t s = (a * G + b) * P + c;
-                            sum[t][s] += eval::keyframe_rmse(kf, real_kf);
-                            if (use_emotion) ok[t][s] += clf.predict(eval::motion_features(kf, out.duration())) == target;
+                            sum[f][t][s] += eval::keyframe_rmse(kf, real_kf);
+                            if (use_emotion) {
+                                const auto x = eval::motion_features(kf, out.duration());
+                                const bool hit = clf.predict(x) == target;
+                                ok[f][t][s] += hit;
+                                score[f][t][s] += opt.gate_posterior ? clf.posterior(x, target) : static_cast<double>(hit);
+                            }
                         }
-                ++count[t];
+                ++count[f][t];
             }
         }
         ++g.folds;
     }
     // G's whole change (1, 1, prior 0) and no change (0, 0, 0): gate_grid runs from 1 down to 0
-    const std::size_t full_s = (0 * G + 0) * P + (opt.gate_prior ? G - 1 : 0);
-    const std::size_t none_s = ((G - 1) * G + (G - 1)) * P + (opt.gate_prior ? G - 1 : 0);
-    for (std::size_t t = 0; t < C; ++t) {
-        if (count[t] == 0) continue;
-        const double n = static_cast<double>(count[t]);
-        const double real_rate = static_cast<double>(real_ok[t]) / n;
+    const std::size_t full_s = (0 * G + 0) * P + (P - 1);
+    const std::size_t none_s = ((G - 1) * G + (G - 1)) * P + (P - 1);
+    // the rule on the pairs of the inner groups in `use` (pooled) for target t: the chosen setting (S when none)
+    const auto choose = [&](std::size_t t, const std::vector<bool>& use, double margin) {
+        std::vector<double> rs(S, 0.0), os(S, 0.0);
+        double n = 0, real = 0;
+        for (std::size_t f = 0; f < F; ++f)
+            if (use[f]) {
+                n += static_cast<double>(count[f][t]), real += real_score[f][t];
+                for (std::size_t s = 0; s < S; ++s) rs[s] += sum[f][t][s], os[s] += score[f][t][s];
+            }
         std::size_t best = S;
+        if (n == 0) return best;
         if (use_emotion) {
             for (std::size_t s = 0; s < S; ++s)
-                if (ok[t][s] / n >= real_rate - opt.gate_margin - 1e-12 && (best == S || sum[t][s] < sum[t][best])) best = s;
+                if (os[s] / n >= real / n - margin - 1e-12 && (best == S || rs[s] < rs[best])) best = s;
             if (best == S)  // no setting is recognised well enough: the most recognised, then the lowest RMSE
                 for (std::size_t s = 0; s < S; ++s)
-                    if (best == S || ok[t][s] > ok[t][best] || (ok[t][s] == ok[t][best] && sum[t][s] < sum[t][best])) best = s;
+                    if (best == S || os[s] > os[best] || (os[s] == os[best] && rs[s] < rs[best])) best = s;
         } else {
             best = 0;
             for (std::size_t s = 0; s < S; ++s)
-                if (sum[t][s] < sum[t][best]) best = s;
+                if (rs[s] < rs[best]) best = s;
         }
+        return best;
+    };
+    // the rule checked inside the training set for target t: chosen without group f, scored on group f, pooled
+    // over the groups: {summed RMSE, recognised outputs, recognised real clips, pairs}
+    const auto cross_check = [&](std::size_t t, double margin) {
+        std::array<double, 4> r{0, 0, 0, 0};
+        if (F < 2) return r;
+        for (std::size_t f = 0; f < F; ++f) {
+            std::vector<bool> others(F, true);
+            others[f] = false;
+            const std::size_t s = count[f][t] ? choose(t, others, margin) : S;
+            if (s == S) continue;
+            r[0] += sum[f][t][s], r[1] += ok[f][t][s], r[2] += static_cast<double>(real_ok[f][t]), r[3] += static_cast<double>(count[f][t]);
+        }
+        return r;
+    };
+    // train_options::gate_auto_margin: the least strict margin whose cross-checked recognition, pooled over
+    // the targets, is at most gate_margin below the real clips'; else the best cross-checked one
+    double margin = opt.gate_margin;
+    if (use_emotion && opt.gate_auto_margin) {
+        std::string table = "margin,rmse_cross,emotion_cross,emotion_real,pairs,chosen\n";
+        std::vector<std::array<double, 4>> pooled;
+        const auto candidates = gate_margin_candidates(opt.gate_margin);
+        std::size_t pick = candidates.size(), top = 0;
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+            std::array<double, 4> p{0, 0, 0, 0};
+            for (std::size_t t = 0; t < C; ++t) {
+                const auto r = cross_check(t, candidates[i]);
+                for (std::size_t k = 0; k < 4; ++k) p[k] += r[k];
+            }
+            pooled.push_back(p);
+            if (p[3] > 0 && pick == candidates.size() && p[1] / p[3] >= p[2] / p[3] - opt.gate_margin - 1e-12) pick = i;
+            if (p[1] > pooled[top][1]) top = i;
+        }
+        if (pick == candidates.size()) pick = top;
+        margin = candidates[pick];
+        g.margin = margin;
+        char b[200];
+        for (std::size_t i = 0; i < candidates.size(); ++i) {
+            const auto& p = pooled[i];
+            std::snprintf(b, sizeof b, "%.2f,%.6f,%.4f,%.4f,%.0f,%d\n", candidates[i], p[3] > 0 ? p[0] / p[3] : std::nan(""),
+                          p[3] > 0 ? p[1] / p[3] : std::nan(""), p[3] > 0 ? p[2] / p[3] : std::nan(""), p[3], i == pick ? 1 : 0);
+            table += b;
+        }
+        write_file_atomic(work_dir / "gate_margins.csv", table);
+        if (opt.progress_out) {
+            const auto& p = pooled[pick];
+            std::fprintf(opt.progress_out,
+                         "gate: margin %.2f chosen inside the training set (its choices, made on one group and scored on the other: "
+                         "recognised %.0f%% against the real clips' %.0f%%, %.3f deg; %s)\n",
+                         margin, 100 * p[1] / std::max(1.0, p[3]), 100 * p[2] / std::max(1.0, p[3]), p[0] / std::max(1.0, p[3]),
+                         (work_dir / "gate_margins.csv").string().c_str());
+        }
+    }
+    for (std::size_t t = 0; t < C; ++t) {
+        std::vector<double> rsum(S, 0.0), osum(S, 0.0);
+        std::size_t pairs = 0, real_pairs = 0;
+        for (std::size_t f = 0; f < F; ++f) {
+            pairs += count[f][t], real_pairs += real_ok[f][t];
+            for (std::size_t s = 0; s < S; ++s) rsum[s] += sum[f][t][s], osum[s] += ok[f][t][s];
+        }
+        if (pairs == 0) continue;
+        const double n = static_cast<double>(pairs);
+        const double real_rate = static_cast<double>(real_pairs) / n;
+        const std::size_t best = choose(t, std::vector<bool>(F, true), margin);
+        const auto cross = cross_check(t, margin);
+        const double cross_r = cross[0], cross_o = cross[1], cross_n = cross[3];
         const std::size_t a = best / (G * P), b = (best / P) % G, c = best % P;
         g.posture[t] = gate_grid[a];
         g.motion[t] = gate_grid[b];
         g.prior[t] = prior_weight(c);
-        gate_fit::row r{info.domain_names[t], g.posture[t], g.motion[t], g.prior[t], sum[t][best] / n, sum[t][full_s] / n, sum[t][none_s] / n};
-        if (use_emotion) r.emotion_gated = ok[t][best] / n, r.emotion_full = ok[t][full_s] / n, r.emotion_real = real_rate;
-        r.pairs = count[t];
+        gate_fit::row r{info.domain_names[t], g.posture[t], g.motion[t], g.prior[t], rsum[best] / n, rsum[full_s] / n, rsum[none_s] / n};
+        if (use_emotion) r.emotion_gated = osum[best] / n, r.emotion_full = osum[full_s] / n, r.emotion_real = real_rate;
+        r.pairs = pairs;
+        if (cross_n > 0) {
+            r.rmse_cross = cross_r / cross_n;
+            if (use_emotion) r.emotion_cross = cross_o / cross_n;
+        }
         g.rows.push_back(r);
         if (opt.progress_out)
             std::fprintf(opt.progress_out,

@@ -81,9 +81,20 @@ struct train_options {
     bool gate_prior = false;
     /// change gate: the setting chosen per target is the lowest-RMSE one among those whose held-out outputs
     /// the independent emotion classifier (trained on the inner training clips) recognises at a rate no more
-    /// than gate_margin below the real held-out clips' rate; when none does, the most recognised one. < 0: off
-    /// (lowest RMSE only, the first gate)
+    /// than gate_margin below the real held-out clips' rate (a negative margin asks for more than it); when
+    /// none does, the most recognised one. <= -1: off (lowest RMSE only, the first gate)
     double gate_margin = -1.0;
+    /// change gate: score recognition (for gate_margin) by the classifier's posterior probability of the
+    /// target (its linear-discriminant reading, eval::nearest_centroid_classifier::posterior) averaged over the
+    /// held-out pairs, for outputs and real clips alike, instead of the share recognised: a finer estimate on
+    /// few pairs (7 per target on Bandai), where the share moves in steps of 14 points
+    bool gate_posterior = false;
+    /// change gate: choose the margin inside the training set (gate.hpp, gate_margin_candidates()): the gate's
+    /// rule is checked across its own groups (choices made on one group's pairs, scored on the other's), and
+    /// the least strict margin from gate_margin down whose checked recognition, pooled over the targets, is at
+    /// most gate_margin below the real clips' rate is used; when none is, the best checked one. No effect
+    /// when the rule is off (gate_margin <= -1)
+    bool gate_auto_margin = false;
 
     /// @throws value_error naming the option.
     void validate() const
@@ -102,16 +113,19 @@ struct train_options {
         if (range != "global" && range != "channel") bad("range '" + range + "' is not 'global' or 'channel'");
         if (gate_folds != 0 && (gate_folds < 2 || gate_folds > 16)) bad("gate_folds " + std::to_string(gate_folds) + " is not 0 or in [2, 16]");
         if (gate_folds != 0 && !residual) bad("gate_folds needs a residual G (the gate blends G's change)");
-        if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; < 0: off)");
+        if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; <= -1: off)");
     }
     nlohmann::json to_json() const
     {
-        return {{"iters", iters},       {"n_critic", n_critic}, {"lambda_cls", lambda_cls}, {"lambda_rec", lambda_rec},
+        nlohmann::json j = {{"iters", iters},       {"n_critic", n_critic}, {"lambda_cls", lambda_cls}, {"lambda_rec", lambda_rec},
                 {"lambda_gp", lambda_gp}, {"g_lr", g_lr},        {"d_lr", d_lr},             {"beta1", beta1},
                 {"beta2", beta2},       {"decay_start", decay_start}, {"seed", seed},
                 {"residual", residual}, {"lambda_id", lambda_id}, {"lambda_pair", lambda_pair},
                 {"lambda_delta", lambda_delta}, {"ema", ema}, {"range", range}, {"amplitude", amplitude},
                 {"augment", augment}, {"gate_folds", gate_folds}, {"gate_prior", gate_prior}, {"gate_margin", gate_margin}};
+        if (gate_posterior) j["gate_posterior"] = true;
+        if (gate_auto_margin) j["gate_auto_margin"] = true;  // written only when on: older checkpoints' options stay equal
+        return j;
     }
 };
 
@@ -146,6 +160,7 @@ inline train_options handemo_options()
     o.gate_folds = 2;
     o.gate_prior = true;
     o.gate_margin = 0.10;
+    o.gate_auto_margin = true;
     return o;
 }
 
