@@ -24,13 +24,14 @@ declare -A args=(
   [gate-no-prior]="--gate-prior false"
   [gate-first]="--gate-prior false --gate-margin -1"
   [gate-fixed-margin]="--gate-auto-margin false"
-  [gate-posterior]="--gate-posterior true"
+  [gate-hits]="--gate-posterior false"
+  [gate-previous]="--gate-auto-margin false --gate-posterior false"
 )
 # variants that only change the gate: the handemo variant's trained models with another gate (seconds each)
-declare -A regate=([gate-no-rule]=1 [gate-no-prior]=1 [gate-first]=1 [gate-fixed-margin]=1 [gate-posterior]=1)
+declare -A regate=([gate-no-rule]=1 [gate-no-prior]=1 [gate-first]=1 [gate-fixed-margin]=1 [gate-hits]=1 [gate-previous]=1)
 variants=("$@")
 if ((${#variants[@]} == 0)); then
-  variants=(handemo paper no-gate no-pair no-residual no-augment global-range no-ema no-id gate-no-rule gate-no-prior gate-first gate-fixed-margin gate-posterior)
+  variants=(handemo paper no-gate no-pair no-residual no-augment global-range no-ema no-id gate-no-rule gate-no-prior gate-first gate-fixed-margin gate-hits gate-previous)
 fi
 mkdir -p "$out"
 [[ -d "$out/data" ]] || "$bin" synth --out "$out/data" --takes 3 --seed 1 >/dev/null

@@ -63,7 +63,7 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "this share below the real clips (negative: above them); <= -1 = lowest RMSE only (handemo 0.10)");
     sub->add_option("--gate-posterior", o.gate_posterior,
                     "Change gate: score recognition for --gate-margin by the classifier's mean posterior of the target instead "
-                    "of the share recognised (finer on few held-out pairs) (handemo false)");
+                    "of the share recognised (finer on few held-out pairs) (handemo true)");
     sub->add_option("--gate-auto-margin", o.gate_auto_margin,
                     "Change gate: choose the margin inside the training set: the least strict of --gate-margin, 0.1, 0.2, 0.3 "
                     "stricter and 'most recognised' whose choices, checked across the gate's own groups, are recognised at "

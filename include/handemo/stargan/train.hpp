@@ -161,6 +161,7 @@ inline train_options handemo_options()
     o.gate_prior = true;
     o.gate_margin = 0.10;
     o.gate_auto_margin = true;
+    o.gate_posterior = true;
     return o;
 }
 
