@@ -351,6 +351,8 @@ struct synth_result {
     fit_result fit;                ///< coefficients and Eq. 6 losses of the rule-moved points
     double loss_after_ik = 0;      ///< Eq. 6 loss of the control points the IK reached
     double ik_rms_max = 0;         ///< largest weighted RMS distance to the targets after IK
+    double ik_rms = 0;             ///< weighted RMS distance to the targets after IK over all keyframes
+    long ik_iterations = 0;        ///< IK iterations summed over the keyframes
     std::vector<std::size_t> keyframes;  ///< source frames of the keyframes
 };
 
@@ -407,6 +409,7 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
     std::vector<double> kf_angles(K * J3), kf_pos(K * J3);
     std::vector<std::vector<double>> reached(r.points.size(), std::vector<double>(K * 3));
     std::vector<ik_target> goals;
+    double ik_ss = 0;
     for (std::size_t k = 0; k < K; ++k) {
         const std::size_t f = out.keyframes[k];
         std::copy(u.frame_angles(f), u.frame_angles(f) + J3, kf_angles.begin() + static_cast<std::ptrdiff_t>(k * J3));
@@ -419,6 +422,8 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
         const ik_report rep = ik.solve(std::span<double>(kf_angles.data() + k * J3, J3),
                                        std::span<double>(kf_pos.data() + k * J3, J3), goals);
         out.ik_rms_max = std::max(out.ik_rms_max, rep.rms_after);
+        ik_ss += rep.rms_after * rep.rms_after;
+        out.ik_iterations += rep.iterations;
         const pose_positions fk = forward_kinematics(u.skel, kf_angles.data() + k * J3, kf_pos.data() + k * J3);
         for (std::size_t q = 0; q < r.points.size(); ++q) {
             const auto j = static_cast<std::size_t>(r.points[q].joint);
@@ -426,6 +431,7 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
             for (int a = 0; a < 3; ++a) reached[q][k * 3 + static_cast<std::size_t>(a)] = v[a];
         }
     }
+    out.ik_rms = K > 0 ? std::sqrt(ik_ss / static_cast<double>(K)) : 0.0;
     {
         objective obj(r, kp, targets, opt.window, opt.bound);
         out.loss_after_ik = obj.loss_of_points(reached, out.fit.coefficients.back());
