@@ -164,6 +164,8 @@ TEST_CASE("rcm ik: the stall rule stops early on unreachable targets and returns
     for (std::size_t f = 0; f < 5; ++f) tg.push_back({r.points[2 + f], {0.0, -100.0, 30.0}, 1.0});
     rcm::ik_options stall;
     stall.max_iterations = 200;
+    stall.stall_tolerance = 1e-3;
+    stall.stall_iterations = 2;
     rcm::ik_options off = stall;
     off.stall_tolerance = 0;  // an accepted step always lowers the error: never stalls
     auto q = q0;
@@ -201,7 +203,10 @@ TEST_CASE("rcm ik: a warm start from the previous solution does as well or bette
     double cold_ss = 0, warm_ss = 0;
     int used = 0, cold_iters = 0, warm_iters = 0;
     std::vector<double> prev_in_a, prev_in_p, prev_out_a, prev_out_p;
-    rcm::ik_solver ik(c.skel, r.translation_joint);
+    rcm::ik_options o;
+    o.stall_tolerance = 1e-3;  // stylise's default with the warm start
+    o.stall_iterations = 2;
+    rcm::ik_solver ik(c.skel, r.translation_joint, o);
     for (std::size_t f = 0; f < c.frames; f += 5) {
         const std::vector<double> a(c.frame_angles(f), c.frame_angles(f) + J3), pos(c.frame_positions(f), c.frame_positions(f) + J3);
         const auto fk = forward_kinematics(c.skel, a.data(), pos.data());

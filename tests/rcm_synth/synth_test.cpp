@@ -140,8 +140,9 @@ TEST_CASE("rcm synth: the IK's warm start from the previous keyframe reaches the
                                    {"thumb_palm", "index_palm", "middle_palm", "ring_palm", "index_middle", "thumb_index"});
     rcm::synth_options cold;
     cold.ik_warm_start = false;
+    const rcm::synth_options warm;  // the default: warm start, stall rule 1e-3 over 2 steps
     const auto rc = rcm::stylise(c, p.targets, cold);
-    const auto rw = rcm::stylise(c, p.targets);  // warm start is the default
+    const auto rw = rcm::stylise(c, p.targets, warm);
     MESSAGE("hand IK: cold rms " << rc.ik_rms << " cm (max " << rc.ik_rms_max << "), " << rc.ik_iterations << " iterations, Eq.6 after IK "
                                  << rc.loss_after_ik << "; warm rms " << rw.ik_rms << " cm (max " << rw.ik_rms_max << "), "
                                  << rw.ik_iterations << " iterations, Eq.6 after IK " << rw.loss_after_ik);

@@ -44,8 +44,9 @@ struct ik_options {
     double damping = 1.0;         ///< initial Levenberg-Marquardt damping lambda (units of the Jacobian)
     double min_damping = 1e-6;
     /// Stall rule for targets out of reach: stop after `stall_iterations` accepted steps in a row that each
-    /// lowered the weighted squared distance by at most this fraction of its new value. Default 1e-3 with
-    /// 2 steps; 1e-9 with 1 step is the rule before (every keyframe of the hand ran to the iteration cap).
+    /// lowered the weighted squared distance by at most this fraction of its new value (0: never). Default
+    /// 1e-3 over 2 steps; 1e-9 over 1 step is the rule before (with synth_options::ik_warm_start off, the
+    /// results as before).
     double stall_tolerance = 1e-3;
     int stall_iterations = 2;
 };

@@ -75,7 +75,9 @@ struct synth_options {
     ik_options ik{};
     bool ik_warm_start = true;          ///< also offer each keyframe's IK the previous keyframe's change (its
                                         ///< solution minus its input, added to this keyframe's input) as a
-                                        ///< start; the IK starts from whichever is nearer the targets
+                                        ///< start; the IK starts from whichever is nearer the targets (README,
+                                        ///< "Speed": faster and nearer the bench's targets, but through a model
+                                        ///< `rcm path` gave a 3-18% higher Eq. 6 after IK)
     std::optional<role_map> roles;      ///< control joints (default: find_roles from the joint names)
     int up = 1;                         ///< up axis of a body
 };
