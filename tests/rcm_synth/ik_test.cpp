@@ -127,3 +127,139 @@ TEST_CASE("rcm ik: unreachable targets leave limits and bone lengths intact and 
     CHECK(some_at_limit);
     CHECK_THROWS_AS(ik.solve(q, p, std::vector<rcm::ik_target>{{{99, false}, {}, 1.0}}), shape_error);
 }
+
+namespace {
+
+double rms_of(const skeleton& s, const std::vector<double>& ang, const std::vector<double>& pos, const std::vector<rcm::ik_target>& tg)
+{
+    const auto fk = forward_kinematics(s, ang.data(), pos.data());
+    double e = 0, w = 0;
+    for (const auto& t : tg) {
+        const auto j = static_cast<std::size_t>(t.point.joint);
+        const vec3 p = t.point.end_site ? fk.end_sites[j] : fk.joints[j];
+        for (int c = 0; c < 3; ++c) e += t.weight * (p[c] - t.position[c]) * (p[c] - t.position[c]);
+        w += t.weight;
+    }
+    return std::sqrt(e / w);
+}
+
+bool within_limits(const skeleton& s, const std::vector<double>& q)
+{
+    for (std::size_t j = 0; j < s.size(); ++j)
+        for (std::size_t a = 0; a < 3; ++a)
+            if (q[j * 3 + a] < s.joints[j].lower_limit[a] - 1e-12 || q[j * 3 + a] > s.joints[j].upper_limit[a] + 1e-12) return false;
+    return true;
+}
+
+}  // namespace
+
+TEST_CASE("rcm ik: the stall rule stops early on unreachable targets and returns the best pose seen")
+{
+    const skeleton s = hand_skeleton();
+    const rcm::rig r = rcm::make_rig(s);
+    std::vector<double> q0(s.size() * 3, 0.0), p(s.size() * 3);
+    for (std::size_t j = 0; j < s.size(); ++j)
+        for (int a = 0; a < 3; ++a) p[j * 3 + a] = s.joints[j].offset[a];
+    std::vector<rcm::ik_target> tg;  // forearm fixed, tips 1 m away: out of reach
+    for (std::size_t f = 0; f < 5; ++f) tg.push_back({r.points[2 + f], {0.0, -100.0, 30.0}, 1.0});
+    rcm::ik_options stall;
+    stall.max_iterations = 200;
+    stall.stall_tolerance = 1e-3;
+    stall.stall_iterations = 2;
+    rcm::ik_options off = stall;
+    off.stall_tolerance = 0;  // an accepted step always lowers the error: never stalls
+    auto q = q0;
+    const auto rep = rcm::ik_solver(s, -1, stall).solve(q, p, tg);
+    auto q_off = q0;
+    const auto rep_off = rcm::ik_solver(s, -1, off).solve(q_off, p, tg);
+    MESSAGE("unreachable: stall rule " << rep.iterations << " iterations, rms " << rep.rms_after << "; without it "
+                                       << rep_off.iterations << " iterations, rms " << rep_off.rms_after);
+    CHECK(rep.iterations < rep_off.iterations / 2);
+    CHECK(rep.rms_after < rep.rms_before);
+    CHECK(rep.rms_after <= 1.02 * rep_off.rms_after);  // what the extra iterations would still gain is small (1.3%)
+    // the pose returned is the one whose distance is reported, and no pose seen on the way was nearer
+    CHECK(rms_of(s, q, p, tg) == doctest::Approx(rep.rms_after).epsilon(1e-9));
+    double prev = rep.rms_before;
+    for (int it = 1; it <= rep.iterations; ++it) {
+        rcm::ik_options o = stall;
+        o.max_iterations = it;
+        auto qi = q0;
+        const auto ri = rcm::ik_solver(s, -1, o).solve(qi, p, tg);
+        CHECK(ri.rms_after <= prev);
+        prev = ri.rms_after;
+    }
+    CHECK(prev == rep.rms_after);
+    CHECK(within_limits(s, q));
+}
+
+TEST_CASE("rcm ik: a warm start from the previous solution does as well or better than a cold start on nearby targets")
+{
+    // A hand sequence as the synthesis sees it: keyframe inputs 5 frames apart, targets that move the tips
+    // 3 cm away from the palm (partly out of reach), solved once from each input (cold) and once also offered
+    // the previous keyframe's change (warm).
+    const clip c = synthesize(hand_motion::pointing, emotion::neutral, 0, 2, 30.0);
+    const rcm::rig r = rcm::make_rig(c.skel);
+    const std::size_t J3 = c.skel.size() * 3;
+    double cold_ss = 0, warm_ss = 0;
+    int used = 0, cold_iters = 0, warm_iters = 0;
+    std::vector<double> prev_in_a, prev_in_p, prev_out_a, prev_out_p;
+    rcm::ik_options o;
+    o.stall_tolerance = 1e-3;  // stylise's default with the warm start
+    o.stall_iterations = 2;
+    rcm::ik_solver ik(c.skel, r.translation_joint, o);
+    for (std::size_t f = 0; f < c.frames; f += 5) {
+        const std::vector<double> a(c.frame_angles(f), c.frame_angles(f) + J3), pos(c.frame_positions(f), c.frame_positions(f) + J3);
+        const auto fk = forward_kinematics(c.skel, a.data(), pos.data());
+        std::vector<rcm::ik_target> tg;
+        const vec3 palm = fk.joints[static_cast<std::size_t>(r.points[1].joint)];
+        for (std::size_t k = 0; k < 7; ++k) {
+            const auto& pt = r.points[k];
+            vec3 x = pt.end_site ? fk.end_sites[static_cast<std::size_t>(pt.joint)] : fk.joints[static_cast<std::size_t>(pt.joint)];
+            if (k >= 2) {
+                const double d = std::hypot(x[0] - palm[0], x[1] - palm[1], x[2] - palm[2]);
+                for (int e = 0; e < 3; ++e) x[e] += 3.0 * (x[e] - palm[e]) / d;
+            }
+            tg.push_back({pt, x, r.ik_weights[k]});
+        }
+        auto qc = a, pc = pos;
+        const auto rc = ik.solve(qc, pc, tg);
+        auto qw = a, pw = pos;
+        std::vector<double> sa(J3), sp(J3);
+        rcm::ik_report rw;
+        if (prev_in_a.empty()) {
+            rw = ik.solve(qw, pw, tg);
+        } else {
+            for (std::size_t i = 0; i < J3; ++i) {
+                sa[i] = a[i] + prev_out_a[i] - prev_in_a[i];
+                sp[i] = pos[i] + prev_out_p[i] - prev_in_p[i];
+            }
+            rw = ik.solve(qw, pw, tg, sa, sp);
+        }
+        CHECK(within_limits(c.skel, qw));
+        CHECK(rw.rms_after <= rw.rms_before);
+        CHECK(rms_of(c.skel, qw, pw, tg) == doctest::Approx(rw.rms_after).epsilon(1e-9));
+        used += rw.warm;
+        cold_ss += rc.rms_after * rc.rms_after;
+        warm_ss += rw.rms_after * rw.rms_after;
+        cold_iters += rc.iterations;
+        warm_iters += rw.iterations;
+        prev_in_a = a, prev_in_p = pos, prev_out_a = qw, prev_out_p = pw;
+    }
+    MESSAGE("hand sequence: cold rms " << std::sqrt(cold_ss) << " (" << cold_iters << " iterations), warm rms " << std::sqrt(warm_ss)
+                                       << " (" << warm_iters << " iterations), warm start taken " << used << " times");
+    CHECK(used > 0);
+    CHECK(warm_ss <= cold_ss * (1 + 1e-9));
+
+    // A start that already solves a reachable problem is taken and needs no step.
+    const std::vector<double> a(c.frame_angles(0), c.frame_angles(0) + J3), pos(c.frame_positions(0), c.frame_positions(0) + J3);
+    const auto goal = c.frame_angles(c.frames / 2);
+    const std::vector<double> ga(goal, goal + J3);
+    const auto tg = targets_of(c.skel, ga, pos, r.points);
+    auto q = a, p = pos;
+    const auto rep = ik.solve(q, p, tg, ga, pos);
+    CHECK(rep.warm);
+    CHECK(rep.iterations == 0);
+    CHECK(q == ga);
+    std::vector<double> bad(3);
+    CHECK_THROWS_AS(ik.solve(q, p, tg, bad, bad), shape_error);
+}

@@ -73,6 +73,11 @@ struct synth_options {
     bool interpolate_offsets = true;    ///< spline the keyframes' IK changes onto the original frames
                                         ///< (keeps detail between keyframes); false: spline the keyframes
     ik_options ik{};
+    bool ik_warm_start = true;          ///< also offer each keyframe's IK the previous keyframe's change (its
+                                        ///< solution minus its input, added to this keyframe's input) as a
+                                        ///< start; the IK starts from whichever is nearer the targets (README,
+                                        ///< "Speed": faster and nearer the bench's targets, but through a model
+                                        ///< `rcm path` gave a 3-18% higher Eq. 6 after IK)
     std::optional<role_map> roles;      ///< control joints (default: find_roles from the joint names)
     int up = 1;                         ///< up axis of a body
 };
@@ -351,6 +356,8 @@ struct synth_result {
     fit_result fit;                ///< coefficients and Eq. 6 losses of the rule-moved points
     double loss_after_ik = 0;      ///< Eq. 6 loss of the control points the IK reached
     double ik_rms_max = 0;         ///< largest weighted RMS distance to the targets after IK
+    double ik_rms = 0;             ///< weighted RMS distance to the targets after IK over all keyframes
+    long ik_iterations = 0;        ///< IK iterations summed over the keyframes
     std::vector<std::size_t> keyframes;  ///< source frames of the keyframes
 };
 
@@ -407,18 +414,33 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
     std::vector<double> kf_angles(K * J3), kf_pos(K * J3);
     std::vector<std::vector<double>> reached(r.points.size(), std::vector<double>(K * 3));
     std::vector<ik_target> goals;
+    std::vector<double> warm_angles(J3), warm_pos(J3);
+    double ik_ss = 0;
     for (std::size_t k = 0; k < K; ++k) {
         const std::size_t f = out.keyframes[k];
         std::copy(u.frame_angles(f), u.frame_angles(f) + J3, kf_angles.begin() + static_cast<std::ptrdiff_t>(k * J3));
         std::copy(u.frame_positions(f), u.frame_positions(f) + J3, kf_pos.begin() + static_cast<std::ptrdiff_t>(k * J3));
+        const bool warm = opt.ik_warm_start && k > 0;
+        if (warm) {
+            // this keyframe's input plus the previous keyframe's IK change (keyframes are a few frames apart)
+            const std::size_t fp = out.keyframes[k - 1];
+            for (std::size_t i = 0; i < J3; ++i) {
+                warm_angles[i] = u.angles[f * J3 + i] + (kf_angles[(k - 1) * J3 + i] - u.angles[fp * J3 + i]);
+                warm_pos[i] = u.positions[f * J3 + i] + (kf_pos[(k - 1) * J3 + i] - u.positions[fp * J3 + i]);
+            }
+        }
         goals.clear();
         for (std::size_t q = 0; q < r.points.size(); ++q)
             if (r.ik_weights[q] > 0)
                 goals.push_back({r.points[q], {moved.points[q][k * 3], moved.points[q][k * 3 + 1], moved.points[q][k * 3 + 2]},
                                  r.ik_weights[q]});
         const ik_report rep = ik.solve(std::span<double>(kf_angles.data() + k * J3, J3),
-                                       std::span<double>(kf_pos.data() + k * J3, J3), goals);
+                                       std::span<double>(kf_pos.data() + k * J3, J3), goals,
+                                       warm ? std::span<const double>(warm_angles) : std::span<const double>(),
+                                       warm ? std::span<const double>(warm_pos) : std::span<const double>());
         out.ik_rms_max = std::max(out.ik_rms_max, rep.rms_after);
+        ik_ss += rep.rms_after * rep.rms_after;
+        out.ik_iterations += rep.iterations;
         const pose_positions fk = forward_kinematics(u.skel, kf_angles.data() + k * J3, kf_pos.data() + k * J3);
         for (std::size_t q = 0; q < r.points.size(); ++q) {
             const auto j = static_cast<std::size_t>(r.points[q].joint);
@@ -426,6 +448,7 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
             for (int a = 0; a < 3; ++a) reached[q][k * 3 + static_cast<std::size_t>(a)] = v[a];
         }
     }
+    out.ik_rms = K > 0 ? std::sqrt(ik_ss / static_cast<double>(K)) : 0.0;
     {
         objective obj(r, kp, targets, opt.window, opt.bound);
         out.loss_after_ik = obj.loss_of_points(reached, out.fit.coefficients.back());
