@@ -3,8 +3,8 @@
 // and its subclasses) through as "refused". Anything else escaping (std::out_of_range, bad_alloc,
 // length_error, nlohmann exceptions), a sanitizer report, a hang or memory over -rss_limit_mb is a bug.
 // Built two ways: with clang -fsanitize=fuzzer,address,undefined as one libFuzzer program per target
-// (HANDEMO_FUZZ=ON), and, without libFuzzer, all harnesses in one ASan/UBSan program (replay.cpp, which
-// defines HANDEMO_FUZZ_REPLAY) that CTest runs over the committed corpora and regression files.
+// (HANDEMO_FUZZ=ON), and, without libFuzzer, all harnesses in one ASan/UBSan program (replay.cpp plus every
+// harness compiled with HANDEMO_FUZZ_REPLAY defined) that CTest runs over the committed corpora and regression files.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -34,7 +34,13 @@ int refuse_ok(F&& f)
 }  // namespace handemo_fuzz
 
 #ifdef HANDEMO_FUZZ_REPLAY
-#define HANDEMO_FUZZ_ENTRY(target)
+// The replay program compiles each harness as its own translation unit (so the build spreads them over the
+// cores) and reaches it through this plain entry point, which replay.cpp declares.
+#define HANDEMO_FUZZ_ENTRY(target)                                                              \
+    int handemo_fuzz_replay_##target(const std::uint8_t* data, std::size_t size)               \
+    {                                                                                           \
+        return handemo_fuzz::target::run(data, size);                                           \
+    }
 #else
 #define HANDEMO_FUZZ_ENTRY(target)                                                              \
     extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)          \

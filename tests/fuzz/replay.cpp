@@ -3,17 +3,14 @@
 // Usage: handemo_fuzz_replay <target> [--optional] <file or folder>...   (folders are walked recursively, sorted;
 // a path after --optional may be missing)
 // Exit 0 when every input is accepted or refused with a handemo error; anything else aborts.
-#define HANDEMO_FUZZ_REPLAY 1
-#include "bvh.cpp"
-#include "checkpoint.cpp"
-#include "csv.cpp"
-#include "glove.cpp"
-#include "image.cpp"
-#include "manifest.cpp"
-#include "range.cpp"
-#include "safetensors.cpp"
+// Each harness (bvh.cpp, checkpoint.cpp, ...) is a translation unit of this program of its own, compiled with
+// HANDEMO_FUZZ_REPLAY defined (tests/fuzz/CMakeLists.txt), which makes HANDEMO_FUZZ_ENTRY define
+// handemo_fuzz_replay_<target> instead of libFuzzer's entry point.
+#include <handemo/core/io.hpp>
 
 #include <algorithm>
+#include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -21,14 +18,24 @@
 #include <utility>
 #include <vector>
 
+#define HANDEMO_FUZZ_REPLAY_DECLARE(target) int handemo_fuzz_replay_##target(const std::uint8_t* data, std::size_t size);
+HANDEMO_FUZZ_REPLAY_DECLARE(bvh)
+HANDEMO_FUZZ_REPLAY_DECLARE(checkpoint)
+HANDEMO_FUZZ_REPLAY_DECLARE(csv)
+HANDEMO_FUZZ_REPLAY_DECLARE(glove)
+HANDEMO_FUZZ_REPLAY_DECLARE(image)
+HANDEMO_FUZZ_REPLAY_DECLARE(manifest)
+HANDEMO_FUZZ_REPLAY_DECLARE(range)
+HANDEMO_FUZZ_REPLAY_DECLARE(safetensors)
+
 int main(int argc, char** argv)
 {
     namespace fs = std::filesystem;
     const std::map<std::string, int (*)(const std::uint8_t*, std::size_t)> targets = {
-        {"bvh", handemo_fuzz::bvh::run},           {"checkpoint", handemo_fuzz::checkpoint::run},
-        {"csv", handemo_fuzz::csv::run},           {"glove", handemo_fuzz::glove::run},
-        {"image", handemo_fuzz::image::run},       {"manifest", handemo_fuzz::manifest::run},
-        {"range", handemo_fuzz::range::run},       {"safetensors", handemo_fuzz::safetensors::run}};
+        {"bvh", handemo_fuzz_replay_bvh},           {"checkpoint", handemo_fuzz_replay_checkpoint},
+        {"csv", handemo_fuzz_replay_csv},           {"glove", handemo_fuzz_replay_glove},
+        {"image", handemo_fuzz_replay_image},       {"manifest", handemo_fuzz_replay_manifest},
+        {"range", handemo_fuzz_replay_range},       {"safetensors", handemo_fuzz_replay_safetensors}};
     if (argc < 3 || !targets.contains(argv[1])) {
         std::fprintf(stderr, "usage: handemo_fuzz_replay <target> <file or folder>...; targets:");
         for (const auto& [n, f] : targets) std::fprintf(stderr, " %s", n.c_str());
