@@ -53,6 +53,33 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         });
         CHECK(n_ungated == (gated ? 4 : 0));
     }
+    // the report's section of the gate's training-set check: one row per fold and the pooled one
+    const auto sec = std::find_if(r.sections.begin(), r.sections.end(),
+                                  [](const report_section& x) { return x.title == "The change gate, checked inside the training sets"; });
+    REQUIRE(sec != r.sections.end());
+    CHECK(sec->markdown.find("| patting | ") != std::string::npos);
+    CHECK(sec->markdown.find("| gripping | ") != std::string::npos);
+    long pairs = 0;
+    for (const char* f : {"patting", "gripping"}) {
+        const auto text = read_file(dir / "folds" / f / "gate" / "gate.csv");
+        for (std::size_t a = text.find('\n') + 1, b; a < text.size(); a = b + 1) {
+            b = text.find('\n', a);
+            const std::string line = text.substr(a, b - a);
+            std::size_t comma = 0;
+            for (int k = 0; k < 10; ++k) comma = line.find(',', comma) + 1;  // pairs is the 11th column
+            pairs += std::stol(line.substr(comma));
+        }
+    }
+    CHECK(sec->markdown.find("| all | " + std::to_string(pairs) + " | ") != std::string::npos);
+    CHECK(read_file(dir / "report.md").find("## The change gate, checked inside the training sets") != std::string::npos);
+    {
+        // a gate table it cannot read is an error naming the file and line, not a wrong number
+        const fs::path bad = dir / "bad_copy";
+        fs::create_directories(bad / "folds" / "patting" / "gate");
+        const auto good = read_file(dir / "folds" / "patting" / "gate" / "gate.csv");
+        write_file_atomic(bad / "folds" / "patting" / "gate" / "gate.csv", good + "angry,1,1\n");
+        CHECK_THROWS_WITH_AS(gate_check_section(r, bad), doctest::Contains("gate.csv: line"), format_error);
+    }
     const std::size_t n_samples = 56 + 4 * gated_folds;
     CHECK(r.samples.size() == n_samples);
     std::set<std::string> methods;

@@ -24,7 +24,10 @@
 #include <handemo/stargan/train.hpp>
 #include <handemo/stargan/transfer.hpp>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -443,6 +446,97 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
 
 }  // namespace detail
 
+namespace detail {
+
+/// The cells of a CSV line (no quoting: the gate's files have none).
+inline std::vector<std::string> csv_cells(const std::string& line)
+{
+    std::vector<std::string> out(1);
+    for (char c : line) {
+        if (c == ',')
+            out.emplace_back();
+        else
+            out.back().push_back(c);
+    }
+    return out;
+}
+
+}  // namespace detail
+
+/// @brief The report section "The change gate, checked inside the training sets" from the folds'
+/// `gate/gate.csv` (and `gate/gate_margins.csv`) under out_dir/folds/: per fold, pooled over the target
+/// emotions and weighted by their pairs, the chosen settings scored on the inner pairs that chose them, the
+/// rule's check (chosen on one inner group, scored on the other), the real inner clips' recognition and the
+/// margin used. Only training-set numbers. Empty (no title) when no fold has a gate table.
+/// @throws format_error naming the file for a table it cannot read.
+inline report_section gate_check_section(const eval_result& r, const std::filesystem::path& out_dir)
+{
+    report_section sec;
+    std::string rows;
+    double tot[7] = {0, 0, 0, 0, 0, 0, 0};  // pairs, rmse_gated, emotion_gated, rmse_cross, emotion_cross, emotion_real, cross pairs
+    for (const auto& f : r.folds) {
+        const auto gate_dir = out_dir / "folds" / f.held_out / "gate";
+        if (!std::filesystem::exists(gate_dir / "gate.csv")) continue;
+        const std::string text = read_file(gate_dir / "gate.csv");
+        std::vector<std::string> lines;
+        for (std::size_t a = 0, b; a < text.size(); a = b + 1) {
+            b = text.find('\n', a);
+            if (b == std::string::npos) b = text.size();
+            if (b > a) lines.push_back(text.substr(a, b - a));
+        }
+        if (lines.empty()) continue;
+        const auto head = detail::csv_cells(lines[0]);
+        const auto col = [&](const char* name) {
+            const auto it = std::find(head.begin(), head.end(), name);
+            if (it == head.end()) throw format_error((gate_dir / "gate.csv").string() + ": no column '" + name + "'");
+            return static_cast<std::size_t>(it - head.begin());
+        };
+        if (std::find(head.begin(), head.end(), "rmse_cross") == head.end()) continue;  // made before the check existed
+        const std::size_t c_pairs = col("pairs"), c_rg = col("rmse_gated"), c_eg = col("emotion_gated"), c_rc = col("rmse_cross"),
+                          c_ec = col("emotion_cross"), c_er = col("emotion_real");
+        double fsum[7] = {0, 0, 0, 0, 0, 0, 0};
+        for (std::size_t i = 1; i < lines.size(); ++i) {
+            const auto cells = detail::csv_cells(lines[i]);
+            if (cells.size() != head.size())
+                throw format_error((gate_dir / "gate.csv").string() + ": line " + std::to_string(i + 1) + " has " + std::to_string(cells.size()) +
+                                   " cells, the header " + std::to_string(head.size()));
+            const auto num = [&](std::size_t c) { return std::strtod(cells[c].c_str(), nullptr); };
+            const double n = num(c_pairs);
+            fsum[0] += n, fsum[1] += n * num(c_rg), fsum[2] += n * num(c_eg), fsum[5] += n * num(c_er);
+            if (std::isfinite(num(c_rc))) fsum[6] += n, fsum[3] += n * num(c_rc), fsum[4] += n * num(c_ec);
+        }
+        if (fsum[0] <= 0 || fsum[6] <= 0) continue;
+        std::string margin = "(fixed)";
+        if (std::filesystem::exists(gate_dir / "gate_margins.csv")) {
+            const std::string m = read_file(gate_dir / "gate_margins.csv");
+            for (std::size_t a = m.find('\n') + 1, b; a < m.size(); a = b + 1) {
+                b = m.find('\n', a);
+                if (b == std::string::npos) b = m.size();
+                const auto cells = detail::csv_cells(m.substr(a, b - a));
+                if (cells.size() == 6 && cells[5] == "1") margin = cells[0];
+            }
+        }
+        for (int k = 0; k < 7; ++k) tot[k] += fsum[k];
+        rows += "| " + f.held_out + " | " + std::to_string(static_cast<long>(fsum[0])) + " | " + detail::fmt(fsum[1] / fsum[0]) + " / " +
+                detail::fmt(100 * fsum[2] / fsum[0], 1) + "% | " + detail::fmt(fsum[3] / fsum[6]) + " / " + detail::fmt(100 * fsum[4] / fsum[6], 1) +
+                "% | " + detail::fmt(100 * fsum[5] / fsum[0], 1) + "% | " + margin + " |\n";
+    }
+    if (rows.empty()) return sec;
+    sec.title = "The change gate, checked inside the training sets";
+    sec.markdown =
+        "Training-set numbers only (each fold's `gate/gate.csv`, pooled over the target emotions, weighted by their inner held-out "
+        "pairs): **inside** scores the chosen settings on the inner pairs that chose them (optimistic); **checked** is the rule's "
+        "choice made on one inner group's pairs and scored on the other group's; **real** is how often the inner classifier "
+        "recognises the real inner held-out clips; **margin** the recognition margin used (chosen by the check with "
+        "`--gate-auto-margin`, `gate/gate_margins.csv`). Compare checked with real, and with the held-out stargan row above.\n\n"
+        "| held out | inner pairs | inside: RMSE (deg) / recognised | checked: RMSE (deg) / recognised | real recognised | margin |\n"
+        "|---|---|---|---|---|---|\n" +
+        rows + "| all | " + std::to_string(static_cast<long>(tot[0])) + " | " + detail::fmt(tot[1] / tot[0]) + " / " +
+        detail::fmt(100 * tot[2] / tot[0], 1) + "% | " + detail::fmt(tot[3] / tot[6]) + " / " + detail::fmt(100 * tot[4] / tot[6], 1) + "% | " +
+        detail::fmt(100 * tot[5] / tot[0], 1) + "% | |\n";
+    return sec;
+}
+
 /// @brief Runs the leave-one-content-out evaluation for one configuration.
 /// @param clips the whole labelled data set (load_folder())
 /// @param out_dir the report folder: per-fold models and loss curves go to out_dir/folds/<content>/
@@ -556,6 +650,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         overall.update(static_cast<long>(fi + 1), status);
     }
     res.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
+    if (auto sec = gate_check_section(res, out_dir); !sec.title.empty()) res.sections.push_back(std::move(sec));
     return res;
 }
 
