@@ -170,17 +170,25 @@ public:
     /// @brief The posterior probability of class `label` for `x` when every class is a Gaussian with the shared
     /// (shrunk) covariance and equal priors, the probabilistic reading of predict() (linear discriminant
     /// analysis): exp(-d_label / 2) / sum_c exp(-d_c / 2) with d the distances(). 0 for a label not fitted.
-    double posterior(const std::vector<double>& x, std::string_view label) const
+    double posterior(const std::vector<double>& x, std::string_view label) const { return posterior_of(distances(x), index_of(label)); }
+
+    /// @brief posterior() from distances() already computed, for the class at `index` (0 when it is out of range).
+    static double posterior_of(const std::vector<double>& d, std::size_t index)
     {
-        const auto d = distances(x);
         const double dmin = *std::min_element(d.begin(), d.end());
         double z = 0, p = 0;
         for (std::size_t c = 0; c < d.size(); ++c) {
             const double e = std::exp(-0.5 * (d[c] - dmin));
             z += e;
-            if (classes_[c] == label) p = e;
+            if (c == index) p = e;
         }
         return p / z;
+    }
+
+    /// @brief The index of `label` in classes() (classes().size() when it was not fitted).
+    std::size_t index_of(std::string_view label) const
+    {
+        return static_cast<std::size_t>(std::find(classes_.begin(), classes_.end(), label) - classes_.begin());
     }
 
     /// Class labels, sorted.

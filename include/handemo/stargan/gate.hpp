@@ -191,11 +191,15 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
     const bool use_emotion = opt.gate_margin > -1;  // margins in (-1, 0) ask for more than the real rate
     if (use_emotion) g.margin = opt.gate_margin;
     const std::size_t S = G * G * P;  // settings, index (a * G + b) * P + c
-    // per inner group f: summed RMSE and recognised outputs per target and setting, pairs, recognised real clips
-    // and what the rule scores recognition by (ok, or the classifier's posterior with gate_posterior) for outputs and real clips
-    std::vector<std::vector<std::vector<double>>> sum(F, std::vector<std::vector<double>>(C, std::vector<double>(S, 0.0))), ok = sum, score = sum;
-    std::vector<std::vector<std::size_t>> count(F, std::vector<std::size_t>(C, 0)), real_ok = count;
-    std::vector<std::vector<double>> real_score(F, std::vector<double>(C, 0.0));
+    // What the held-out pairs of a target gave, per inner group ([F][C]) or pooled over groups (pooled()): per
+    // setting the summed RMSE, the recognised outputs and what the rule scores recognition by (hits, or the
+    // classifier's posterior with gate_posterior); the pairs and the real clips' hits and score.
+    struct tally {
+        std::vector<double> rmse, hits, score;  // [S]
+        double pairs = 0, real_hits = 0, real_score = 0;
+    };
+    const tally empty{std::vector<double>(S, 0.0), std::vector<double>(S, 0.0), std::vector<double>(S, 0.0)};
+    std::vector<std::vector<tally>> tallies(F, std::vector<tally>(C, empty));
     std::filesystem::create_directories(work_dir);
     for (std::size_t f = 0; f < F; ++f) {
         std::vector<labelled_clip> train;
@@ -239,6 +243,14 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
         // the independent emotion classifier of the evaluation, fitted on this inner training set only
         eval::nearest_centroid_classifier clf;
+        // adds to `hits` whether the classifier recognises `target` (class index) from x, and to `score` what
+        // the rule counts; the distances are computed once for both
+        const auto recognise = [&](const std::vector<double>& x, std::size_t target, double& hits, double& score) {
+            const auto d = clf.distances(x);
+            const bool hit = static_cast<std::size_t>(std::min_element(d.begin(), d.end()) - d.begin()) == target;
+            hits += hit;
+            score += opt.gate_posterior ? eval::nearest_centroid_classifier::posterior_of(d, target) : static_cast<double>(hit);
+        };
         if (use_emotion) {
             std::vector<std::vector<double>> x;
             std::vector<std::string> y;
@@ -255,12 +267,9 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                     if (r->content == in->content && r->emotion == target && r->take == in->take) real = r;
                 if (!real) continue;
                 const auto real_kf = extract_keyframes<K>(real->motion);
-                if (use_emotion) {
-                    const auto x = eval::motion_features(real_kf, real->motion.duration());
-                    const bool hit = clf.predict(x) == target;
-                    real_ok[f][t] += hit;
-                    real_score[f][t] += opt.gate_posterior ? clf.posterior(x, target) : static_cast<double>(hit);
-                }
+                tally& ty = tallies[f][t];
+                const std::size_t label = use_emotion ? clf.index_of(target) : 0;
+                if (use_emotion) recognise(eval::motion_features(real_kf, real->motion.duration()), label, ty.real_hits, ty.real_score);
                 const auto parts = model.parts(in->motion, target);
                 for (std::size_t a = 0; a < G; ++a)
                     for (std::size_t b = 0; b < G; ++b)
@@ -268,15 +277,10 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                             const clip out = model.finish(in->motion, parts, gate_grid[a], gate_grid[b], prior_weight(c));
                             const auto kf = extract_keyframes<K>(out);
                             const std::size_t s = (a * G + b) * P + c;
-                            sum[f][t][s] += eval::keyframe_rmse(kf, real_kf);
-                            if (use_emotion) {
-                                const auto x = eval::motion_features(kf, out.duration());
-                                const bool hit = clf.predict(x) == target;
-                                ok[f][t][s] += hit;
-                                score[f][t][s] += opt.gate_posterior ? clf.posterior(x, target) : static_cast<double>(hit);
-                            }
+                            ty.rmse[s] += eval::keyframe_rmse(kf, real_kf);
+                            if (use_emotion) recognise(eval::motion_features(kf, out.duration()), label, ty.hits[s], ty.score[s]);
                         }
-                ++count[f][t];
+                ty.pairs += 1;
             }
         }
         ++g.folds;
@@ -284,20 +288,27 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
     // G's whole change (1, 1, prior 0) and no change (0, 0, 0): gate_grid runs from 1 down to 0
     const std::size_t full_s = (0 * G + 0) * P + (P - 1);
     const std::size_t none_s = ((G - 1) * G + (G - 1)) * P + (P - 1);
-    // the rule on the pairs of the inner groups in `use` (pooled) for target t: the chosen setting (S when none)
-    const auto choose = [&](std::size_t t, const std::vector<bool>& use, double margin) {
-        std::vector<double> rs(S, 0.0), os(S, 0.0);
-        double n = 0, real = 0;
+    // the tallies of target t pooled over the inner groups in `use`
+    const auto pooled = [&](std::size_t t, const std::vector<bool>& use) {
+        tally p = empty;
         for (std::size_t f = 0; f < F; ++f)
             if (use[f]) {
-                n += static_cast<double>(count[f][t]), real += real_score[f][t];
-                for (std::size_t s = 0; s < S; ++s) rs[s] += sum[f][t][s], os[s] += score[f][t][s];
+                const tally& x = tallies[f][t];
+                p.pairs += x.pairs, p.real_hits += x.real_hits, p.real_score += x.real_score;
+                for (std::size_t s = 0; s < S; ++s) p.rmse[s] += x.rmse[s], p.hits[s] += x.hits[s], p.score[s] += x.score[s];
             }
+        return p;
+    };
+    // the rule on pooled pairs: the chosen setting (S when there are none)
+    const auto choose = [&](const tally& p, double margin) {
+        const auto& rs = p.rmse;
+        const auto& os = p.score;
+        const double n = p.pairs;
         std::size_t best = S;
         if (n == 0) return best;
         if (use_emotion) {
             for (std::size_t s = 0; s < S; ++s)
-                if (os[s] / n >= real / n - margin - 1e-12 && (best == S || rs[s] < rs[best])) best = s;
+                if (os[s] / n >= p.real_score / n - margin - 1e-12 && (best == S || rs[s] < rs[best])) best = s;
             if (best == S)  // no setting is recognised well enough: the most recognised, then the lowest RMSE
                 for (std::size_t s = 0; s < S; ++s)
                     if (best == S || os[s] > os[best] || (os[s] == os[best] && rs[s] < rs[best])) best = s;
@@ -312,13 +323,13 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
     // over the groups: {summed RMSE, recognised outputs, recognised real clips, pairs}
     const auto cross_check = [&](std::size_t t, double margin) {
         std::array<double, 4> r{0, 0, 0, 0};
-        if (F < 2) return r;
         for (std::size_t f = 0; f < F; ++f) {
+            const tally& x = tallies[f][t];
             std::vector<bool> others(F, true);
             others[f] = false;
-            const std::size_t s = count[f][t] ? choose(t, others, margin) : S;
+            const std::size_t s = x.pairs > 0 ? choose(pooled(t, others), margin) : S;
             if (s == S) continue;
-            r[0] += sum[f][t][s], r[1] += ok[f][t][s], r[2] += static_cast<double>(real_ok[f][t]), r[3] += static_cast<double>(count[f][t]);
+            r[0] += x.rmse[s], r[1] += x.hits[s], r[2] += x.real_hits, r[3] += x.pairs;
         }
         return r;
     };
@@ -361,16 +372,13 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         }
     }
     for (std::size_t t = 0; t < C; ++t) {
-        std::vector<double> rsum(S, 0.0), osum(S, 0.0);
-        std::size_t pairs = 0, real_pairs = 0;
-        for (std::size_t f = 0; f < F; ++f) {
-            pairs += count[f][t], real_pairs += real_ok[f][t];
-            for (std::size_t s = 0; s < S; ++s) rsum[s] += sum[f][t][s], osum[s] += ok[f][t][s];
-        }
-        if (pairs == 0) continue;
-        const double n = static_cast<double>(pairs);
-        const double real_rate = static_cast<double>(real_pairs) / n;
-        const std::size_t best = choose(t, std::vector<bool>(F, true), margin);
+        const tally all = pooled(t, std::vector<bool>(F, true));
+        if (all.pairs == 0) continue;
+        const double n = all.pairs;
+        const auto& rsum = all.rmse;
+        const auto& osum = all.hits;
+        const double real_rate = all.real_hits / n;
+        const std::size_t best = choose(all, margin);
         const auto cross = cross_check(t, margin);
         const double cross_r = cross[0], cross_o = cross[1], cross_n = cross[3];
         const std::size_t a = best / (G * P), b = (best / P) % G, c = best % P;
@@ -379,7 +387,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         g.prior[t] = prior_weight(c);
         gate_fit::row r{info.domain_names[t], g.posture[t], g.motion[t], g.prior[t], rsum[best] / n, rsum[full_s] / n, rsum[none_s] / n};
         if (use_emotion) r.emotion_gated = osum[best] / n, r.emotion_full = osum[full_s] / n, r.emotion_real = real_rate;
-        r.pairs = pairs;
+        r.pairs = static_cast<std::size_t>(all.pairs);
         if (cross_n > 0) {
             r.rmse_cross = cross_r / cross_n;
             if (use_emotion) r.emotion_cross = cross_o / cross_n;
