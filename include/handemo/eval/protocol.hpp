@@ -90,8 +90,8 @@ inline double tail_mean(const std::vector<stargan::loss_row>& log, std::size_t c
     return s / static_cast<double>(n);
 }
 
-/// Mean of the column `name` over the last 10% of the rows of a log.csv text (NaN when absent).
-inline double csv_tail_mean(const std::string& text, const std::string& name)
+/// The lines of a CSV text, each split into its cells (stargan::detail::split_csv_line()).
+inline std::vector<std::vector<std::string>> csv_rows(const std::string& text)
 {
     std::vector<std::vector<std::string>> rows;
     std::size_t pos = 0;
@@ -100,6 +100,13 @@ inline double csv_tail_mean(const std::string& text, const std::string& name)
         rows.push_back(stargan::detail::split_csv_line(std::string_view(text).substr(pos, nl - pos)));
         pos = nl + 1;
     }
+    return rows;
+}
+
+/// Mean of the column `name` over the last 10% of the rows of a log.csv text (NaN when absent).
+inline double csv_tail_mean(const std::string& text, const std::string& name)
+{
+    const auto rows = csv_rows(text);
     if (rows.size() < 2) return std::nan("");
     const auto it = std::find(rows[0].begin(), rows[0].end(), name);
     if (it == rows[0].end()) return std::nan("");
@@ -448,18 +455,23 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
 
 namespace detail {
 
-/// The cells of a CSV line (no quoting: the gate's files have none).
-inline std::vector<std::string> csv_cells(const std::string& line)
-{
-    std::vector<std::string> out(1);
-    for (char c : line) {
-        if (c == ',')
-            out.emplace_back();
-        else
-            out.back().push_back(c);
+/// gate.csv rows pooled, weighted by their pairs: the chosen settings scored inside, the rule's check, the real
+/// inner clips' recognition.
+struct gate_check_sum {
+    double pairs = 0, rmse_in = 0, emotion_in = 0, real = 0;  // sums weighted by pairs
+    double cross_pairs = 0, rmse_cross = 0, emotion_cross = 0;
+    void add(const gate_check_sum& o)
+    {
+        pairs += o.pairs, rmse_in += o.rmse_in, emotion_in += o.emotion_in, real += o.real;
+        cross_pairs += o.cross_pairs, rmse_cross += o.rmse_cross, emotion_cross += o.emotion_cross;
     }
-    return out;
-}
+    /// The table cells "pairs | inside | checked | real |".
+    std::string cells() const
+    {
+        return std::to_string(static_cast<long>(pairs)) + " | " + fmt(rmse_in / pairs) + " / " + fmt(100 * emotion_in / pairs, 1) + "% | " +
+               fmt(rmse_cross / cross_pairs) + " / " + fmt(100 * emotion_cross / cross_pairs, 1) + "% | " + fmt(100 * real / pairs, 1) + "% |";
+    }
+};
 
 }  // namespace detail
 
@@ -473,53 +485,40 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
 {
     report_section sec;
     std::string rows;
-    double tot[7] = {0, 0, 0, 0, 0, 0, 0};  // pairs, rmse_gated, emotion_gated, rmse_cross, emotion_cross, emotion_real, cross pairs
+    detail::gate_check_sum total;
     for (const auto& f : r.folds) {
         const auto gate_dir = out_dir / "folds" / f.held_out / "gate";
         if (!std::filesystem::exists(gate_dir / "gate.csv")) continue;
-        const std::string text = read_file(gate_dir / "gate.csv");
-        std::vector<std::string> lines;
-        for (std::size_t a = 0, b; a < text.size(); a = b + 1) {
-            b = text.find('\n', a);
-            if (b == std::string::npos) b = text.size();
-            if (b > a) lines.push_back(text.substr(a, b - a));
-        }
+        const auto lines = detail::csv_rows(read_file(gate_dir / "gate.csv"));
         if (lines.empty()) continue;
-        const auto head = detail::csv_cells(lines[0]);
+        const auto& head = lines[0];
+        if (std::find(head.begin(), head.end(), "rmse_cross") == head.end()) continue;  // made before the check existed
         const auto col = [&](const char* name) {
             const auto it = std::find(head.begin(), head.end(), name);
             if (it == head.end()) throw format_error((gate_dir / "gate.csv").string() + ": no column '" + name + "'");
             return static_cast<std::size_t>(it - head.begin());
         };
-        if (std::find(head.begin(), head.end(), "rmse_cross") == head.end()) continue;  // made before the check existed
         const std::size_t c_pairs = col("pairs"), c_rg = col("rmse_gated"), c_eg = col("emotion_gated"), c_rc = col("rmse_cross"),
                           c_ec = col("emotion_cross"), c_er = col("emotion_real");
-        double fsum[7] = {0, 0, 0, 0, 0, 0, 0};
+        detail::gate_check_sum sum;
         for (std::size_t i = 1; i < lines.size(); ++i) {
-            const auto cells = detail::csv_cells(lines[i]);
+            const auto& cells = lines[i];
+            if (cells.size() == 1 && cells[0].empty()) continue;  // a blank line
             if (cells.size() != head.size())
                 throw format_error((gate_dir / "gate.csv").string() + ": line " + std::to_string(i + 1) + " has " + std::to_string(cells.size()) +
                                    " cells, the header " + std::to_string(head.size()));
             const auto num = [&](std::size_t c) { return std::strtod(cells[c].c_str(), nullptr); };
             const double n = num(c_pairs);
-            fsum[0] += n, fsum[1] += n * num(c_rg), fsum[2] += n * num(c_eg), fsum[5] += n * num(c_er);
-            if (std::isfinite(num(c_rc))) fsum[6] += n, fsum[3] += n * num(c_rc), fsum[4] += n * num(c_ec);
+            sum.pairs += n, sum.rmse_in += n * num(c_rg), sum.emotion_in += n * num(c_eg), sum.real += n * num(c_er);
+            if (std::isfinite(num(c_rc))) sum.cross_pairs += n, sum.rmse_cross += n * num(c_rc), sum.emotion_cross += n * num(c_ec);
         }
-        if (fsum[0] <= 0 || fsum[6] <= 0) continue;
+        if (sum.pairs <= 0 || sum.cross_pairs <= 0) continue;
         std::string margin = "(fixed)";
-        if (std::filesystem::exists(gate_dir / "gate_margins.csv")) {
-            const std::string m = read_file(gate_dir / "gate_margins.csv");
-            for (std::size_t a = m.find('\n') + 1, b; a < m.size(); a = b + 1) {
-                b = m.find('\n', a);
-                if (b == std::string::npos) b = m.size();
-                const auto cells = detail::csv_cells(m.substr(a, b - a));
+        if (std::filesystem::exists(gate_dir / "gate_margins.csv"))
+            for (const auto& cells : detail::csv_rows(read_file(gate_dir / "gate_margins.csv")))
                 if (cells.size() == 6 && cells[5] == "1") margin = cells[0];
-            }
-        }
-        for (int k = 0; k < 7; ++k) tot[k] += fsum[k];
-        rows += "| " + f.held_out + " | " + std::to_string(static_cast<long>(fsum[0])) + " | " + detail::fmt(fsum[1] / fsum[0]) + " / " +
-                detail::fmt(100 * fsum[2] / fsum[0], 1) + "% | " + detail::fmt(fsum[3] / fsum[6]) + " / " + detail::fmt(100 * fsum[4] / fsum[6], 1) +
-                "% | " + detail::fmt(100 * fsum[5] / fsum[0], 1) + "% | " + margin + " |\n";
+        total.add(sum);
+        rows += "| " + f.held_out + " | " + sum.cells() + " " + margin + " |\n";
     }
     if (rows.empty()) return sec;
     sec.title = "The change gate, checked inside the training sets";
@@ -531,9 +530,7 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
         "`--gate-auto-margin`, `gate/gate_margins.csv`). Compare checked with real, and with the held-out stargan row above.\n\n"
         "| held out | inner pairs | inside: RMSE (deg) / recognised | checked: RMSE (deg) / recognised | real recognised | margin |\n"
         "|---|---|---|---|---|---|\n" +
-        rows + "| all | " + std::to_string(static_cast<long>(tot[0])) + " | " + detail::fmt(tot[1] / tot[0]) + " / " +
-        detail::fmt(100 * tot[2] / tot[0], 1) + "% | " + detail::fmt(tot[3] / tot[6]) + " / " + detail::fmt(100 * tot[4] / tot[6], 1) + "% | " +
-        detail::fmt(100 * tot[5] / tot[0], 1) + "% | |\n";
+        rows + "| all | " + total.cells() + " |\n";
     return sec;
 }
 
