@@ -10,3 +10,4 @@
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/synth.hpp>
+#include <handemo/motion/detail_layer.hpp>
