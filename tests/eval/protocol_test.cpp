@@ -35,8 +35,8 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(r.folds[0].held_out == "patting");
     CHECK(r.folds[0].train_clips == 10);
     CHECK(r.folds[0].test_inputs == 1);
-    // 2 folds x 4 targets x 1 take x 7 methods (the handemo preset's amplitude stage adds stargan-g and
-    // amplitude-only), and stargan-ungated in each fold whose change gate is not all 1
+    // 2 folds x 4 targets x 1 take x 8 methods (the handemo preset's amplitude stage adds stargan-g and
+    // amplitude-only; the detail layer adds stargan+detail), and stargan-ungated in each fold whose change gate is not all 1
     std::size_t gated_folds = 0;
     for (const char* f : {"patting", "gripping"}) {
         const auto ck = read_checkpoint(dir / "folds" / f / "checkpoint.safetensors").second;
@@ -80,7 +80,7 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         write_file_atomic(bad / "folds" / "patting" / "gate" / "gate.csv", good + "angry,1,1\n");
         CHECK_THROWS_WITH_AS(gate_check_section(r, bad), doctest::Contains("gate.csv: line"), format_error);
     }
-    const std::size_t n_samples = 56 + 4 * gated_folds;
+    const std::size_t n_samples = 64 + 4 * gated_folds;
     CHECK(r.samples.size() == n_samples);
     std::set<std::string> methods;
     for (const auto& s : r.samples) {
@@ -88,6 +88,8 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         CHECK(std::isfinite(s.rmse_real));
         CHECK(s.target != "neutral");
         if (s.method == "identity") {
+            CHECK(s.rom_ratio_full == doctest::Approx(1.0));
+            CHECK(s.speed_ratio_full == doctest::Approx(1.0));
             CHECK(s.rmse_input == doctest::Approx(0.0));
             CHECK(s.content_ok);
             CHECK(s.rom_ratio == doctest::Approx(1.0));
@@ -97,10 +99,23 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
             CHECK(s.rmse_real == doctest::Approx(0.0));
             CHECK(s.rom_ratio == doctest::Approx(s.real_rom_ratio));
             CHECK(s.rom_error == doctest::Approx(0.0));
+            CHECK(s.rom_error_full == doctest::Approx(0.0));
+            CHECK(s.speed_error_full == doctest::Approx(0.0));
+        }
+        if (s.method == "stargan+detail") {
+            // the detail layer leaves the keyframes, so every keyframe number is stargan's; the full-rate ones move
+            const auto g = std::find_if(r.samples.begin(), r.samples.end(), [&](const sample_record& x) {
+                return x.method == "stargan" && x.fold == s.fold && x.target == s.target && x.take == s.take;
+            });
+            REQUIRE(g != r.samples.end());
+            CHECK(s.rmse_real == doctest::Approx(g->rmse_real).epsilon(1e-9));
+            CHECK(s.predicted_emotion == g->predicted_emotion);
+            CHECK(s.rom_ratio == doctest::Approx(g->rom_ratio).epsilon(1e-6));
+            CHECK(s.speed_ratio_full != doctest::Approx(g->speed_ratio_full).epsilon(1e-3));
         }
         if (s.method == "nearest-neighbour") CHECK(s.predicted_content != s.fold);  // a clip of another content
     }
-    CHECK(methods.size() == (gated_folds ? 8u : 7u));
+    CHECK(methods.size() == (gated_folds ? 9u : 8u));
     for (const char* f : {"report.md", "results.csv", "summary.csv", "summary.svg", "folds.svg", "folds/patting/checkpoint.safetensors",
                           "folds/patting/losses.svg", "folds/gripping/log.csv"})
         CHECK_MESSAGE(fs::exists(dir / f), f);
@@ -114,7 +129,7 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')) == n_samples + 1);  // header + samples
     // comparisons exist for each baseline and metric with a direction, pooled and per target
     const auto cmp = compare_with_baselines(r);
-    CHECK(cmp.size() == 4 * 5 * 5);  // identity, mean-offset, amplitude-only, nearest-neighbour x 5 metrics x (pooled + 4 targets)
+    CHECK(cmp.size() == 4 * 7 * 5);  // identity, mean-offset, amplitude-only, nearest-neighbour x 7 metrics x (pooled + 4 targets)
     for (const auto& f : r.folds) {
         CHECK(std::isfinite(f.seen_rmse_stargan));
         CHECK(f.seen_rmse_identity > 0);
@@ -175,10 +190,10 @@ TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed 
     const fs::path dir = fs::temp_directory_path() / ("handemo_eval_oracle_test_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     const auto r = run_eval<hand_tiny>(clips, info, o, dir);
-    // 1 fold x 4 targets x 1 take x 8 methods (+ stargan-ungated when the fold's change gate is not all 1)
+    // 1 fold x 4 targets x 1 take x 9 methods (+ stargan-ungated when the fold's change gate is not all 1)
     const auto n_ungated = std::count_if(r.samples.begin(), r.samples.end(), [](const sample_record& s) { return s.method == "stargan-ungated"; });
     CHECK((n_ungated == 0 || n_ungated == 4));
-    REQUIRE(r.samples.size() == 32 + static_cast<std::size_t>(n_ungated));
+    REQUIRE(r.samples.size() == 36 + static_cast<std::size_t>(n_ungated));
     double oracle = 0, identity = 0;
     for (const auto& s : r.samples) {
         if (s.method == "oracle") {

@@ -301,3 +301,56 @@ TEST_CASE("end to end: where emotions are large offsets, transfer of an unseen c
     MESSAGE("held-out content: transfer RMSE " << s_model / 4 << " deg, identity " << s_identity / 4 << " deg");
     CHECK(s_model < 0.85 * s_identity);
 }
+
+TEST_CASE("the checkpoint carries the detail layer; checkpoints without it load; add_detail keeps the keyframes")
+{
+    const auto clips = toy_set();
+    const auto data = prepare_data<hand_tiny>(clips, tiny_info());
+    REQUIRE(data.detail);
+    CHECK(data.detail->channels == 23 * 3);
+    const fs::path a = fresh_dir("handemo_train_detail");
+    {
+        trainer<hand_tiny> t(tiny_info(), data, quiet(4));
+        t.run(a);
+    }
+    const auto info = read_checkpoint(a / "checkpoint.safetensors").second;
+    REQUIRE(info.detail);
+    CHECK(info.detail->emotions == data.detail->emotions);
+    CHECK(info.detail->amplitude == data.detail->amplitude);
+    const auto model = load_model(a);
+    REQUIRE(model->has_detail());
+    const auto neutral = std::find_if(clips.begin(), clips.end(), [](const labelled_clip& c) { return c.emotion == "neutral"; });
+    REQUIRE(neutral != clips.end());
+    const clip& in = neutral->motion;
+    const auto r = model->transfer(in, "sad");
+    const clip d = model->add_detail(r.motion, in, "sad");
+    CHECK(d.frames == r.motion.frames);
+    const auto k0 = extract_keyframes<hand_tiny::keyframes>(r.motion), k1 = extract_keyframes<hand_tiny::keyframes>(d);
+    double moved = 0, keymoved = 0;
+    for (std::size_t i = 0; i < k0.angles.size(); ++i) keymoved = std::max(keymoved, std::abs(k0.angles[i] - k1.angles[i]));
+    for (std::size_t i = 0; i < d.angles.size(); ++i) moved = std::max(moved, std::abs(d.angles[i] - r.motion.angles[i]));
+    CHECK(keymoved < 1e-9);
+    CHECK(moved > 1e-3);  // the toy clips have detail between their keyframes
+
+    // a checkpoint written before the layer existed (no 'detail' field) still loads, and says it has none
+    auto f = read_safetensors(a / "checkpoint.safetensors");
+    auto meta = nlohmann::json::parse(f.metadata.at("handemo"));
+    meta.erase("detail");
+    f.metadata["handemo"] = meta.dump();
+    f.metadata["checksum"] = handemo::stargan::detail::checkpoint_checksum(f);
+    const fs::path old = fresh_dir("handemo_train_detail_old");
+    fs::create_directories(old);
+    write_safetensors(old / "checkpoint.safetensors", f);
+    const auto old_model = load_model(old);
+    CHECK_FALSE(old_model->has_detail());
+    CHECK_THROWS_WITH_AS(old_model->add_detail(r.motion, in, "sad"), doctest::Contains("no detail layer"), value_error);
+    // a detail layer for another skeleton is refused naming the field
+    meta = nlohmann::json::parse(read_safetensors(a / "checkpoint.safetensors").metadata.at("handemo"));
+    meta["detail"]["channels"] = 6;
+    meta["detail"]["amplitude"] = nlohmann::json::array();
+    for (std::size_t e = 0; e < info.detail->emotions.size(); ++e) meta["detail"]["amplitude"].push_back(std::vector<double>(6, 1.0));
+    f.metadata["handemo"] = meta.dump();
+    f.metadata["checksum"] = handemo::stargan::detail::checkpoint_checksum(f);
+    write_safetensors(old / "checkpoint.safetensors", f);
+    CHECK_THROWS_WITH_AS(read_checkpoint(old / "checkpoint.safetensors"), doctest::Contains("metadata 'detail' is for 2 joints"), format_error);
+}

@@ -19,6 +19,7 @@ namespace handemo::cli::transfer_cmd {
 struct transfer_cli {
     std::string model, in, emotion, out, from, like;
     std::size_t frames = 0;
+    bool detail = false;
 };
 
 inline bool has_ext(const std::string& p, const char* a, const char* b = nullptr)
@@ -57,7 +58,11 @@ inline void run_transfer(const transfer_cli& o)
         return;
     }
     const clip in = read_bvh(o.in);
-    const auto r = o.from.empty() ? model->transfer(in, o.emotion) : model->transfer(in, o.emotion, o.from);
+    if (o.detail && out_image) throw value_error("transfer: --detail adds full-rate motion; a motion image output (" + o.out + ") has none");
+    if (o.detail && !model->has_detail())
+        throw value_error("transfer: --detail: model " + o.model + " has no detail layer (trained before it existed): train it again");
+    auto r = o.from.empty() ? model->transfer(in, o.emotion) : model->transfer(in, o.emotion, o.from);
+    if (o.detail) r.motion = o.from.empty() ? model->add_detail(r.motion, in, o.emotion) : model->add_detail(r.motion, in, o.emotion, o.from);
     if (out_image)
         (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(r.image));
     else
@@ -66,7 +71,7 @@ inline void run_transfer(const transfer_cli& o)
         std::cerr << "transfer: warning: " << r.clamped_values << " keyframe angles of " << o.in << " lie outside the model's range ["
                   << info.range.p_min << ", " << info.range.p_max << "] and were clamped by Eq. 3\n";
     std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << o.emotion << " (tempo x" << r.tempo << ", "
-              << r.motion.frames << " frames) -> " << o.out << "\n";
+              << r.motion.frames << " frames" << (o.detail ? ", with detail" : "") << ") -> " << o.out << "\n";
 }
 
 }  // namespace handemo::cli::transfer_cmd
@@ -80,6 +85,9 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     sub->add_option("--out", o->out, "Output: .bvh (full-rate motion) or .bmp/.png (motion image)")->required();
     sub->add_option("--from", o->from, "Emotion of the input (default: the model's neutral domain); sets the tempo ratio");
     sub->add_option("--like", o->like, "Reference BVH for an image input and BVH output (skeleton, fps, frames)");
+    sub->add_flag("--detail", o->detail,
+                  "Add the detail layer: the input's own full-rate detail (what 9 keyframes miss), at the target emotion's "
+                  "amplitude and frequency learned from the training clips; the keyframes stay as they are");
     sub->add_option("--frames", o->frames, "Output frame count for an image input (default: the reference's times the tempo)");
     sub->callback([o] { handemo::cli::transfer_cmd::run_transfer(*o); });
 }};

@@ -122,6 +122,12 @@ characteristics measure(const clip& c)
     return {range_of_motion(v), mean_speed(v), c.duration()};
 }
 
+/// @brief Range of motion, speed and duration of `c` as it is (full rate: a capture's tremor and noise count).
+inline characteristics measure_full(const clip& c)
+{
+    return {range_of_motion(c), mean_speed(c), c.duration()};
+}
+
 /// @brief `num / den` of a characteristic; a ratio to a motionless input is undefined.
 /// @throws value_error naming `what` when den is not positive.
 inline double ratio(double num, double den, const char* what)

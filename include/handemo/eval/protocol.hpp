@@ -16,6 +16,7 @@
 #include <handemo/eval/extension.hpp>
 #include <handemo/eval/metrics.hpp>
 #include <handemo/eval/report.hpp>
+#include <handemo/motion/detail_layer.hpp>
 #include <handemo/motion/synth.hpp>
 #include <handemo/render/svg.hpp>
 #include <handemo/stargan/configs.hpp>
@@ -78,6 +79,7 @@ struct prepared_clip {
     const stargan::labelled_clip* src;
     keyframes<K> kf;
     characteristics ch;
+    characteristics full;  ///< measured on the clip as it is (measure_full())
 };
 
 /// Mean of a loss column over the last 10% of logged rows.
@@ -196,7 +198,7 @@ std::vector<prepared_clip<K>> prepare_clips(const std::vector<stargan::labelled_
 {
     std::vector<prepared_clip<K>> all;
     all.reserve(clips.size());
-    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), measure<K>(c.motion)});
+    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), measure<K>(c.motion), measure_full(c.motion)});
     return all;
 }
 
@@ -392,20 +394,21 @@ const prepared_clip<K>* real_target(const std::vector<const prepared_clip<K>*>& 
 /// clips that are not outputs (identity, nearest neighbour, real), in the order of the report.
 struct method_outputs {
     stargan::transfer_result stargan;
-    clip g_only, ungated, amp_only, mean_offset, oracle;
+    clip detailed, g_only, ungated, amp_only, mean_offset, oracle;
     const clip* input = nullptr;
     const clip* nearest = nullptr;
     const clip* real = nullptr;
-    bool has_amp = false, gated = false, has_oracle = false;
+    bool has_amp = false, gated = false, has_oracle = false, has_detail = false;
     std::vector<std::pair<std::string, clip>> extra;
 
     std::vector<std::pair<const char*, const clip*>> rows() const
     {
-        std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &stargan.motion},
-                                                                 {"identity", input},
+        std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &stargan.motion}};
+        if (has_detail) outs.push_back({"stargan+detail", &detailed});
+        outs.insert(outs.end(), {{"identity", input},
                                                                  {"mean-offset", &mean_offset},
                                                                  {"nearest-neighbour", nearest},
-                                                                 {"real", real}};
+                                                                 {"real", real}});
         if (has_amp) outs.push_back({"stargan-g", &g_only}), outs.push_back({"amplitude-only", &amp_only});
         if (gated) outs.push_back({"stargan-ungated", &ungated});
         if (has_oracle) outs.push_back({"oracle", &oracle});
@@ -434,6 +437,7 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
 {
     const auto kf = extract_keyframes<K>(out);
     const auto ch = measure<K>(out);
+    const auto full = measure_full(out);
     sample_record s;
     s.fold = held, s.target = target, s.take = in.src->take, s.method = method;
     s.rmse_real = keyframe_rmse(kf, real.kf);
@@ -447,6 +451,12 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
     s.real_rom_ratio = real_rom, s.real_speed_ratio = real_speed;
     s.rom_error = log_ratio_error(s.rom_ratio, real_rom);
     s.speed_error = log_ratio_error(s.speed_ratio, real_speed);
+    s.rom_ratio_full = ratio(full.range_of_motion, in.full.range_of_motion, "range of motion (full rate)");
+    s.speed_ratio_full = ratio(full.speed, in.full.speed, "speed (full rate)");
+    s.real_rom_ratio_full = ratio(real.full.range_of_motion, in.full.range_of_motion, "range of motion (full rate)");
+    s.real_speed_ratio_full = ratio(real.full.speed, in.full.speed, "speed (full rate)");
+    s.rom_error_full = log_ratio_error(s.rom_ratio_full, s.real_rom_ratio_full);
+    s.speed_error_full = log_ratio_error(s.speed_ratio_full, s.real_speed_ratio_full);
     for (const auto& x : extensions) x->score(s, out);
     return s;
 }
@@ -589,6 +599,9 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
 
         // ---- baselines and the independent emotion classifier, from the training clips only
         const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
+        std::vector<std::pair<const clip*, std::string>> detail_data;
+        for (const auto& c : train) detail_data.push_back({&c.motion, c.emotion});
+        const auto fold_detail = detail_layer::fit(detail_data, K);  // the detail layer, from training clips only
         const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
         detail::seen_content_rmse<K>(models.model, split.train_p, info.neutral, fsum);
 
@@ -614,6 +627,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 detail::method_outputs o;
                 o.stargan = models.model.transfer(input, target);
                 o.has_amp = models.has_amp, o.gated = models.gated;
+                o.detailed = fold_detail.apply(o.stargan.motion, input, info.neutral, target), o.has_detail = true;
                 if (o.has_amp) o.g_only = models.g_only.transfer(input, target).motion;
                 if (o.gated) o.ungated = models.ungated.transfer(input, target).motion;
                 if (o.has_amp) o.amp_only = detail::amplitude_only<K>(input, o.stargan);

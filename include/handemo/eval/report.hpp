@@ -26,7 +26,7 @@ namespace handemo::eval {
 /// the circumplex synthesis of Aristidou et al. 2017 (only with the extension of eval/rcm.hpp).
 inline const std::vector<std::string>& method_names()
 {
-    static const std::vector<std::string> m{"stargan", "stargan-g", "stargan-ungated", "identity", "mean-offset", "amplitude-only",
+    static const std::vector<std::string> m{"stargan", "stargan+detail", "stargan-g", "stargan-ungated", "identity", "mean-offset", "amplitude-only",
                                             "nearest-neighbour", "rcm", "real", "oracle"};
     return m;
 }
@@ -42,6 +42,10 @@ struct sample_record {
     double rom_ratio = 0, speed_ratio = 0;            ///< output / input
     double real_rom_ratio = 0, real_speed_ratio = 0;  ///< real target / input
     double rom_error = 0, speed_error = 0;            ///< |log(ratio / real ratio)|
+    /// The same three on the full-rate clips as they are (a capture's tremor and noise included; the detail layer's
+    /// measure), not on their 9-keyframe reconstructions.
+    double rom_ratio_full = 0, speed_ratio_full = 0, real_rom_ratio_full = 0, real_speed_ratio_full = 0;
+    double rom_error_full = 0, speed_error_full = 0;
     /// The fold's circumplex model's analysis of the output (eval/rcm.hpp; NaN when not measured) and whether it
     /// lies in the target label's quadrant (1 or 0; NaN when not measured).
     double circumplex_valence = std::nan(""), circumplex_arousal = std::nan(""), circumplex_quadrant_ok = std::nan("");
@@ -110,6 +114,8 @@ inline const std::vector<metric_def>& metric_defs()
         {"speed_ratio", "speed ratio out/in", 0, [](const sample_record& r) { return r.speed_ratio; }},
         {"rom_error", "ROM ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.rom_error; }},
         {"speed_error", "speed ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.speed_error; }},
+        {"rom_error_full", "full-rate ROM ratio error", -1, [](const sample_record& r) { return r.rom_error_full; }},
+        {"speed_error_full", "full-rate speed ratio error", -1, [](const sample_record& r) { return r.speed_error_full; }},
         {"circumplex_quadrant", "circumplex quadrant reached (%)", +1,
          [](const sample_record& r) { return 100.0 * r.circumplex_quadrant_ok; }, true},
     };
@@ -215,14 +221,17 @@ inline std::string samples_csv(const eval_result& r)
     // the circumplex columns only when an extension measured them (the file is unchanged otherwise)
     const bool circ = std::any_of(r.samples.begin(), r.samples.end(), [](const sample_record& x) { return !std::isnan(x.circumplex_quadrant_ok); });
     std::string s = "fold,target,take,method,rmse_real,rmse_input,emotion_ok,predicted_emotion,content_ok,predicted_content,"
-                    "rom_ratio,speed_ratio,real_rom_ratio,real_speed_ratio,rom_error,speed_error";
+                    "rom_ratio,speed_ratio,real_rom_ratio,real_speed_ratio,rom_error,speed_error,rom_ratio_full,speed_ratio_full,"
+                    "real_rom_ratio_full,real_speed_ratio_full,rom_error_full,speed_error_full";
     s += circ ? ",circumplex_valence,circumplex_arousal,circumplex_quadrant_ok\n" : "\n";
     for (const auto& x : r.samples) {
         s += x.fold + "," + x.target + "," + x.take + "," + x.method + "," + detail::csv_num(x.rmse_real) + "," +
              detail::csv_num(x.rmse_input) + "," + (x.emotion_ok ? "1" : "0") + "," + x.predicted_emotion + "," +
              (x.content_ok ? "1" : "0") + "," + x.predicted_content + "," + detail::csv_num(x.rom_ratio) + "," +
              detail::csv_num(x.speed_ratio) + "," + detail::csv_num(x.real_rom_ratio) + "," + detail::csv_num(x.real_speed_ratio) +
-             "," + detail::csv_num(x.rom_error) + "," + detail::csv_num(x.speed_error);
+             "," + detail::csv_num(x.rom_error) + "," + detail::csv_num(x.speed_error) + "," + detail::csv_num(x.rom_ratio_full) + "," +
+             detail::csv_num(x.speed_ratio_full) + "," + detail::csv_num(x.real_rom_ratio_full) + "," +
+             detail::csv_num(x.real_speed_ratio_full) + "," + detail::csv_num(x.rom_error_full) + "," + detail::csv_num(x.speed_error_full);
         if (circ)
             s += "," + detail::csv_num(x.circumplex_valence) + "," + detail::csv_num(x.circumplex_arousal) + "," +
                  (std::isnan(x.circumplex_quadrant_ok) ? std::string("nan") : x.circumplex_quadrant_ok > 0.5 ? "1" : "0");
@@ -334,7 +343,12 @@ inline std::string markdown_report(const eval_result& r)
          " fold(s); in each, StarGAN is trained on every other content (motion type), then every held-out `" + r.neutral +
          "` take is transferred to each other emotion and compared with the held-out take of that emotion (same take "
          "index). Total time " + detail::fmt(r.seconds / 60.0, 1) + " min.\n\n";
-    s += "Methods: **stargan** (the trained G, tempo from the training set's duration ratios); **identity** (output = input); "
+    s += "Methods: **stargan** (the trained G, tempo from the training set's duration ratios); ";
+    if (has_method(r, "stargan+detail"))
+        s += "**stargan+detail** (stargan's output with the detail layer: the input's own full-rate detail about its keyframe "
+             "spline, played back and scaled by the per-emotion statistics of the fold's training clips, zero at the "
+             "output's keyframes, so only the full-rate columns can differ from stargan's; motion/detail_layer.hpp); ";
+    s += "**identity** (output = input); "
          "**mean-offset** (input keyframes + the training-set mean keyframe difference emotion - neutral over same content "
          "and take pairs, same tempo as stargan); **nearest-neighbour** (the training clip of the target emotion with the "
          "closest keyframes); **real** (the captured target clip itself: the reference)";
@@ -357,7 +371,9 @@ inline std::string markdown_report(const eval_result& r)
          "nearest-centroid classifier (shrunk pooled within-class covariance) on keyframe features, trained only on the "
          "real training clips of the fold, never on the discriminator; content kept: the nearest `" + r.neutral +
          "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "
-         "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio). "
+         "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio); "
+         "full-rate ratio errors: the same on the clips as they are (a capture's tremor and noise, and the detail layer's, "
+         "included; a keyframe-spline output has none, identity keeps the input's). "
          "Caveat: nearest-neighbour outputs are clips the emotion classifier was trained on, so its emotion score is "
          "in-sample (an upper bound), and it keeps no content by construction.";
     if (std::any_of(ms.begin(), ms.end(), [](const metric_def& m) { return m.key == "circumplex_quadrant"; }))

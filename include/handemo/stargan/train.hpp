@@ -18,6 +18,7 @@
 #include <handemo/core/thread_pool.hpp>
 #include <handemo/motion/bvh.hpp>
 #include <handemo/motion/codec.hpp>
+#include <handemo/motion/detail_layer.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/nn/adam.hpp>
 #include <handemo/nn/init.hpp>
@@ -211,6 +212,8 @@ struct prepared_data {
     std::vector<double> gate_prior;
     /// [C][J*3] the posture prior: the training pairs' mean keyframe-mean change (deg) per target and channel
     std::vector<std::vector<double>> prior_posture;
+    /// the detail layer's per-emotion statistics of the training clips (motion/detail_layer.hpp)
+    std::optional<detail_layer> detail;
     std::size_t size() const noexcept { return labels.size(); }
 };
 
@@ -407,6 +410,11 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     p.tempo = tempo_factors(clips, info.domain_names, info.neutral);
     p.amplitude = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
     p.amplitude_check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
+    {
+        std::vector<std::pair<const clip*, std::string>> d;
+        for (const auto& c : clips) d.push_back({&c.motion, c.emotion});
+        p.detail = detail_layer::fit(d, K);
+    }
     if (!(p.amplitude_check.second < p.amplitude_check.first)) p.amplitude.assign(p.amplitude.size(), 1.0);
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
@@ -478,6 +486,8 @@ struct checkpoint_info {
     /// prior itself in degrees (empty when every weight is 0)
     std::vector<double> gate_prior;
     std::vector<std::vector<double>> prior_posture;
+    /// the detail layer learned from the training clips (absent in checkpoints written before it existed)
+    std::optional<detail_layer> detail;
     std::vector<std::string> joint_names;
     long step = 0;
     nlohmann::json options;
@@ -542,6 +552,7 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
                 for (const auto& row : j.at("gate").at("prior_posture")) info.prior_posture.push_back(detail::json_doubles(row));
         }
         if (info.gate_prior.empty()) info.gate_prior.assign(info.tempo.size(), 0.0);
+        if (j.contains("detail")) info.detail = detail_layer::from_json(j.at("detail"), "checkpoint: " + path.string() + " (metadata 'detail')");
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = static_cast<long>(count("step", std::uint64_t{1} << 53));
         info.options = j.at("options");
@@ -579,6 +590,15 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
             for (double v : info.prior_posture[d])
                 if (!(std::abs(v) <= 360)) throw fail("gate prior_posture of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
         }
+    }
+    if (info.detail) {
+        if (info.detail->channels != info.range.joints * 3 || info.detail->keyframes != info.range.keyframes)
+            throw fail("metadata 'detail' is for " + std::to_string(info.detail->channels / 3) + " joints and " +
+                       std::to_string(info.detail->keyframes) + " keyframes, the model has " + std::to_string(info.range.joints) + " and " +
+                       std::to_string(info.range.keyframes));
+        for (const auto& e : info.detail->emotions)
+            if (std::find(info.domains.begin(), info.domains.end(), e) == info.domains.end())
+                throw fail("metadata 'detail' has emotion '" + e + "', which is not a domain of the model");
     }
     if (std::find(info.domains.begin(), info.domains.end(), info.neutral) == info.domains.end())
         throw fail("neutral domain '" + info.neutral + "' is not one of the " + std::to_string(info.domains.size()) + " domains");
@@ -824,6 +844,7 @@ public:
                             {"joint_names", data_.joint_names},
                             {"step", step_},
                             {"options", opt_.to_json()}};
+        if (data_.detail) j["detail"] = data_.detail->to_json();
         f.metadata["format"] = "handemo-checkpoint/1";
         f.metadata["handemo"] = j.dump();
         f.metadata["checksum"] = detail::checkpoint_checksum(f);
@@ -881,6 +902,7 @@ public:
         data_.gate_motion = info.gate_motion;
         data_.gate_prior = info.gate_prior;
         data_.prior_posture = info.prior_posture;
+        if (info.detail) data_.detail = info.detail;
         step_ = info.step;
     }
 

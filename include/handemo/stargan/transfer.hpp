@@ -262,6 +262,20 @@ public:
         return r;
     }
 
+    /// @brief Whether the checkpoint carries the detail layer (checkpoints written before it existed do not).
+    bool has_detail() const noexcept { return info_.detail.has_value(); }
+
+    /// @brief `out`, a transfer of `in` to `target` (transfer()), with the detail layer learned from the model's
+    /// training clips (motion/detail_layer.hpp): the input's own full-rate detail, played back and scaled by the
+    /// target's statistics against the source's, zero at the output's keyframes.
+    /// @throws value_error when the model has no detail layer or no statistics for the source or the target.
+    clip add_detail(const clip& out, const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
+    {
+        if (!info_.detail)
+            throw value_error("transfer: model " + info_.source + " has no detail layer (trained before it existed): train it again");
+        return info_.detail->apply(out, in, std::string(source ? *source : std::string_view(info_.neutral)), std::string(target));
+    }
+
     /// @brief Checks a skeleton against the one the model was trained on.
     void check_skeleton(const skeleton& s) const
     {
