@@ -158,6 +158,9 @@ TEST_CASE("detail_layer: JSON round trip and errors that name the field")
     bad["keyframes"] = 1e300;
     CHECK_THROWS_WITH_AS(detail_layer::from_json(bad, "x.json"), doctest::Contains("field 'keyframes'"), format_error);
     bad = layer.to_json();
+    bad["clips"][0] = 1e300;
+    CHECK_THROWS_WITH_AS(detail_layer::from_json(bad, "x.json"), doctest::Contains("field 'clips'"), format_error);
+    bad = layer.to_json();
     bad["amplitude"][0].erase(0);
     CHECK_THROWS_WITH_AS(detail_layer::from_json(bad, "x.json"), doctest::Contains("channels"), format_error);
     CHECK_THROWS_AS(detail_layer::from_json(nlohmann::json::array(), "x.json"), format_error);

@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -250,7 +251,12 @@ struct detail_layer {
             m.emotions = j.at("emotions").get<std::vector<std::string>>();
             m.amplitude = j.at("amplitude").get<std::vector<std::vector<double>>>();
             m.frequency = j.at("frequency").get<std::vector<double>>();
-            m.clips = j.at("clips").get<std::vector<std::size_t>>();
+            // integers only from JSON integers: a float such as 1e300 converted to an integer type is undefined
+            for (const auto& v : j.at("clips")) {
+                if (!v.is_number_unsigned() || v.get<std::uint64_t>() > (std::uint64_t{1} << 32))
+                    throw fail("field 'clips' holds " + v.dump() + ", expected clip counts");
+                m.clips.push_back(static_cast<std::size_t>(v.get<std::uint64_t>()));
+            }
         } catch (const nlohmann::json::exception& e) {
             throw fail(std::string("malformed: ") + e.what());
         }
