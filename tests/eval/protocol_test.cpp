@@ -72,6 +72,17 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     }
     CHECK(sec->markdown.find("| all | " + std::to_string(pairs) + " | ") != std::string::npos);
     CHECK(read_file(dir / "report.md").find("## The change gate, checked inside the training sets") != std::string::npos);
+    // the detail layer's example picture: the first fold, one panel per target, real / stargan / stargan+detail in each
+    const auto dsec = std::find_if(r.sections.begin(), r.sections.end(), [](const report_section& x) { return x.file == "detail.svg"; });
+    REQUIRE(dsec != r.sections.end());
+    CHECK(dsec->markdown.find("fold 'patting'") != std::string::npos);
+    REQUIRE(fs::exists(dir / "detail.svg"));
+    const std::string dsvg = read_file(dir / "detail.svg");
+    std::size_t polylines = 0;
+    for (std::size_t p = dsvg.find("<polyline"); p != std::string::npos; p = dsvg.find("<polyline", p + 1)) ++polylines;
+    CHECK(polylines == 12);
+    CHECK(dsvg.find("data-series=\"stargan+detail\"") != std::string::npos);
+    CHECK(read_file(dir / "report.md").find("![detail layer](detail.svg)") != std::string::npos);
     {
         // a gate table it cannot read is an error naming the file and line, not a wrong number
         const fs::path bad = dir / "bad_copy";

@@ -225,6 +225,24 @@ TEST_CASE("svg: per-fold small multiples")
     CHECK_THROWS_AS(plot_folds_svg({}), value_error);
 }
 
+TEST_CASE("svg: track plot: panels, a legend entry per series, a break at each non-finite value")
+{
+    std::vector<track_series> c{{"sad <wrist>", "real", {0, 0.5, 1}, {1, 2, 3}},
+                                {"sad <wrist>", "stargan", {0, 0.5, 1}, {1, std::nan(""), 3}},
+                                {"angry", "real", {0, 1}, {-5, 5}}};
+    const std::string svg = plot_tracks_svg(c);
+    CHECK(xml_problem(svg) == "");
+    CHECK(svg.find("sad &lt;wrist&gt;") != std::string::npos);
+    CHECK(legend_names(svg) == std::vector<std::string>{"real", "stargan"});
+    CHECK(count(svg, "class=\"series\"") == 4);  // the NaN splits stargan's curve in two
+    CHECK_THROWS_AS(plot_tracks_svg({}), value_error);
+    c[0].t.push_back(0.7);
+    CHECK_THROWS_WITH_AS(plot_tracks_svg(c), doctest::Contains("3 values"), value_error);
+    c[0].v.push_back(1.0);
+    c[0].t.back() = 1.5;
+    CHECK_THROWS_WITH_AS(plot_tracks_svg(c), doctest::Contains("outside [0, 1]"), value_error);
+}
+
 TEST_CASE("svg: the checker itself rejects broken XML")
 {
     CHECK(xml_problem("<svg><g></g></svg>").empty());

@@ -571,6 +571,104 @@ inline std::string plot_folds_svg(std::span<const fold_point> points, const fold
     return out;
 }
 
+/// @brief One curve of a track plot: `v[i]` at `t[i]` (t in [0, 1], the clip's normalised time), drawn in `panel`.
+struct track_series {
+    std::string panel, series;
+    std::vector<double> t, v;
+};
+
+/// @brief Options of plot_tracks_svg.
+struct track_plot_options {
+    std::size_t panel_width = 420, panel_height = 220;
+    std::size_t panels_per_row = 2;
+    std::string title = "tracks";
+    std::string y_label = "deg";
+};
+
+/// @brief Curves over normalised time as small multiples: one panel per `panel` (own linear y axis, x from 0 to 1),
+/// one colour per series across every panel (legend on top). Each curve is a polyline with `class="series"` and
+/// `data-series`. Non-finite values break the curve.
+/// @throws value_error when `curves` is empty, or a curve's t and v differ in size or t leaves [0, 1].
+inline std::string plot_tracks_svg(std::span<const track_series> curves, const track_plot_options& opt = {})
+{
+    if (curves.empty()) throw value_error("plot_tracks_svg: no curves to draw");
+    std::vector<std::string> panels, series;
+    auto add = [](std::vector<std::string>& v, const std::string& s) {
+        if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
+    };
+    for (const auto& c : curves) {
+        if (c.t.size() != c.v.size())
+            throw value_error("plot_tracks_svg: curve '" + c.series + "' has " + std::to_string(c.t.size()) + " times and " +
+                              std::to_string(c.v.size()) + " values");
+        for (double t : c.t)
+            if (!(t >= 0 && t <= 1)) throw value_error("plot_tracks_svg: curve '" + c.series + "' has a time outside [0, 1]");
+        add(panels, c.panel), add(series, c.series);
+    }
+    const std::size_t per_row = std::max<std::size_t>(1, std::min(opt.panels_per_row, panels.size()));
+    const std::size_t prow = (panels.size() + per_row - 1) / per_row;
+    const double pw = static_cast<double>(std::max<std::size_t>(opt.panel_width, 200)),
+                 ph = static_cast<double>(std::max<std::size_t>(opt.panel_height, 140));
+    const double legend_h = 20.0 * static_cast<double>((series.size() + 3) / 4) + 8, top = 40 + legend_h;
+    const double W = pw * static_cast<double>(per_row) + 20, H = top + ph * static_cast<double>(prow) + 10;
+    std::string out = detail::svg_open(static_cast<std::size_t>(W), static_cast<std::size_t>(H));
+    detail::svg_text(out, W / 2, 24, opt.title, "middle", 16, "font-weight=\"bold\"");
+    for (std::size_t m = 0; m < series.size(); ++m) {
+        const double lx = 20 + static_cast<double>(m % 4) * (W - 40) / 4, ly = 44 + 20.0 * static_cast<double>(m / 4);
+        detail::svg_line(out, lx, ly - 3, lx + 22, ly - 3, detail::plot_palette[m % detail::plot_palette.size()], 2.5);
+        detail::svg_text(out, lx + 28, ly + 1, series[m], "start", 12, "class=\"legend\"");
+    }
+    for (std::size_t k = 0; k < panels.size(); ++k) {
+        const double ox = 10 + pw * static_cast<double>(k % per_row), oy = top + ph * static_cast<double>(k / per_row);
+        const double L = ox + 56, R = ox + pw - 14, T = oy + 26, B = oy + ph - 36;
+        std::vector<double> vals;
+        for (const auto& c : curves)
+            if (c.panel == panels[k])
+                for (double v : c.v)
+                    if (std::isfinite(v)) vals.push_back(v);
+        std::vector<double> ticks;
+        const detail::y_axis ay = detail::make_y_axis(axis_scale::linear, vals, T, B, ticks);
+        detail::svg_text(out, (L + R) / 2, oy + 16, panels[k], "middle", 13, "font-weight=\"bold\"");
+        for (double t : ticks) {
+            const double y = ay.pixel(t);
+            if (y < T - 0.5 || y > B + 0.5) continue;
+            detail::svg_line(out, L, y, R, y, "#ececec");
+            detail::svg_text(out, L - 6, y + 4, detail::fmt_num(t), "end", 10);
+        }
+        detail::svg_text(out, ox + 14, (T + B) / 2, opt.y_label, "middle", 10,
+                         "transform=\"rotate(-90 " + detail::fmt_px(ox + 14) + " " + detail::fmt_px((T + B) / 2) + ")\"");
+        for (double x : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+            const double px = L + x * (R - L);
+            detail::svg_line(out, px, B, px, B + 4, "#444");
+            detail::svg_text(out, px, B + 15, detail::fmt_num(x), "middle", 10);
+        }
+        out += "<rect x=\"" + detail::fmt_px(L) + "\" y=\"" + detail::fmt_px(T) + "\" width=\"" + detail::fmt_px(R - L) + "\" height=\"" +
+               detail::fmt_px(B - T) + "\" fill=\"none\" stroke=\"#444\"/>\n";
+        for (std::size_t m = 0; m < series.size(); ++m) {
+            const std::string col(detail::plot_palette[m % detail::plot_palette.size()]);
+            for (const auto& c : curves) {
+                if (c.panel != panels[k] || c.series != series[m]) continue;
+                std::string pts;
+                auto flush = [&] {
+                    if (pts.empty()) return;
+                    out += "<polyline class=\"series\" data-series=\"" + detail::xml_escape(series[m]) + "\" fill=\"none\" stroke=\"" + col +
+                           "\" stroke-width=\"1.4\" points=\"" + pts + "\"><title>" + detail::xml_escape(series[m]) + "</title></polyline>\n";
+                    pts.clear();
+                };
+                for (std::size_t i = 0; i < c.t.size(); ++i) {
+                    if (!std::isfinite(c.v[i])) {
+                        flush();
+                        continue;
+                    }
+                    pts += (pts.empty() ? "" : " ") + detail::fmt_px(L + c.t[i] * (R - L)) + "," + detail::fmt_px(ay.pixel(c.v[i]));
+                }
+                flush();
+            }
+        }
+    }
+    out += "</svg>\n";
+    return out;
+}
+
 /// @brief Parses an evaluation summary CSV with the header `metric,method,mean,std` (std may be empty: 0).
 /// @throws format_error naming `what`, the line and the field for a wrong header, field count, a mean
 ///         that is not a finite number, or a std that is negative or not a number.
