@@ -120,6 +120,39 @@ TEST_CASE("detail_layer: fit learns per-emotion amplitude and frequency, apply m
     }
 }
 
+TEST_CASE("detail_layer::fit_checked: where the statistics hold on every content, it keeps them (strength 1)")
+{
+    std::vector<clip> clips;
+    std::vector<detail_layer::sample> data;
+    const char* contents[] = {"a", "b", "c"};
+    for (int c = 0; c < 3; ++c) clips.push_back(detailed_clip(4.0, 1.0 + 0.1 * c)), clips.push_back(detailed_clip(16.0, 3.0 + 0.3 * c));
+    for (int c = 0; c < 3; ++c) {
+        data.push_back({&clips[2 * c], "calm", contents[c], "0"});
+        data.push_back({&clips[2 * c + 1], "shaky", contents[c], "0"});
+    }
+    const auto m = detail_layer::fit_checked(data, "calm");
+    REQUIRE(m.check_error.size() == detail_layer::strength_candidates.size());
+    CHECK(m.strength == 1.0);
+    CHECK(m.check_error.back() < 0.5 * m.check_error.front());
+    for (double e : m.check_error) CHECK(std::isfinite(e));
+    // the statistics are fit()'s
+    const auto plain = detail_layer::fit({{&clips[0], "calm"}, {&clips[1], "shaky"}, {&clips[2], "calm"}, {&clips[3], "shaky"}, {&clips[4], "calm"},
+                                          {&clips[5], "shaky"}});
+    CHECK(m.amplitude == plain.amplitude);
+    // strength 0: the input's detail as it is (gain and rate 1)
+    detail_layer z = m;
+    z.strength = 0;
+    CHECK(z.rate("calm", "shaky") == 1.0);
+    CHECK(z.gain("calm", "shaky", 0) == 1.0);
+    const auto back = detail_layer::from_json(m.to_json(), "x");
+    CHECK(back.strength == m.strength);
+    CHECK(back.check_error == m.check_error);
+    // one content: nothing to check on, strength 1 and no check
+    const auto one = detail_layer::fit_checked({data[0], data[1]}, "calm");
+    CHECK(one.strength == 1.0);
+    CHECK(one.check_error.empty());
+}
+
 TEST_CASE("detail_layer: the synthetic set's fearful tremor shows as more, faster detail than neutral")
 {
     std::vector<clip> clips;
@@ -157,6 +190,9 @@ TEST_CASE("detail_layer: JSON round trip and errors that name the field")
     bad = layer.to_json();
     bad["keyframes"] = 1e300;
     CHECK_THROWS_WITH_AS(detail_layer::from_json(bad, "x.json"), doctest::Contains("field 'keyframes'"), format_error);
+    bad = layer.to_json();
+    bad["strength"] = 1.5;
+    CHECK_THROWS_WITH_AS(detail_layer::from_json(bad, "x.json"), doctest::Contains("field 'strength'"), format_error);
     bad = layer.to_json();
     bad["clips"][0] = 1e300;
     CHECK_THROWS_WITH_AS(detail_layer::from_json(bad, "x.json"), doctest::Contains("field 'clips'"), format_error);

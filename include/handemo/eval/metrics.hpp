@@ -11,6 +11,7 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/motion/clip.hpp>
+#include <handemo/motion/detail_layer.hpp>
 #include <handemo/motion/keyframes.hpp>
 
 #include <algorithm>
@@ -69,31 +70,14 @@ inline double range_of_motion(const clip& c)
     if (c.angles.size() != c.frames * J3)
         throw shape_error("range_of_motion: clip holds " + std::to_string(c.angles.size()) + " angles, expected frames*joints*3 = " +
                           std::to_string(c.frames * J3));
-    double total = 0;
-    for (std::size_t k = 0; k < J3; ++k) {
-        const double first = c.angles[k];
-        double lo = 0, hi = 0;
-        for (std::size_t f = 1; f < c.frames; ++f) {
-            const double d = wrap_degrees(c.angles[f * J3 + k] - first);
-            lo = std::min(lo, d);
-            hi = std::max(hi, d);
-        }
-        total += hi - lo;
-    }
-    return total / static_cast<double>(J3);
+    return ::handemo::detail::detail_rom(c);  // motion/detail_layer.hpp: the same sums, shared with the detail layer's check
 }
 
 /// @brief Mean absolute angular velocity (degrees per second) over joints, axes and frames.
 inline double mean_speed(const clip& c)
 {
     if (c.frames < 2) throw value_error("mean_speed: clip " + c.skel.name + " of " + std::to_string(c.frames) + " frames has no speed");
-    clip u = c;
-    unwrap_angles(u);
-    const std::size_t J3 = c.skel.size() * 3;
-    double total = 0;
-    for (std::size_t f = 1; f < c.frames; ++f)
-        for (std::size_t k = 0; k < J3; ++k) total += std::abs(u.angles[f * J3 + k] - u.angles[(f - 1) * J3 + k]);
-    return total * c.fps / static_cast<double>((c.frames - 1) * J3);
+    return ::handemo::detail::detail_speed(c);
 }
 
 /// @brief The clip as the network sees it: K uniform keyframes (Eq. 2) reconstructed by Catmull-Rom at the

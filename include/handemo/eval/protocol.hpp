@@ -447,7 +447,8 @@ void add_detail_curves(std::vector<track_series>& curves, const std::string& tar
 }
 
 /// The report section with the detail layer's example picture (detail.svg).
-inline report_section detail_section(const std::vector<track_series>& curves, const std::string& held, const std::string& take)
+inline report_section detail_section(const std::vector<track_series>& curves, const std::string& held, const std::string& take,
+                                     const std::vector<fold_summary>& folds)
 {
     report_section sec;
     if (curves.empty()) return sec;
@@ -461,7 +462,11 @@ inline report_section detail_section(const std::vector<track_series>& curves, co
                    "(its 9-keyframe spline) and **stargan+detail** (the same with the input's own detail, played back at the target's "
                    "frequency and scaled to its amplitude, both learned from the fold's training clips; the keyframes are "
                    "unchanged). Time is normalised (the clips' durations differ). The full-rate ROM and speed columns of the tables "
-                   "above measure it over every fold.\n\n![detail layer](detail.svg)\n";
+                   "above measure it over every fold.\n\n![detail layer](detail.svg)\n\nThe layer's strength (the exponent of its "
+                   "gains and rate: 0 keeps the input's detail as it is, 1 the statistics as learned), chosen per fold inside the "
+                   "training set (`detail_layer::fit_checked()`):";
+    for (const auto& f : folds) sec.markdown += " " + f.held_out + " " + fmt(f.detail_strength, 2) + (&f == &folds.back() ? "." : ",");
+    sec.markdown += "\n";
     return sec;
 }
 
@@ -638,9 +643,10 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
 
         // ---- baselines and the independent emotion classifier, from the training clips only
         const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
-        std::vector<std::pair<const clip*, std::string>> detail_data;
-        for (const auto& c : train) detail_data.push_back({&c.motion, c.emotion});
-        const auto fold_detail = detail_layer::fit(detail_data, K);  // the detail layer, from training clips only
+        std::vector<detail_layer::sample> detail_data;
+        for (const auto& c : train) detail_data.push_back({&c.motion, c.emotion, c.content, c.take});
+        const auto fold_detail = detail_layer::fit_checked(detail_data, info.neutral, K);  // the detail layer, from training clips only
+        fsum.detail_strength = fold_detail.strength;
         const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
         detail::seen_content_rmse<K>(models.model, split.train_p, info.neutral, fsum);
 
@@ -705,7 +711,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
     }
     res.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     if (auto sec = gate_check_section(res, out_dir); !sec.title.empty()) res.sections.push_back(std::move(sec));
-    if (auto sec = detail::detail_section(detail_curves, folds.front(), detail_take); !sec.title.empty()) res.sections.push_back(std::move(sec));
+    if (auto sec = detail::detail_section(detail_curves, folds.front(), detail_take, res.folds); !sec.title.empty()) res.sections.push_back(std::move(sec));
     return res;
 }
 

@@ -64,6 +64,7 @@ struct fold_summary {
     /// its training data from one that does not generalise to the held-out content.
     double seen_rmse_stargan = 0, seen_rmse_identity = 0;
     bool reused_model = false;  ///< the fold's model was loaded (--reuse-models), not trained in this run
+    double detail_strength = std::nan("");  ///< the detail layer's strength chosen on the fold's training clips
 };
 
 /// @brief A report section written by an extension (eval/extension.hpp): Markdown placed after the summary, and

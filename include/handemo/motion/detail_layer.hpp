@@ -12,6 +12,9 @@
 // keyframes, and so its keyframe RMSE and its recognised emotion, do not change; its full-rate range of motion and
 // speed do.
 // It cannot create detail on a channel where the input has none (A[s] near 0 gives gain 1 on a zero track).
+// How far to trust the statistics is chosen inside the training set (fit_checked()): the gains and the rate are
+// raised to a strength s in {0, 0.25, 0.5, 0.75, 1} (0: the input's detail as it is), the one whose outputs come
+// closest to the real clips in full-rate range of motion and speed, leave-one-content-out on the training clips.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -21,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -29,6 +33,37 @@
 #include <vector>
 
 namespace handemo {
+
+namespace detail {
+/// Full-rate range of motion and mean speed as eval/metrics.hpp measures them (angles taken within 180 degrees of the
+/// first frame; speed on unwrapped angles), repeated here so the motion layer does not depend on the evaluation.
+inline double detail_rom(const clip& c)
+{
+    const std::size_t C = c.skel.size() * 3;
+    double total = 0;
+    for (std::size_t ch = 0; ch < C; ++ch) {
+        double lo = 0, hi = 0;
+        for (std::size_t f = 1; f < c.frames; ++f) {
+            double d = std::fmod(c.angles[f * C + ch] - c.angles[ch], 360.0);
+            if (d > 180.0) d -= 360.0;
+            if (d <= -180.0) d += 360.0;
+            lo = std::min(lo, d), hi = std::max(hi, d);
+        }
+        total += hi - lo;
+    }
+    return C ? total / static_cast<double>(C) : 0.0;
+}
+inline double detail_speed(const clip& c)
+{
+    clip u = c;
+    unwrap_angles(u);
+    const std::size_t C = c.skel.size() * 3;
+    double total = 0;
+    for (std::size_t f = 1; f < u.frames; ++f)
+        for (std::size_t ch = 0; ch < C; ++ch) total += std::abs(u.angles[f * C + ch] - u.angles[(f - 1) * C + ch]);
+    return u.frames > 1 && C ? total * u.fps / static_cast<double>((u.frames - 1) * C) : 0.0;
+}
+}  // namespace detail
 
 /// @brief The full-rate detail of `c` about its K-keyframe spline: [frames, J, 3] degrees (unwrapped clip minus
 /// the Catmull-Rom spline through its uniform keyframes, the spline reconstruct() makes).
@@ -94,6 +129,73 @@ struct detail_layer {
     std::vector<std::vector<double>> amplitude;    ///< [E][J*3] mean RMS detail (degrees)
     std::vector<double> frequency;                 ///< [E] RMS frequency (Hz)
     std::vector<std::size_t> clips;                ///< [E] training clips behind each row
+    /// Exponent of gain() and rate(): 1 the statistics as learned, 0 the input's own detail unchanged; chosen by
+    /// fit_checked(), 1 after fit()
+    double strength = 1.0;
+    /// fit_checked()'s training-set check: per candidate strength (strength_candidates()), the mean over the
+    /// held-out pairs of |log(ROM out / ROM real)| + |log(speed out / speed real)| (full rate); empty after fit()
+    std::vector<double> check_error;
+
+    /// The strengths fit_checked() chooses from.
+    static constexpr std::array<double, 5> strength_candidates{0.0, 0.25, 0.5, 0.75, 1.0};
+
+    /// @brief One training clip for fit_checked(): its motion, emotion, content (motion type) and take.
+    struct sample {
+        const clip* motion = nullptr;
+        std::string emotion, content, take;
+    };
+
+    /// @brief fit(), with the strength chosen inside the training set: for every content, the layer fitted on the
+    /// other contents puts the detail of each of this content's `neutral` takes on the keyframe spline of the same
+    /// take in every other emotion (a perfect keyframe transfer), and the full-rate range of motion and speed of the
+    /// result are compared with the real clip's; the candidate strength with the lowest mean error is kept (ties:
+    /// the stronger). With fewer than 2 contents, or no pair, the strength stays 1.
+    /// @throws as fit().
+    static detail_layer fit_checked(const std::vector<sample>& data, const std::string& neutral, std::size_t k = 9)
+    {
+        std::vector<std::pair<const clip*, std::string>> all;
+        for (const auto& d : data) all.push_back({d.motion, d.emotion});
+        detail_layer m = fit(all, k);
+        std::vector<std::string> contents;
+        for (const auto& d : data)
+            if (std::find(contents.begin(), contents.end(), d.content) == contents.end()) contents.push_back(d.content);
+        if (contents.size() < 2) return m;
+        std::vector<double> err(strength_candidates.size(), 0.0);
+        std::size_t pairs = 0;
+        for (const auto& c : contents) {
+            std::vector<std::pair<const clip*, std::string>> rest;
+            for (const auto& d : data)
+                if (d.content != c) rest.push_back({d.motion, d.emotion});
+            const detail_layer inner = fit(rest, k);
+            for (const auto& in : data) {
+                if (in.content != c || in.emotion != neutral) continue;
+                for (const auto& real : data) {
+                    if (real.content != c || real.take != in.take || real.emotion == neutral) continue;
+                    if (std::find(inner.emotions.begin(), inner.emotions.end(), real.emotion) == inner.emotions.end() ||
+                        std::find(inner.emotions.begin(), inner.emotions.end(), neutral) == inner.emotions.end())
+                        continue;
+                    const clip spline = reconstruct(extract_keyframes<dynamic_keyframes>(*real.motion, k), real.motion->skel,
+                                                    real.motion->frames, real.motion->fps);
+                    const double rom_real = detail::detail_rom(*real.motion), speed_real = detail::detail_speed(*real.motion);
+                    for (std::size_t i = 0; i < strength_candidates.size(); ++i) {
+                        detail_layer l = inner;
+                        l.strength = strength_candidates[i];
+                        const clip out = l.apply(spline, *in.motion, neutral, real.emotion);
+                        err[i] += std::abs(std::log(detail::detail_rom(out) / rom_real)) + std::abs(std::log(detail::detail_speed(out) / speed_real));
+                    }
+                    ++pairs;
+                }
+            }
+        }
+        if (pairs == 0) return m;
+        for (double& e : err) e /= static_cast<double>(pairs);
+        std::size_t best = 0;
+        for (std::size_t i = 1; i < err.size(); ++i)
+            if (err[i] <= err[best] || !std::isfinite(err[best])) best = i;
+        m.strength = strength_candidates[best];
+        m.check_error = err;
+        return m;
+    }
 
     /// @brief Learns the statistics from (clip, emotion) pairs, every clip of the same skeleton size.
     /// @throws value_error for no clips; shape_error when the skeletons differ in joint count.
@@ -145,21 +247,21 @@ struct detail_layer {
     }
 
     /// @brief Rate at which the input's detail is played back for a transfer source -> target: F[t] / F[s],
-    /// within [1/max_rate, max_rate]; 1 when either emotion has no detail.
+    /// within [1/max_rate, max_rate], to the power `strength`; 1 when either emotion has no detail.
     double rate(const std::string& source, const std::string& target) const
     {
         const double fs = frequency[index(source)], ft = frequency[index(target)];
         if (!(fs > 0) || !(ft > 0)) return 1.0;
-        return std::clamp(ft / fs, 1.0 / max_rate, max_rate);
+        return std::pow(std::clamp(ft / fs, 1.0 / max_rate, max_rate), strength);
     }
 
-    /// @brief Gain of channel `ch` for source -> target: A[t][ch] / A[s][ch] within [0, max_gain]; 1 where the
-    /// source has (almost) no detail (1e-6 deg).
+    /// @brief Gain of channel `ch` for source -> target: A[t][ch] / A[s][ch] within [0, max_gain], to the power
+    /// `strength`; 1 where the source has (almost) no detail (1e-6 deg).
     double gain(const std::string& source, const std::string& target, std::size_t ch) const
     {
         const double as = amplitude[index(source)].at(ch), at = amplitude[index(target)].at(ch);
         if (!(as > 1e-6)) return 1.0;
-        return std::clamp(at / as, 0.0, max_gain);
+        return std::pow(std::clamp(at / as, 0.0, max_gain), strength);
     }
 
     /// @brief `out` (a keyframe-spline output of a transfer of `input` from `source` to `target`) with the input's
@@ -227,6 +329,8 @@ struct detail_layer {
         j["amplitude"] = amplitude;
         j["frequency"] = frequency;
         j["clips"] = clips;
+        j["strength"] = strength;
+        if (!check_error.empty()) j["check_error"] = check_error;
         return j;
     }
 
@@ -251,6 +355,8 @@ struct detail_layer {
             m.emotions = j.at("emotions").get<std::vector<std::string>>();
             m.amplitude = j.at("amplitude").get<std::vector<std::vector<double>>>();
             m.frequency = j.at("frequency").get<std::vector<double>>();
+            if (j.contains("strength")) m.strength = j.at("strength").get<double>();
+            if (j.contains("check_error")) m.check_error = j.at("check_error").get<std::vector<double>>();
             // integers only from JSON integers: a float such as 1e300 converted to an integer type is undefined
             for (const auto& v : j.at("clips")) {
                 if (!v.is_number_unsigned() || v.get<std::uint64_t>() > (std::uint64_t{1} << 32))
@@ -262,6 +368,7 @@ struct detail_layer {
         }
         const std::size_t E = m.emotions.size();
         if (E == 0) throw fail("no emotions");
+        if (!(m.strength >= 0 && m.strength <= 1)) throw fail("field 'strength' is not in [0, 1]");
         if (m.amplitude.size() != E || m.frequency.size() != E || m.clips.size() != E)
             throw fail("amplitude, frequency and clips have " + std::to_string(m.amplitude.size()) + ", " + std::to_string(m.frequency.size()) +
                        " and " + std::to_string(m.clips.size()) + " rows for " + std::to_string(E) + " emotions");

@@ -411,9 +411,9 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     p.amplitude = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
     p.amplitude_check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
     {
-        std::vector<std::pair<const clip*, std::string>> d;
-        for (const auto& c : clips) d.push_back({&c.motion, c.emotion});
-        p.detail = detail_layer::fit(d, K);
+        std::vector<detail_layer::sample> d;
+        for (const auto& c : clips) d.push_back({&c.motion, c.emotion, c.content, c.take});
+        p.detail = detail_layer::fit_checked(d, info.neutral, K);
     }
     if (!(p.amplitude_check.second < p.amplitude_check.first)) p.amplitude.assign(p.amplitude.size(), 1.0);
     p.images.resize(clips.size() * 3 * H * W);
