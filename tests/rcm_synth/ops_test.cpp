@@ -83,20 +83,6 @@ TEST_CASE("rcm ops: gather, stencil, exp, bbox_volume, g1_height match finite di
     }
 }
 
-TEST_CASE("rcm ik: fk_points node matches finite differences (joints, end sites, translation)")
-{
-    const skeleton s = hand_skeleton();
-    rcm::detail::dof_layout L{s.size(), 0};
-    std::mt19937 rng(5);
-    std::vector<gc_param> ps{random_param(L.size(), rng, 40.0, 1.0)};
-    std::vector<double> base(s.size() * 3);
-    for (std::size_t j = 0; j < s.size(); ++j)
-        for (int a = 0; a < 3; ++a) base[j * 3 + a] = s.joints[j].offset[a];
-    const std::vector<rcm::skeleton_point> pts{{1, false}, {2, false}, {6, true}, {14, true}, {9, false}};
-    const rcm::detail::fk_context ctx{&s, L, base.data(), pts};
-    gradcheck(ps, [&](auto& t) { return weighted_sum(t, rcm::detail::fk_points(t, param(t, ps[0]), ctx)); }, 1e-6, 1e-9, 80);
-}
-
 namespace {
 
 // Checks d feature / d coefficients for every differentiable feature of a rig, at random coefficients.

@@ -1,20 +1,21 @@
 // Full-body inverse kinematics for the synthesis of Aristidou et al. 2017 (Section 4: "we then pass these
 // joint positions to an Inverse Kinematics solver ... to solve for the fullbody poses", FBBIK in the
 // paper). Here: damped least squares (Levenberg-Marquardt) over all joint angles and the translation of one
-// joint (the pelvis, or the hand's forearm). The solver's forward kinematics writes the world axis of every
-// rotation DOF as it goes, so the Jacobian of the control points is w x (p - o) per axis above the point
-// (the same as the tape node `fk_points`, which the finite-difference tests check, without a reverse sweep
-// per row). Bone lengths are kept exactly because the unknowns are angles (positions follow from forward
-// kinematics with the skeleton's fixed offsets and position-channel values); joint limits are kept by
-// projection with an active set (a DOF that a step would push past its limit is held at the limit and the
-// step solved again without it). Axes whose range is 360 degrees or more (BVH's +-180) are unlimited.
+// joint (the pelvis, or the hand's forearm). The solver's forward kinematics (detail::ik_kinematics, without
+// allocation) writes the world axis of every rotation DOF as it goes, so the Jacobian of the control points is
+// w x (p - o) per axis above the point; ik_kinematics::residuals_with_jacobian gives that same Jacobian for the
+// finite-difference test (tests/rcm_synth/ik_test.cpp). Bone lengths are kept exactly because the unknowns
+// are angles (positions follow from forward kinematics with the skeleton's fixed offsets and position-channel
+// values); joint limits are kept by projection with an active set (a DOF that a step would push past its
+// limit is held at the limit and the step solved again without it). Axes whose range is 360 degrees or more
+// (BVH's +-180) are unlimited.
 #pragma once
 
-#include <handemo/autodiff.hpp>
 #include <handemo/core/error.hpp>
 #include <handemo/motion/skeleton.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <numbers>
@@ -68,117 +69,198 @@ struct dof_layout {
     std::size_t size() const noexcept { return joints * 3 + (translation_joint >= 0 ? 3 : 0); }
 };
 
-/// True when `a` is `b` or one of its ancestors.
-inline bool is_ancestor_or_self(const skeleton& s, int a, int b) noexcept
-{
-    for (int j = b; j >= 0; j = s.joints[static_cast<std::size_t>(j)].parent)
-        if (j == a) return true;
-    return false;
-}
-
-/// Positions of `points` and their Jacobian d p / d q ([3 P, n], degrees for angles) at q. `base_positions`
-/// [J, 3] are the position-channel values (or offsets) of every joint; the translation joint's come from q.
-inline void fk_with_jacobian(const skeleton& s, const dof_layout& L, const double* q, const double* base_positions,
-                             std::span<const skeleton_point> points, double* out_pos, double* jac)
-{
-    const std::size_t J = s.size(), n = L.size(), P = points.size();
-    thread_local std::vector<double> pos;
-    pos.assign(base_positions, base_positions + J * 3);
-    if (L.translation_joint >= 0)
-        for (int c = 0; c < 3; ++c) pos[static_cast<std::size_t>(L.translation_joint) * 3 + c] = q[J * 3 + c];
-    const pose_positions fk = forward_kinematics(s, q, pos.data());
-    constexpr double rad = std::numbers::pi / 180.0;
-    if (jac) std::fill(jac, jac + 3 * P * n, 0.0);
-    for (std::size_t k = 0; k < P; ++k) {
-        const auto j = static_cast<std::size_t>(points[k].joint);
-        const vec3 p = points[k].end_site ? fk.end_sites[j] : fk.joints[j];
-        for (int c = 0; c < 3; ++c) out_pos[k * 3 + c] = p[c];
-        if (!jac) continue;
-        double* row0 = jac + (k * 3) * n;
-        // Rotations of every joint whose rotation moves p: the joint itself for an End Site, then ancestors.
-        int a = points[k].end_site ? static_cast<int>(j) : s.joints[j].parent;
-        for (; a >= 0; a = s.joints[static_cast<std::size_t>(a)].parent) {
-            const auto au = static_cast<std::size_t>(a);
-            const joint& ja = s.joints[au];
-            mat3 R = ja.parent >= 0 ? fk.rotations[static_cast<std::size_t>(ja.parent)] : mat3{1, 0, 0, 0, 1, 0, 0, 0, 1};
-            const vec3& o = fk.joints[au];
-            const vec3 r{p[0] - o[0], p[1] - o[1], p[2] - o[2]};
-            for (axis ax : ja.rotation_order()) {
-                const int ai = static_cast<int>(ax);
-                const vec3 w{R[0 * 3 + ai], R[1 * 3 + ai], R[2 * 3 + ai]};  // world axis = R e_ax
-                // d p / d theta = (w x r) pi/180 for theta in degrees
-                const vec3 d{w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2], w[0] * r[1] - w[1] * r[0]};
-                const std::size_t col = au * 3 + static_cast<std::size_t>(ai);
-                for (int c = 0; c < 3; ++c) row0[c * n + col] += d[c] * rad;
-                R = matmul(R, axis_rotation(ax, q[au * 3 + static_cast<std::size_t>(ai)]));
-            }
-        }
-        // Translation: p_t = p_parent + R_parent t, so d p / d t = R_parent for every point below t.
-        if (L.translation_joint >= 0 && is_ancestor_or_self(s, L.translation_joint, static_cast<int>(j))) {
-            const joint& jt = s.joints[static_cast<std::size_t>(L.translation_joint)];
-            const mat3 R = jt.parent >= 0 ? fk.rotations[static_cast<std::size_t>(jt.parent)] : mat3{1, 0, 0, 0, 1, 0, 0, 0, 1};
-            for (int c = 0; c < 3; ++c)
-                for (int e = 0; e < 3; ++e) row0[c * n + J * 3 + static_cast<std::size_t>(e)] += R[c * 3 + e];
-        }
-    }
-}
-
-/// Context of an fk_points node: what its forward pass needs (the backward reads only the stored Jacobian).
-struct fk_context {
-    const skeleton* skel = nullptr;
-    dof_layout layout;
-    const double* base_positions = nullptr;
-    std::span<const skeleton_point> points;
+/// Buffers of one forward-kinematics pass of ik_kinematics, [J] each ([J, 3] for `waxis`); from
+/// ik_kinematics::make_state, reused across passes.
+struct ik_fk_state {
+    std::vector<mat3> R;      ///< global rotation of every joint
+    std::vector<vec3> org;    ///< joint origins
+    std::vector<vec3> tip;    ///< End Sites (the joint's origin when it has none)
+    std::vector<vec3> waxis;  ///< world axis of each of a joint's rotations, in its rotation order (forward with axes)
 };
 
-// y = FK(q) at the requested points, [3 P]. The forward pass stores the local Jacobian d y / d q [3P, n]
-// (rows: d p / d theta = (w x (p - o)) pi/180 for each rotation axis w through joint origin o above the
-// point; d p / d t = R_parent for the translation).  d/dq = J^T g.
-inline void fk_points_backward(autodiff::tape<double>& t, int self)
-{
-    const auto& nd = t.at(self);
-    double* gq = t.adj(nd.in[0]);
-    if (!gq) return;
-    const std::size_t m = nd.size, n = t.at(nd.in[0]).size;
-    for (std::size_t r = 0; r < m; ++r) {
-        const double g = nd.adjoint[r];
-        if (g == 0.0) continue;
-        const double* row = nd.aux + r * n;
-        for (std::size_t c = 0; c < n; ++c) gq[c] += g * row[c];
-    }
-}
-
-/// @brief Positions of the context's points as a tape node of q (a node of size dof_layout::size()).
-inline int fk_points(autodiff::tape<double>& t, int q, const fk_context& ctx)
-{
-    const std::size_t n = ctx.layout.size(), m = ctx.points.size() * 3;
-    if (t.at(q).size != n)
-        throw shape_error("rcm::fk_points: q has " + std::to_string(t.at(q).size) + " values, expected " + std::to_string(n));
-    double* aux = t.alloc(m * n);
-    const int id = t.make("fk_points", m, {q}, &fk_points_backward, nullptr);
-    t.at(id).aux = aux;
-    fk_with_jacobian(*ctx.skel, ctx.layout, t.at(q).value, ctx.base_positions, ctx.points, t.at(id).value, aux);
-    return id;
-}
-
-/// @brief d out / d in ([size(out), size(in)], row-major) by one reverse sweep per output element over the
-/// nodes recorded between `in` and `out` (the vector-Jacobian products of their backward functions).
-inline void reverse_jacobian(autodiff::tape<double>& t, int out, int in, double* jac)
-{
-    const std::size_t m = t.at(out).size, n = t.at(in).size;
-    for (std::size_t r = 0; r < m; ++r) {
-        for (int i = in; i <= out; ++i) {
-            auto& nd = t.at(i);
-            if (nd.requires_grad) std::fill(nd.adjoint, nd.adjoint + nd.size, 0.0);
+/// @brief The IK solver's forward kinematics and Jacobian (what ik_solver::solve runs, allocation-free once a
+/// state is made). The unknowns q are dof_layout's: 3 angles per joint (x, y, z, degrees), then the position
+/// channel values of the translation joint. The same positions as handemo::forward_kinematics (to rounding:
+/// a rotation is applied in place to two columns instead of as a matrix product).
+class ik_kinematics {
+public:
+    ik_kinematics() = default;
+    /// @throws value_error when translation_joint (>= 0) is not a joint with position channels;
+    ///         format_error when the skeleton is malformed.
+    ik_kinematics(const skeleton& s, int translation_joint)
+    {
+        s.validate();
+        layout_.joints = s.size();
+        if (translation_joint >= 0) {
+            if (static_cast<std::size_t>(translation_joint) >= s.size() ||
+                !s.joints[static_cast<std::size_t>(translation_joint)].has_position())
+                throw value_error("ik_solver: translation joint " + std::to_string(translation_joint) +
+                                  " has no position channels in skeleton '" + s.name + "'");
+            layout_.translation_joint = translation_joint;
         }
-        t.at(out).adjoint[r] = 1.0;
-        for (int i = out; i > in; --i) {
-            auto& nd = t.at(i);
-            if (nd.requires_grad && nd.backward) nd.backward(t, i);
+        kin_.resize(s.size());
+        for (std::size_t j = 0; j < s.size(); ++j) {
+            const joint& jt = s.joints[j];
+            kin_[j].parent = jt.parent;
+            kin_[j].offset = jt.offset;
+            kin_[j].has_position = jt.has_position();
+            kin_[j].has_end = jt.end_site.has_value();
+            if (jt.end_site) kin_[j].end = *jt.end_site;
+            const auto order = jt.rotation_order();
+            for (int a = 0; a < 3; ++a) kin_[j].order[static_cast<std::size_t>(a)] = static_cast<int>(order[static_cast<std::size_t>(a)]);
         }
-        std::copy(t.at(in).adjoint, t.at(in).adjoint + n, jac + r * n);
     }
-}
+
+    const dof_layout& layout() const noexcept { return layout_; }
+    ik_fk_state make_state() const
+    {
+        const std::size_t J = kin_.size();
+        return {std::vector<mat3>(J), std::vector<vec3>(J), std::vector<vec3>(J), std::vector<vec3>(J * 3)};
+    }
+
+    /// Forward kinematics at q [layout().size()] into `st`: global rotations, origins, End Sites and (when
+    /// `axes`) the world axis of each of a joint's rotations in its order, w = R_parent R_a0 .. e_a.
+    /// `positions` [J, 3]: position-channel values of the joints that have them (the translation joint's come
+    /// from q); other joints use their offsets.
+    void forward(const double* qq, const double* positions, ik_fk_state& st, bool axes) const noexcept
+    {
+        constexpr double rad = std::numbers::pi / 180.0;
+        const std::size_t J = kin_.size();
+        const int tj = layout_.translation_joint;
+        std::vector<mat3>& R = st.R;
+        std::vector<vec3>& org = st.org;
+        std::vector<vec3>& tip = st.tip;
+        std::vector<vec3>& waxis = st.waxis;
+        for (std::size_t i = 0; i < J; ++i) {
+            const kin& k = kin_[i];
+            vec3 t = k.offset;
+            if (static_cast<int>(i) == tj) t = {qq[J * 3], qq[J * 3 + 1], qq[J * 3 + 2]};
+            else if (k.has_position) t = {positions[i * 3], positions[i * 3 + 1], positions[i * 3 + 2]};
+            mat3 M{1, 0, 0, 0, 1, 0, 0, 0, 1};
+            if (k.parent >= 0) {
+                const auto p = static_cast<std::size_t>(k.parent);
+                M = R[p];
+                for (int c = 0; c < 3; ++c) org[i][c] = org[p][c] + M[c * 3] * t[0] + M[c * 3 + 1] * t[1] + M[c * 3 + 2] * t[2];
+            } else {
+                org[i] = t;
+            }
+            for (std::size_t slot = 0; slot < 3; ++slot) {
+                const int ax = k.order[slot];
+                if (axes) waxis[i * 3 + slot] = {M[ax], M[3 + ax], M[6 + ax]};
+                // M <- M rot(ax, angle): only the other two columns change
+                const double th = qq[i * 3 + static_cast<std::size_t>(ax)] * rad, cs = std::cos(th), sn = std::sin(th);
+                const int u = ax == 0 ? 1 : ax == 1 ? 2 : 0, v = ax == 0 ? 2 : ax == 1 ? 0 : 1;  // (u, v, ax) cyclic
+                for (int r = 0; r < 3; ++r) {
+                    const double mu = M[r * 3 + u], mv = M[r * 3 + v];
+                    M[r * 3 + u] = mu * cs + mv * sn;
+                    M[r * 3 + v] = mv * cs - mu * sn;
+                }
+            }
+            R[i] = M;
+            tip[i] = org[i];
+            if (k.has_end)
+                for (int c = 0; c < 3; ++c)
+                    tip[i][c] = org[i][c] + M[c * 3] * k.end[0] + M[c * 3 + 1] * k.end[1] + M[c * 3 + 2] * k.end[2];
+        }
+    }
+
+    /// Position of a point after forward().
+    static const vec3& point(const ik_fk_state& st, skeleton_point p) noexcept
+    {
+        const auto j = static_cast<std::size_t>(p.joint);
+        return p.end_site ? st.tip[j] : st.org[j];
+    }
+
+    /// Appends the joints whose rotations move point p (the joint itself for an End Site, then its ancestors).
+    void append_chain(skeleton_point p, std::vector<int>& chain) const
+    {
+        for (int a = p.end_site ? p.joint : kin_[static_cast<std::size_t>(p.joint)].parent; a >= 0;
+             a = kin_[static_cast<std::size_t>(a)].parent)
+            chain.push_back(a);
+    }
+    /// True when the translation moves point p (the translation joint is p's joint or an ancestor).
+    bool translated(skeleton_point p) const noexcept
+    {
+        const int tj = layout_.translation_joint;
+        if (tj < 0) return false;
+        for (int j = p.joint; j >= 0; j = kin_[static_cast<std::size_t>(j)].parent)
+            if (j == tj) return true;
+        return false;
+    }
+
+    /// Square root of a target's weight (0 for a negative weight): the factor of its residual.
+    static double sqrt_weight(const ik_target& t) noexcept { return std::sqrt(std::max(0.0, t.weight)); }
+
+    /// Adds d r / d q of the residual r = sqrt_w (target - p) of one point p (after forward with axes) to rows
+    /// `row`..`row + 2` of the transposed Jacobian jt ([layout().size(), m], DOF c's column at jt + c m), with
+    /// the angles in degrees. `chain` and `translated` from append_chain and translated. The derivatives:
+    ///   d p / d theta = (w x (p - o)) pi/180 for each rotation axis w through joint origin o above p;
+    ///   d p / d t = R_parent of the translation joint (p = p_parent + R_parent t + ...).
+    void add_residual_jacobian(const ik_fk_state& st, const double* p, std::span<const int> chain, bool translated,
+                               const double* sqrt_w, double* jt, std::size_t m, std::size_t row) const noexcept
+    {
+        constexpr double rad = std::numbers::pi / 180.0;
+        const std::size_t J = kin_.size();
+        const double s0 = -sqrt_w[0] * rad, s1 = -sqrt_w[1] * rad, s2 = -sqrt_w[2] * rad;
+        for (const int ci : chain) {
+            const auto a = static_cast<std::size_t>(ci);
+            const vec3& o = st.org[a];
+            const double r0 = p[0] - o[0], r1 = p[1] - o[1], r2 = p[2] - o[2];
+            for (std::size_t slot = 0; slot < 3; ++slot) {  // in rotation order (an axis may repeat)
+                const vec3& w = st.waxis[a * 3 + slot];
+                const auto ax = static_cast<std::size_t>(kin_[a].order[slot]);
+                double* col = jt + (a * 3 + ax) * m + row;
+                col[0] += s0 * (w[1] * r2 - w[2] * r1);
+                col[1] += s1 * (w[2] * r0 - w[0] * r2);
+                col[2] += s2 * (w[0] * r1 - w[1] * r0);
+            }
+        }
+        if (translated) {
+            const int tp = kin_[static_cast<std::size_t>(layout_.translation_joint)].parent;
+            const mat3 Rp = tp >= 0 ? st.R[static_cast<std::size_t>(tp)] : mat3{1, 0, 0, 0, 1, 0, 0, 0, 1};
+            for (std::size_t e = 0; e < 3; ++e)
+                for (std::size_t c = 0; c < 3; ++c) jt[(J * 3 + e) * m + row + c] -= sqrt_w[c] * Rp[c * 3 + e];
+        }
+    }
+
+    /// @brief The residuals r = sqrt(weight) (target - p) of `targets` ([3 P]) and their Jacobian d r / d q
+    /// ([3 P, layout().size()], row-major, per degree for the angles) at q, computed by forward() and
+    /// add_residual_jacobian() as ik_solver::solve computes them (for tests; allocates).
+    /// @throws shape_error when a target names a joint outside the skeleton.
+    void residuals_with_jacobian(const double* q, const double* positions, std::span<const ik_target> targets,
+                                 double* out_r, double* jac) const
+    {
+        const std::size_t n = layout_.size(), m = 3 * targets.size();
+        ik_fk_state st = make_state();
+        forward(q, positions, st, true);
+        std::vector<double> jt(n * m, 0.0);
+        std::vector<int> chain;
+        for (std::size_t k = 0; k < targets.size(); ++k) {
+            const skeleton_point pt = targets[k].point;
+            if (pt.joint < 0 || static_cast<std::size_t>(pt.joint) >= kin_.size())
+                throw shape_error("ik_kinematics: target " + std::to_string(k) + " names joint " + std::to_string(pt.joint) +
+                                  ", the skeleton has " + std::to_string(kin_.size()));
+            const vec3& p = point(st, pt);
+            const double sw = sqrt_weight(targets[k]), sw3[3] = {sw, sw, sw};
+            for (std::size_t c = 0; c < 3; ++c) out_r[k * 3 + c] = (targets[k].position[c] - p[c]) * sw;
+            chain.clear();
+            append_chain(pt, chain);
+            add_residual_jacobian(st, p.data(), chain, translated(pt), sw3, jt.data(), m, k * 3);
+        }
+        for (std::size_t r = 0; r < m; ++r)
+            for (std::size_t c = 0; c < n; ++c) jac[r * n + c] = jt[c * m + r];
+    }
+
+private:
+    struct kin {  // what forward kinematics needs of a joint
+        int parent = -1;
+        vec3 offset{}, end{};
+        bool has_position = false, has_end = false;
+        std::array<int, 3> order{};
+    };
+    std::vector<kin> kin_;
+    dof_layout layout_;
+};
 
 /// Solves the symmetric positive definite system A x = b (A [m, m], overwritten) by Cholesky.
 /// Returns false when A is not positive definite.
@@ -217,18 +299,10 @@ public:
     /// @param s the skeleton (limits from its joints; a range of 360 degrees or more is unlimited)
     /// @param translation_joint joint whose position channels are free (the pelvis, the hand's forearm), or -1
     /// @throws value_error when translation_joint is not a joint with position channels.
-    ik_solver(const skeleton& s, int translation_joint, ik_options opt = {}) : skel_(&s), opt_(opt)
+    ik_solver(const skeleton& s, int translation_joint, ik_options opt = {})
+        : skel_(&s), opt_(opt), kin_(s, translation_joint)
     {
-        s.validate();
-        layout_.joints = s.size();
-        if (translation_joint >= 0) {
-            if (static_cast<std::size_t>(translation_joint) >= s.size() ||
-                !s.joints[static_cast<std::size_t>(translation_joint)].has_position())
-                throw value_error("ik_solver: translation joint " + std::to_string(translation_joint) +
-                                  " has no position channels in skeleton '" + s.name + "'");
-            layout_.translation_joint = translation_joint;
-        }
-        const std::size_t n = layout_.size();
+        const std::size_t n = kin_.layout().size();
         lo_.assign(n, -1e300);
         hi_.assign(n, 1e300);
         for (std::size_t j = 0; j < s.size(); ++j)
@@ -236,23 +310,14 @@ public:
                 const double l = s.joints[j].lower_limit[a], u = s.joints[j].upper_limit[a];
                 if (u - l < 360.0) lo_[j * 3 + a] = l, hi_[j * 3 + a] = u;
             }
-        kin_.resize(s.size());
-        for (std::size_t j = 0; j < s.size(); ++j) {
-            const joint& jt = s.joints[j];
-            kin_[j].parent = jt.parent;
-            kin_[j].offset = jt.offset;
-            kin_[j].has_position = jt.has_position();
-            kin_[j].has_end = jt.end_site.has_value();
-            if (jt.end_site) kin_[j].end = *jt.end_site;
-            const auto order = jt.rotation_order();
-            for (int a = 0; a < 3; ++a) kin_[j].order[static_cast<std::size_t>(a)] = static_cast<int>(order[static_cast<std::size_t>(a)]);
-        }
     }
 
     /// @brief Number of unknowns: 3 angles per joint (+ 3 translation values).
-    std::size_t dof_count() const noexcept { return layout_.size(); }
+    std::size_t dof_count() const noexcept { return kin_.layout().size(); }
     /// @brief True when angle (joint, axis) is limited (range below 360 degrees).
     bool limited(std::size_t j, std::size_t a) const noexcept { return hi_[j * 3 + a] < 1e299; }
+    /// @brief The forward kinematics and Jacobian that solve() runs (its finite-difference test reads them).
+    const detail::ik_kinematics& kinematics() const noexcept { return kin_; }
 
     /// @brief Moves one pose so that its points reach the targets as well as they can.
     /// @param angles [J, 3] degrees, updated in place (clamped into the limits first)
@@ -266,7 +331,7 @@ public:
                     std::span<const double> start_angles = {}, std::span<const double> start_positions = {}) const
     {
         const skeleton& s = *skel_;
-        const std::size_t J = s.size(), n = layout_.size(), P = targets.size(), m = 3 * P;
+        const std::size_t J = s.size(), n = kin_.layout().size(), P = targets.size(), m = 3 * P;
         if (angles.size() != J * 3 || positions.size() != J * 3)
             throw shape_error("ik_solver::solve: pose holds " + std::to_string(angles.size()) + "/" +
                               std::to_string(positions.size()) + " values, expected joints*3 = " + std::to_string(J * 3));
@@ -274,7 +339,7 @@ public:
         if (alt && (start_angles.size() != J * 3 || start_positions.size() != J * 3))
             throw shape_error("ik_solver::solve: start pose holds " + std::to_string(start_angles.size()) + "/" +
                               std::to_string(start_positions.size()) + " values, expected joints*3 = " + std::to_string(J * 3));
-        const int tj = layout_.translation_joint;
+        const int tj = kin_.layout().translation_joint;
         std::vector<double> tgt(m), sw(m);
         // Per target: the rotation DOFs' joints that move it (chain[chain_at[k] .. chain_at[k + 1]]) and whether
         // the translation moves it.
@@ -287,13 +352,11 @@ public:
                                   ", the skeleton has " + std::to_string(J));
             for (int c = 0; c < 3; ++c) {
                 tgt[k * 3 + c] = targets[k].position[c];
-                sw[k * 3 + c] = std::sqrt(std::max(0.0, targets[k].weight));
+                sw[k * 3 + c] = detail::ik_kinematics::sqrt_weight(targets[k]);
             }
-            for (int a = targets[k].point.end_site ? pj : kin_[static_cast<std::size_t>(pj)].parent; a >= 0;
-                 a = kin_[static_cast<std::size_t>(a)].parent)
-                chain.push_back(a);
+            kin_.append_chain(targets[k].point, chain);
             chain_at[k + 1] = static_cast<int>(chain.size());
-            translated[k] = tj >= 0 && detail::is_ancestor_or_self(s, tj, pj);
+            translated[k] = kin_.translated(targets[k].point);
         }
         std::vector<double> q(n), qn(n);
         auto load = [&](std::vector<double>& qq, std::span<const double> a, std::span<const double> p) {
@@ -307,48 +370,15 @@ public:
         double wsum = 0;
         for (std::size_t i = 0; i < m; ++i) wsum += sw[i] * sw[i];
         wsum = std::max(wsum / 3.0, 1e-300);
-        // Forward kinematics into the solver's buffers: global rotations, origins, End Sites and (for the
-        // Jacobian) the world axis of each of a joint's rotations in its order, w = R_parent R_a0 .. e_a.
-        std::vector<mat3> R(J);
-        std::vector<vec3> org(J), tip(J), waxis(J * 3);
+        // Forward kinematics into the solver's buffers (with the world axes when the Jacobian is wanted), then
+        // the points' positions and the weighted squared distance to the targets.
+        detail::ik_fk_state st = kin_.make_state();
         std::vector<double> cur(m);
         auto fk = [&](const std::vector<double>& qq, bool axes) {
-            constexpr double rad = std::numbers::pi / 180.0;
-            for (std::size_t i = 0; i < J; ++i) {
-                const kin& k = kin_[i];
-                vec3 t = k.offset;
-                if (static_cast<int>(i) == tj) t = {qq[J * 3], qq[J * 3 + 1], qq[J * 3 + 2]};
-                else if (k.has_position) t = {positions[i * 3], positions[i * 3 + 1], positions[i * 3 + 2]};
-                mat3 M{1, 0, 0, 0, 1, 0, 0, 0, 1};
-                if (k.parent >= 0) {
-                    const auto p = static_cast<std::size_t>(k.parent);
-                    M = R[p];
-                    for (int c = 0; c < 3; ++c) org[i][c] = org[p][c] + M[c * 3] * t[0] + M[c * 3 + 1] * t[1] + M[c * 3 + 2] * t[2];
-                } else {
-                    org[i] = t;
-                }
-                for (std::size_t slot = 0; slot < 3; ++slot) {
-                    const int ax = k.order[slot];
-                    if (axes) waxis[i * 3 + slot] = {M[ax], M[3 + ax], M[6 + ax]};
-                    // M <- M rot(ax, angle): only the other two columns change
-                    const double th = qq[i * 3 + static_cast<std::size_t>(ax)] * rad, cs = std::cos(th), sn = std::sin(th);
-                    const int u = ax == 0 ? 1 : ax == 1 ? 2 : 0, v = ax == 0 ? 2 : ax == 1 ? 0 : 1;  // (u, v, ax) cyclic
-                    for (int r = 0; r < 3; ++r) {
-                        const double mu = M[r * 3 + u], mv = M[r * 3 + v];
-                        M[r * 3 + u] = mu * cs + mv * sn;
-                        M[r * 3 + v] = mv * cs - mu * sn;
-                    }
-                }
-                R[i] = M;
-                tip[i] = org[i];
-                if (k.has_end)
-                    for (int c = 0; c < 3; ++c)
-                        tip[i][c] = org[i][c] + M[c * 3] * k.end[0] + M[c * 3 + 1] * k.end[1] + M[c * 3 + 2] * k.end[2];
-            }
+            kin_.forward(qq.data(), positions.data(), st, axes);
             double e = 0;
             for (std::size_t k = 0; k < P; ++k) {
-                const auto j = static_cast<std::size_t>(targets[k].point.joint);
-                const vec3& p = targets[k].point.end_site ? tip[j] : org[j];
+                const vec3& p = detail::ik_kinematics::point(st, targets[k].point);
                 for (int c = 0; c < 3; ++c) cur[k * 3 + static_cast<std::size_t>(c)] = p[c];
             }
             for (std::size_t i = 0; i < m; ++i) e += sw[i] * sw[i] * (tgt[i] - cur[i]) * (tgt[i] - cur[i]);
@@ -388,31 +418,12 @@ public:
         for (int it = 0; it < opt_.max_iterations && std::sqrt(err / wsum) > opt_.tolerance; ++it) {
             rep.iterations = it + 1;
             if (!fresh) {
-                constexpr double rad = std::numbers::pi / 180.0;
                 fk(q, true);
                 for (std::size_t i = 0; i < m; ++i) r[i] = (tgt[i] - cur[i]) * sw[i];
                 std::fill(jt.begin(), jt.end(), 0.0);
                 for (std::size_t k = 0; k < P; ++k) {
-                    const double* p = cur.data() + k * 3;
-                    const double s0 = -sw[k * 3] * rad, s1 = -sw[k * 3 + 1] * rad, s2 = -sw[k * 3 + 2] * rad;
-                    for (int ci = chain_at[k]; ci < chain_at[k + 1]; ++ci) {
-                        const auto a = static_cast<std::size_t>(chain[static_cast<std::size_t>(ci)]);
-                        const double r0 = p[0] - org[a][0], r1 = p[1] - org[a][1], r2 = p[2] - org[a][2];
-                        for (std::size_t slot = 0; slot < 3; ++slot) {  // in rotation order (an axis may repeat)
-                            const vec3& w = waxis[a * 3 + slot];  // d p / d theta = (w x (p - o)) pi/180, theta in degrees
-                            const auto ax = static_cast<std::size_t>(kin_[a].order[slot]);
-                            double* col = jt.data() + (a * 3 + ax) * m + k * 3;
-                            col[0] += s0 * (w[1] * r2 - w[2] * r1);
-                            col[1] += s1 * (w[2] * r0 - w[0] * r2);
-                            col[2] += s2 * (w[0] * r1 - w[1] * r0);
-                        }
-                    }
-                    if (translated[k]) {  // p = p_parent + R_parent t: d p / d t = R_parent
-                        const int tp = kin_[static_cast<std::size_t>(tj)].parent;
-                        const mat3 Rp = tp >= 0 ? R[static_cast<std::size_t>(tp)] : mat3{1, 0, 0, 0, 1, 0, 0, 0, 1};
-                        for (std::size_t e = 0; e < 3; ++e)
-                            for (std::size_t c = 0; c < 3; ++c) jt[(J * 3 + e) * m + k * 3 + c] -= sw[k * 3 + c] * Rp[c * 3 + e];
-                    }
+                    const std::span<const int> ch(chain.data() + chain_at[k], chain.data() + chain_at[k + 1]);
+                    kin_.add_residual_jacobian(st, cur.data() + k * 3, ch, translated[k] != 0, sw.data() + k * 3, jt.data(), m, k * 3);
                 }
                 std::fill(A0.begin(), A0.end(), 0.0);
                 for (std::size_t c = 0; c < n; ++c)
@@ -473,17 +484,10 @@ public:
     }
 
 private:
-    struct kin {  // what forward kinematics needs of a joint
-        int parent = -1;
-        vec3 offset{}, end{};
-        bool has_position = false, has_end = false;
-        std::array<int, 3> order{};
-    };
     const skeleton* skel_;
-    detail::dof_layout layout_;
     ik_options opt_;
+    detail::ik_kinematics kin_;
     std::vector<double> lo_, hi_;
-    std::vector<kin> kin_;
 };
 
 }  // namespace handemo::rcm
