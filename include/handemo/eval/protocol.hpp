@@ -436,12 +436,18 @@ void add_detail_curves(std::vector<track_series>& curves, const std::string& tar
     const auto st = measure_detail<K>(real);
     const std::size_t ch = static_cast<std::size_t>(std::max_element(st.amplitude.begin(), st.amplitude.end()) - st.amplitude.begin());
     const std::string panel = target + ": " + real.skel.joints[ch / 3].name + " " + "xyz"[ch % 3];
+    double real_mean = 0;
     for (const auto& [name, c] : {std::pair<const char*, const clip*>{"real", &real}, {"stargan", &plain}, {"stargan+detail", &detailed}}) {
         clip u = *c;
         unwrap_angles(u);
         track_series t{panel, name, {}, {}};
+        double mean = 0;
+        for (std::size_t f = 0; f < u.frames; ++f) mean += u.angles[f * u.skel.size() * 3 + ch] / static_cast<double>(u.frames);
+        if (c == &real) real_mean = mean;
+        // the same angle drawn within 180 degrees of the real track's mean (Euler tracks may differ by whole turns)
+        const double turns = 360.0 * std::round((mean - real_mean) / 360.0);
         for (std::size_t f = 0; f < u.frames; ++f)
-            t.t.push_back(static_cast<double>(f) / static_cast<double>(u.frames - 1)), t.v.push_back(u.angles[f * u.skel.size() * 3 + ch]);
+            t.t.push_back(static_cast<double>(f) / static_cast<double>(u.frames - 1)), t.v.push_back(u.angles[f * u.skel.size() * 3 + ch] - turns);
         curves.push_back(std::move(t));
     }
 }
