@@ -68,6 +68,14 @@ def star_find(cfg_keys, kind, extra=""):
     return None
 
 print(f"FP32 FMA peak (1 core, {isa}): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
+# the peak two threads get together (peak_fma_threads): on SMT siblings about the 1-thread peak, so a compute-bound
+# 2-thread step cannot be below (1-thread peak / 2-thread peak) x the 1-thread step
+peak2 = [b.get("GFLOPS", 0) for b in conv_all if b["name"].startswith("peak_fma_threads/") and b.get("run_type") == "iteration"]
+peak2 = max([g / 1e9 if g > 1e6 else g for g in peak2], default=0)
+bound = peak / peak2 if peak and peak2 else None
+if peak2:
+    print(f"FMA peak of 2 threads together: {peak2:.1f} GFLOP/s = {peak2 / peak:.2f}x the 1-thread peak"
+          f" (a compute-bound 2-thread step is at best {bound:.2f}x the 1-thread step on this machine)")
 print()
 print("| config | measure | handemo | PyTorch 1 thr | PyTorch 2 thr | best PyTorch / handemo | fraction of peak |")
 print("|---|---|---|---|---|---|---|")
@@ -86,6 +94,8 @@ for cfg, keys, gname in (("paper", ("paper", "64"), "generator_convs/paper(64,6)
     print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
     if tr1:
         eff = f"2-thread step = {tr/tr1:.2f}x the 1-thread step, parallel efficiency {tr1/(2*tr):.0%}" if tr else ""
+        if tr and bound:
+            eff += f"; machine bound {max(0.5, bound):.2f}x"
         print(f"| {cfg} | train step D+G, batch 16, 1 thread | {fmt_t(tr1)} | {fmt_t(tp1[1])} | | {ratio(tp1[1], tr1)} | {eff} |")
 print()
 layers = load_json(o.layers)

@@ -4,6 +4,10 @@
 // GFLOP/s counter (2 x multiply-adds / s), plus the generator's whole conv stack at batch 1.
 #include <benchmark/benchmark.h>
 
+#include <chrono>
+#include <thread>
+#include <vector>
+
 #include <xsimd/xsimd.hpp>
 
 #include <handemo/kernels/conv.hpp>
@@ -115,12 +119,13 @@ void run_generator(benchmark::State& state, int cd, int rep)
 /// with -march=native on an AVX-512 machine, avx2 on an AVX2 one), measured inside this program with the
 /// loop of ../shared/bench/peak_fma.cpp (12 independent FMA chains kept in registers), so that fraction of
 /// peak compares numbers taken under the same machine load and for the same vector width.
-void peak_fma(benchmark::State& state)
+/// One run of the peak loop: 12 x n FMAs on B::size lanes; returns the sum so nothing is optimised away.
+float peak_loop(long n)
 {
     using B = xsimd::batch<float>;
     using R = typename B::register_type;
-    const long n = 1000000;
-    for (auto _ : state) {
+    float out = 0;
+    {
         // named locals, not an array: an array whose address escapes is stored every iteration (measured:
         // 71 instead of 226 GFLOP/s with AVX-512 on Zen 5)
         R a0 = B(1.000f), a1 = B(1.001f), a2 = B(1.002f), a3 = B(1.003f), a4 = B(1.004f), a5 = B(1.005f);
@@ -135,11 +140,38 @@ void peak_fma(benchmark::State& state)
 #endif
         }
         B sum = B(a0) + B(a1) + B(a2) + B(a3) + B(a4) + B(a5) + B(a6) + B(a7) + B(a8) + B(a9) + B(a10) + B(a11);
-        float out = xsimd::hadd(sum);
-        benchmark::DoNotOptimize(out);
+        out = xsimd::hadd(sum);
     }
+    return out;
+}
+
+void peak_fma(benchmark::State& state)
+{
+    const long n = 1000000;
+    for (auto _ : state) benchmark::DoNotOptimize(peak_loop(n));
     state.counters["GFLOPS"] =
-        benchmark::Counter(double(n) * 12 * B::size * 2 * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+        benchmark::Counter(double(n) * 12 * xsimd::batch<float>::size * 2 * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+/// The same loop on `state.range(0)` threads at once (each its own copy), wall time: the FMA throughput the
+/// machine gives that many threads together. On a VM whose vCPUs are SMT siblings of one physical core it is
+/// about the 1-thread peak, not twice it, which bounds what any compute-bound 2-thread speed-up can be.
+void peak_fma_threads(benchmark::State& state)
+{
+    const int T = int(state.range(0));
+    const long n = 1000000;
+    for (auto _ : state) {
+        const auto t0 = std::chrono::steady_clock::now();
+        std::vector<std::thread> th;
+        std::vector<float> out(std::size_t(T), 0.f);
+        for (int t = 1; t < T; ++t) th.emplace_back([&, t] { out[std::size_t(t)] = peak_loop(n); });
+        out[0] = peak_loop(n);
+        for (auto& x : th) x.join();
+        benchmark::DoNotOptimize(out.data());
+        state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(double(n) * 12 * xsimd::batch<float>::size * 2 * T * 1e-9,
+                                                  benchmark::Counter::kIsIterationInvariantRate);
 }
 
 }  // namespace
@@ -157,6 +189,8 @@ int main(int argc, char** argv)
     benchmark::AddCustomContext("simd_float_lanes", std::to_string(xsimd::batch<float>::size));
     benchmark::RegisterBenchmark((std::string("peak_fma/") + xsimd::default_arch::name()).c_str(), peak_fma)->Unit(benchmark::kMillisecond)->Repetitions(3)
         ->ReportAggregatesOnly(false);
+    benchmark::RegisterBenchmark((std::string("peak_fma_threads/") + xsimd::default_arch::name()).c_str(), peak_fma_threads)
+        ->Arg(2)->ArgName("threads")->UseManualTime()->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(false);
     benchmark::RegisterBenchmark("generator_convs/paper(64,6)/b1", run_generator, 64, 6)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark("generator_convs/embedded(32,3)/b1", run_generator, 32, 3)->Unit(benchmark::kMicrosecond);
     for (int cd : {64, 32})

@@ -2,6 +2,7 @@
 // inference, single thread, tape-free (generator::infer); one training step (D step with WGAN-GP + G step,
 // batch 16, Adam on both) on the autodiff tape with the batch split over 2 threads and over 1 (threads:N). GFLOP/s counters are
 // multiply-adds x 2 / time (for training, an estimate: 7 G-forward + 14 D-forward equivalents per step).
+#include <handemo/micro.hpp>
 #include <handemo/nn/adam.hpp>
 #include <handemo/nn/init.hpp>
 #include <handemo/stargan/model.hpp>
@@ -37,6 +38,41 @@ void bm_infer(benchmark::State& st)
     st.counters["GFLOP/s"] =
         benchmark::Counter(2.0 * generator<float, Config>::forward_macs(), benchmark::Counter::kIsIterationInvariantRate,
                            benchmark::Counter::kIs1000);
+}
+
+/// hand-micro's weights at run time for micro::generator (what `handemo export --header` makes constexpr).
+struct micro_model {
+    static constexpr std::size_t joints = hand_micro::joints, keyframes = hand_micro::keyframes, domains = hand_micro::domains,
+                                 conv_dim = hand_micro::conv_dim, res_blocks = hand_micro::res_blocks;
+    static constexpr bool residual = true;
+    using layout = micro::generator_layout<keyframes, joints, domains, conv_dim, res_blocks>;
+    static inline float weights[layout::parameter_count];
+};
+
+/// G inference of hand-micro on the microcontroller path (micro::generator: plain loops, no heap), batch 1,
+/// one thread, on this machine: the x86 time of the Embedded targets table.
+void bm_infer_micro(benchmark::State& st)
+{
+    generator<float, with_batch<hand_micro, 1>> g;
+    rng gen(1);
+    init_pytorch_default(g, gen);
+    std::size_t i = 0;
+    g.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
+        for (float x : v) micro_model::weights[i++] = x;
+    });
+    if (i != micro_model::layout::parameter_count) st.SkipWithError("hand-micro parameter count differs from the micro layout");
+    using mg = micro::generator<micro_model>;
+    static mg::workspace ws;
+    std::vector<float> x(3 * hand_micro::keyframes * hand_micro::joints), out(x.size());
+    std::mt19937 r(2);
+    std::uniform_real_distribution<float> u(-1, 1);
+    for (auto& v : x) v = u(r);
+    for (auto _ : st) {
+        mg::infer(x.data(), 2, out.data(), ws);
+        benchmark::DoNotOptimize(out.data());
+    }
+    st.counters["GFLOP/s"] = benchmark::Counter(2.0 * micro_model::layout::macs(), benchmark::Counter::kIsIterationInvariantRate,
+                                                benchmark::Counter::kIs1000);
 }
 
 template <class Base>
@@ -114,6 +150,8 @@ void bm_train(benchmark::State& st)
 
 BENCHMARK(bm_infer<hand_paper>)->Name("stargan_infer/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer<hand_embedded>)->Name("stargan_infer/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_micro>)->Name("stargan_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_train<hand_paper>)->Name("stargan_train/paper(64,6)/b16")->ArgName("threads")->Arg(2)->Arg(1)
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 BENCHMARK(bm_train<hand_embedded>)->Name("stargan_train/embedded(32,3)/b16")->ArgName("threads")->Arg(2)->Arg(1)
