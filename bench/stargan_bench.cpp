@@ -2,12 +2,13 @@
 // inference, single thread, tape-free (generator::infer); one training step (D step with WGAN-GP + G step,
 // batch 16, Adam on both) on the autodiff tape with the batch split over 2 threads and over 1 (threads:N). GFLOP/s counters are
 // multiply-adds x 2 / time (for training, an estimate: 7 G-forward + 14 D-forward equivalents per step).
-#include <handemo/micro.hpp>
 #include <handemo/nn/adam.hpp>
 #include <handemo/nn/init.hpp>
 #include <handemo/stargan/model.hpp>
 
 #include <benchmark/benchmark.h>
+
+#include "../tests/micro/helpers.hpp"  // runtime_model, seed_generator, flat_parameters
 
 #include <random>
 #include <thread>
@@ -40,27 +41,15 @@ void bm_infer(benchmark::State& st)
                            benchmark::Counter::kIs1000);
 }
 
-/// hand-micro's weights at run time for micro::generator (what `handemo export --header` makes constexpr).
-struct micro_model {
-    static constexpr std::size_t joints = hand_micro::joints, keyframes = hand_micro::keyframes, domains = hand_micro::domains,
-                                 conv_dim = hand_micro::conv_dim, res_blocks = hand_micro::res_blocks;
-    static constexpr bool residual = true;
-    using layout = micro::generator_layout<keyframes, joints, domains, conv_dim, res_blocks>;
-    static inline float weights[layout::parameter_count];
-};
-
 /// G inference of hand-micro on the microcontroller path (micro::generator: plain loops, no heap), batch 1,
 /// one thread, on this machine: the x86 time of the Embedded targets table.
 void bm_infer_micro(benchmark::State& st)
 {
+    // hand-micro's weights filled at run time (what `handemo export --header` makes constexpr), as the micro tests do
+    using micro_model = test::runtime_model<hand_micro, true>;
     generator<float, with_batch<hand_micro, 1>> g;
-    rng gen(1);
-    init_pytorch_default(g, gen);
-    std::size_t i = 0;
-    g.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, auto) {
-        for (float x : v) micro_model::weights[i++] = x;
-    });
-    if (i != micro_model::layout::parameter_count) st.SkipWithError("hand-micro parameter count differs from the micro layout");
+    test::seed_generator(g, 1);
+    micro_model::set_weights(test::flat_parameters(g));
     using mg = micro::generator<micro_model>;
     static mg::workspace ws;
     std::vector<float> x(3 * hand_micro::keyframes * hand_micro::joints), out(x.size());

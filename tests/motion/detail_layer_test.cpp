@@ -147,6 +147,13 @@ TEST_CASE("detail_layer::fit_checked: where the statistics hold on every content
     const auto back = detail_layer::from_json(m.to_json(), "x");
     CHECK(back.strength == m.strength);
     CHECK(back.check_error == m.check_error);
+    // a motionless real clip has no ratio: its pairs are left out, the check stays finite
+    clip still = clip::make(hand_skeleton(), 241, 120.0);
+    auto with_still = data;
+    with_still.push_back({&still, "shaky", "c", "1"}), with_still.push_back({&clips[4], "calm", "c", "1"});
+    const auto ms = detail_layer::fit_checked(with_still, "calm");
+    for (double e : ms.check_error) CHECK(std::isfinite(e));
+    CHECK_NOTHROW(detail_layer::from_json(nlohmann::json::parse(ms.to_json().dump()), "x"));
     // one content: nothing to check on, strength 1 and no check
     const auto one = detail_layer::fit_checked({data[0], data[1]}, "calm");
     CHECK(one.strength == 1.0);

@@ -177,12 +177,16 @@ struct detail_layer {
                     const clip spline = reconstruct(extract_keyframes<dynamic_keyframes>(*real.motion, k), real.motion->skel,
                                                     real.motion->frames, real.motion->fps);
                     const double rom_real = detail::detail_rom(*real.motion), speed_real = detail::detail_speed(*real.motion);
+                    std::array<double, strength_candidates.size()> e{};
                     for (std::size_t i = 0; i < strength_candidates.size(); ++i) {
                         detail_layer l = inner;
                         l.strength = strength_candidates[i];
                         const clip out = l.apply(spline, *in.motion, neutral, real.emotion);
-                        err[i] += std::abs(std::log(detail::detail_rom(out) / rom_real)) + std::abs(std::log(detail::detail_speed(out) / speed_real));
+                        e[i] = std::abs(std::log(detail::detail_rom(out) / rom_real)) + std::abs(std::log(detail::detail_speed(out) / speed_real));
                     }
+                    // a motionless clip has no ratio to compare: the pair is left out (the check stays finite)
+                    if (!std::all_of(e.begin(), e.end(), [](double x) { return std::isfinite(x); })) continue;
+                    for (std::size_t i = 0; i < e.size(); ++i) err[i] += e[i];
                     ++pairs;
                 }
             }
@@ -191,7 +195,7 @@ struct detail_layer {
         for (double& e : err) e /= static_cast<double>(pairs);
         std::size_t best = 0;
         for (std::size_t i = 1; i < err.size(); ++i)
-            if (err[i] <= err[best] || !std::isfinite(err[best])) best = i;
+            if (err[i] <= err[best]) best = i;
         m.strength = strength_candidates[best];
         m.check_error = err;
         return m;

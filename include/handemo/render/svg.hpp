@@ -242,6 +242,37 @@ inline std::string svg_open(std::size_t w, std::size_t h)
            "\" height=\"" + std::to_string(h) + "\" fill=\"white\"/>\n";
 }
 
+/// The frame of a small-multiples plot: panel grid, SVG header, title and a legend of `series` on top (a dot on each
+/// legend line when `dots`); origin(k) is the top-left corner of panel k.
+struct multiples_frame {
+    std::size_t per_row = 1;
+    double pw = 0, ph = 0, top = 0, W = 0, H = 0;
+    std::pair<double, double> origin(std::size_t k) const noexcept
+    {
+        return {10 + pw * static_cast<double>(k % per_row), top + ph * static_cast<double>(k / per_row)};
+    }
+};
+inline multiples_frame open_multiples(std::string& out, std::size_t panels, const std::vector<std::string>& series, std::size_t per_row,
+                                      double pw, double ph, const std::string& title, bool dots)
+{
+    multiples_frame f;
+    f.per_row = std::max<std::size_t>(1, std::min(per_row, panels));
+    const std::size_t rows = (panels + f.per_row - 1) / f.per_row;
+    f.pw = pw, f.ph = ph;
+    f.top = 40 + 20.0 * static_cast<double>((series.size() + 3) / 4) + 8;
+    f.W = pw * static_cast<double>(f.per_row) + 20, f.H = f.top + ph * static_cast<double>(rows) + 10;
+    out = svg_open(static_cast<std::size_t>(f.W), static_cast<std::size_t>(f.H));
+    svg_text(out, f.W / 2, 24, title, "middle", 16, "font-weight=\"bold\"");
+    for (std::size_t m = 0; m < series.size(); ++m) {
+        const double lx = 20 + static_cast<double>(m % 4) * (f.W - 40) / 4, ly = 44 + 20.0 * static_cast<double>(m / 4);
+        const std::string_view c = plot_palette[m % plot_palette.size()];
+        svg_line(out, lx, ly - 3, lx + 22, ly - 3, c, 2.5);
+        if (dots) out += "<circle cx=\"" + fmt_px(lx + 11) + "\" cy=\"" + fmt_px(ly - 3) + "\" r=\"3\" fill=\"" + std::string(c) + "\"/>\n";
+        svg_text(out, lx + 28, ly + 1, series[m], "start", 12, "class=\"legend\"");
+    }
+    return f;
+}
+
 }  // namespace detail
 
 /// @brief The y-axis scale for a set of values (non-finite values are ignored).
@@ -510,24 +541,12 @@ inline std::string plot_folds_svg(std::span<const fold_point> points, const fold
         if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
     };
     for (const auto& p : points) add(panels, p.panel), add(series, p.series), add(folds, p.fold);
-    const std::size_t per_row = std::max<std::size_t>(1, std::min(opt.panels_per_row, panels.size()));
-    const std::size_t prow = (panels.size() + per_row - 1) / per_row;
-    const double pw = static_cast<double>(std::max<std::size_t>(opt.panel_width, 160)),
-                 ph = static_cast<double>(std::max<std::size_t>(opt.panel_height, 140));
-    const double legend_h = 20.0 * static_cast<double>((series.size() + 3) / 4) + 8, top = 40 + legend_h;
-    const double W = pw * static_cast<double>(per_row) + 20, H = top + ph * static_cast<double>(prow) + 10;
-    std::string out = detail::svg_open(static_cast<std::size_t>(W), static_cast<std::size_t>(H));
-    detail::svg_text(out, W / 2, 24, opt.title, "middle", 16, "font-weight=\"bold\"");
-    for (std::size_t m = 0; m < series.size(); ++m) {
-        const double lx = 20 + static_cast<double>(m % 4) * (W - 40) / 4, ly = 44 + 20.0 * static_cast<double>(m / 4);
-        const std::string_view c = detail::plot_palette[m % detail::plot_palette.size()];
-        detail::svg_line(out, lx, ly - 3, lx + 22, ly - 3, c, 2.5);
-        out += "<circle cx=\"" + detail::fmt_px(lx + 11) + "\" cy=\"" + detail::fmt_px(ly - 3) + "\" r=\"3\" fill=\"" + std::string(c) + "\"/>\n";
-        detail::svg_text(out, lx + 28, ly + 1, series[m], "start", 12, "class=\"legend\"");
-    }
+    std::string out;
+    const auto fr = detail::open_multiples(out, panels.size(), series, opt.panels_per_row, double(std::max<std::size_t>(opt.panel_width, 160)),
+                                           double(std::max<std::size_t>(opt.panel_height, 140)), opt.title, true);
     for (std::size_t k = 0; k < panels.size(); ++k) {
-        const double ox = 10 + pw * static_cast<double>(k % per_row), oy = top + ph * static_cast<double>(k / per_row);
-        const double L = ox + 56, R = ox + pw - 14, T = oy + 26, B = oy + ph - 56;
+        const auto [ox, oy] = fr.origin(k);
+        const double L = ox + 56, R = ox + fr.pw - 14, T = oy + 26, B = oy + fr.ph - 56;
         std::vector<double> vals;
         for (const auto& p : points)
             if (p.panel == panels[k] && std::isfinite(p.value)) vals.push_back(p.value);
@@ -604,22 +623,12 @@ inline std::string plot_tracks_svg(std::span<const track_series> curves, const t
             if (!(t >= 0 && t <= 1)) throw value_error("plot_tracks_svg: curve '" + c.series + "' has a time outside [0, 1]");
         add(panels, c.panel), add(series, c.series);
     }
-    const std::size_t per_row = std::max<std::size_t>(1, std::min(opt.panels_per_row, panels.size()));
-    const std::size_t prow = (panels.size() + per_row - 1) / per_row;
-    const double pw = static_cast<double>(std::max<std::size_t>(opt.panel_width, 200)),
-                 ph = static_cast<double>(std::max<std::size_t>(opt.panel_height, 140));
-    const double legend_h = 20.0 * static_cast<double>((series.size() + 3) / 4) + 8, top = 40 + legend_h;
-    const double W = pw * static_cast<double>(per_row) + 20, H = top + ph * static_cast<double>(prow) + 10;
-    std::string out = detail::svg_open(static_cast<std::size_t>(W), static_cast<std::size_t>(H));
-    detail::svg_text(out, W / 2, 24, opt.title, "middle", 16, "font-weight=\"bold\"");
-    for (std::size_t m = 0; m < series.size(); ++m) {
-        const double lx = 20 + static_cast<double>(m % 4) * (W - 40) / 4, ly = 44 + 20.0 * static_cast<double>(m / 4);
-        detail::svg_line(out, lx, ly - 3, lx + 22, ly - 3, detail::plot_palette[m % detail::plot_palette.size()], 2.5);
-        detail::svg_text(out, lx + 28, ly + 1, series[m], "start", 12, "class=\"legend\"");
-    }
+    std::string out;
+    const auto fr = detail::open_multiples(out, panels.size(), series, opt.panels_per_row, double(std::max<std::size_t>(opt.panel_width, 200)),
+                                           double(std::max<std::size_t>(opt.panel_height, 140)), opt.title, false);
     for (std::size_t k = 0; k < panels.size(); ++k) {
-        const double ox = 10 + pw * static_cast<double>(k % per_row), oy = top + ph * static_cast<double>(k / per_row);
-        const double L = ox + 56, R = ox + pw - 14, T = oy + 26, B = oy + ph - 36;
+        const auto [ox, oy] = fr.origin(k);
+        const double L = ox + 56, R = ox + fr.pw - 14, T = oy + 26, B = oy + fr.ph - 36;
         std::vector<double> vals;
         for (const auto& c : curves)
             if (c.panel == panels[k])
