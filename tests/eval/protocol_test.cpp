@@ -61,14 +61,11 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(sec->markdown.find("| gripping | ") != std::string::npos);
     long pairs = 0;
     for (const char* f : {"patting", "gripping"}) {
-        const auto text = read_file(dir / "folds" / f / "gate" / "gate.csv");
-        for (std::size_t a = text.find('\n') + 1, b; a < text.size(); a = b + 1) {
-            b = text.find('\n', a);
-            const std::string line = text.substr(a, b - a);
-            std::size_t comma = 0;
-            for (int k = 0; k < 10; ++k) comma = line.find(',', comma) + 1;  // pairs is the 11th column
-            pairs += std::stol(line.substr(comma));
-        }
+        const auto rows = handemo::eval::detail::csv_rows(read_file(dir / "folds" / f / "gate" / "gate.csv"));
+        REQUIRE(rows.size() > 1);
+        const auto col = std::find(rows[0].begin(), rows[0].end(), "pairs") - rows[0].begin();
+        REQUIRE(col < static_cast<long>(rows[0].size()));
+        for (std::size_t r = 1; r < rows.size(); ++r) pairs += std::stol(rows[r].at(static_cast<std::size_t>(col)));
     }
     CHECK(sec->markdown.find("| all | " + std::to_string(pairs) + " | ") != std::string::npos);
     CHECK(read_file(dir / "report.md").find("## The change gate, checked inside the training sets") != std::string::npos);
