@@ -22,6 +22,16 @@ TEST_CASE("hand skeleton: 23 joints, names, parents, channels, end sites")
     CHECK(s.joints[0].parent == -1);
     CHECK(s.joints[0].channels.size() == 6);
     CHECK(s.joints[0].rotation_order() == std::array<axis, 3>{axis::z, axis::x, axis::y});
+    // fewer than three rotation channels: the listed axes first, then the missing ones (z, x, y), none twice
+    joint j;
+    j.channels = {channel::xrotation, channel::yrotation};
+    CHECK(j.rotation_order() == std::array<axis, 3>{axis::x, axis::y, axis::z});
+    j.channels = {channel::xposition, channel::yposition, channel::zposition, channel::yrotation};
+    CHECK(j.rotation_order() == std::array<axis, 3>{axis::y, axis::z, axis::x});
+    j.channels = {};
+    CHECK(j.rotation_order() == std::array<axis, 3>{axis::z, axis::x, axis::y});
+    j.channels = {channel::yrotation, channel::xrotation, channel::zrotation};
+    CHECK(j.rotation_order() == std::array<axis, 3>{axis::y, axis::x, axis::z});
     CHECK(s.index_of("wrist") == hand_index::wrist);
     CHECK(s.index_of("palm") == hand_index::palm);
     CHECK(s.index_of("thumb_metacarpal") == hand_index::finger_joint(0, 0));

@@ -58,10 +58,18 @@ struct joint {
     /// Rotation axes in application order (outermost first), e.g. {z, x, y} for ZXY.
     std::array<axis, 3> rotation_order() const noexcept
     {
+        // the listed rotation axes first (each once), then the missing ones in the default order z, x, y: a joint
+        // with fewer than three rotation channels (built in code; the BVH reader asks for three) never applies an
+        // axis twice
         std::array<axis, 3> r{axis::z, axis::x, axis::y};
-        int k = 0;
+        std::array<bool, 3> used{};
+        std::size_t k = 0;
+        const auto take = [&](axis a) {
+            if (k < 3 && !used[static_cast<std::size_t>(a)]) used[static_cast<std::size_t>(a)] = true, r[k++] = a;
+        };
         for (auto c : channels)
-            if (is_rotation(c) && k < 3) r[static_cast<std::size_t>(k++)] = channel_axis(c);
+            if (is_rotation(c)) take(channel_axis(c));
+        for (axis a : {axis::z, axis::x, axis::y}) take(a);
         return r;
     }
 };
