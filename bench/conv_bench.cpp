@@ -115,36 +115,32 @@ void run_generator(benchmark::State& state, int cd, int rep)
     state.counters["MMAC"] = macs * 1e-6;
 }
 
-/// The FP32 FMA peak of the instruction set the kernels were compiled for (xsimd::default_arch: avx512bw
-/// with -march=native on an AVX-512 machine, avx2 on an AVX2 one), measured inside this program with the
-/// loop of ../shared/bench/peak_fma.cpp (12 independent FMA chains kept in registers), so that fraction of
-/// peak compares numbers taken under the same machine load and for the same vector width.
 /// One run of the peak loop: 12 x n FMAs on B::size lanes; returns the sum so nothing is optimised away.
 float peak_loop(long n)
 {
     using B = xsimd::batch<float>;
     using R = typename B::register_type;
-    float out = 0;
-    {
-        // named locals, not an array: an array whose address escapes is stored every iteration (measured:
-        // 71 instead of 226 GFLOP/s with AVX-512 on Zen 5)
-        R a0 = B(1.000f), a1 = B(1.001f), a2 = B(1.002f), a3 = B(1.003f), a4 = B(1.004f), a5 = B(1.005f);
-        R a6 = B(1.006f), a7 = B(1.007f), a8 = B(1.008f), a9 = B(1.009f), a10 = B(1.010f), a11 = B(1.011f);
-        const B b(0.9999f), c(1e-6f);
-        for (long k = 0; k < n; k++) {
-            for (R* r : {&a0, &a1, &a2, &a3, &a4, &a5, &a6, &a7, &a8, &a9, &a10, &a11})
-                *r = static_cast<R>(xsimd::fma(B(*r), b, c));
+    // named locals, not an array: an array whose address escapes is stored every iteration (measured:
+    // 71 instead of 226 GFLOP/s with AVX-512 on Zen 5)
+    R a0 = B(1.000f), a1 = B(1.001f), a2 = B(1.002f), a3 = B(1.003f), a4 = B(1.004f), a5 = B(1.005f);
+    R a6 = B(1.006f), a7 = B(1.007f), a8 = B(1.008f), a9 = B(1.009f), a10 = B(1.010f), a11 = B(1.011f);
+    const B b(0.9999f), c(1e-6f);
+    for (long k = 0; k < n; k++) {
+        for (R* r : {&a0, &a1, &a2, &a3, &a4, &a5, &a6, &a7, &a8, &a9, &a10, &a11})
+            *r = static_cast<R>(xsimd::fma(B(*r), b, c));
 #if defined(__x86_64__)
-            __asm__ volatile("" : "+v"(a0), "+v"(a1), "+v"(a2), "+v"(a3), "+v"(a4), "+v"(a5), "+v"(a6), "+v"(a7),
-                             "+v"(a8), "+v"(a9), "+v"(a10), "+v"(a11));
+        __asm__ volatile("" : "+v"(a0), "+v"(a1), "+v"(a2), "+v"(a3), "+v"(a4), "+v"(a5), "+v"(a6), "+v"(a7),
+                         "+v"(a8), "+v"(a9), "+v"(a10), "+v"(a11));
 #endif
-        }
-        B sum = B(a0) + B(a1) + B(a2) + B(a3) + B(a4) + B(a5) + B(a6) + B(a7) + B(a8) + B(a9) + B(a10) + B(a11);
-        out = xsimd::hadd(sum);
     }
-    return out;
+    B sum = B(a0) + B(a1) + B(a2) + B(a3) + B(a4) + B(a5) + B(a6) + B(a7) + B(a8) + B(a9) + B(a10) + B(a11);
+    return xsimd::hadd(sum);
 }
 
+/// The FP32 FMA peak of the instruction set the kernels were compiled for (xsimd::default_arch: avx512bw
+/// with -march=native on an AVX-512 machine, avx2 on an AVX2 one), measured inside this program with the
+/// loop of ../shared/bench/peak_fma.cpp (12 independent FMA chains kept in registers), so that fraction of
+/// peak compares numbers taken under the same machine load and for the same vector width.
 void peak_fma(benchmark::State& state)
 {
     const long n = 1000000;

@@ -77,6 +77,7 @@ inline void run_demo(demo_cli& o)
     double sum_s = 0, sum_i = 0, sum_o = 0;
     int wins = 0, n = 0;
     std::string detail_lines;  // the detail layer's full-rate speed, printed after the table
+    const double speed_in = eval::mean_speed(input);
     for (const auto& e : m->info().domains) {
         if (e == m->info().neutral) {
             strip.push_back(input);
@@ -99,10 +100,9 @@ inline void run_demo(demo_cli& o)
             // the same transfer with the detail layer (`transfer --detail`): full-rate speed against the real clip's
             const clip d = m->add_detail(r.motion, input, e);
             write_bvh(outdir / (mname + "_" + e + "_detail.bvh"), d);
-            const double sp_in = eval::mean_speed(input);
             char line[160];
-            std::snprintf(line, sizeof line, "  %-8s %9.2f %9.2f %9.2f\n", e.c_str(), eval::mean_speed(r.motion) / sp_in,
-                          eval::mean_speed(d) / sp_in, eval::mean_speed(real) / sp_in);
+            std::snprintf(line, sizeof line, "  %-8s %9.2f %9.2f %9.2f\n", e.c_str(), eval::mean_speed(r.motion) / speed_in,
+                          eval::mean_speed(d) / speed_in, eval::mean_speed(real) / speed_in);
             detail_lines += line;
         }
         strip.push_back(r.motion);

@@ -22,14 +22,7 @@
 
 namespace handemo::eval {
 
-/// @brief An angle difference wrapped into (-180, 180] degrees.
-inline double wrap_degrees(double d) noexcept
-{
-    d = std::fmod(d, 360.0);
-    if (d > 180.0) d -= 360.0;
-    if (d <= -180.0) d += 360.0;
-    return d;
-}
+using ::handemo::wrap_degrees;  // motion/keyframes.hpp: an angle difference wrapped into (-180, 180]
 
 /// @brief RMSE in degrees between two keyframe sets of equal shape (differences wrapped, see wrap_degrees).
 /// @throws shape_error naming both shapes when K or J differ.
@@ -70,14 +63,14 @@ inline double range_of_motion(const clip& c)
     if (c.angles.size() != c.frames * J3)
         throw shape_error("range_of_motion: clip holds " + std::to_string(c.angles.size()) + " angles, expected frames*joints*3 = " +
                           std::to_string(c.frames * J3));
-    return ::handemo::detail::detail_rom(c);  // motion/detail_layer.hpp: the same sums, shared with the detail layer's check
+    return ::handemo::detail::range_of_motion_of(c);  // motion/detail_layer.hpp: shared with the detail layer's check
 }
 
 /// @brief Mean absolute angular velocity (degrees per second) over joints, axes and frames.
 inline double mean_speed(const clip& c)
 {
     if (c.frames < 2) throw value_error("mean_speed: clip " + c.skel.name + " of " + std::to_string(c.frames) + " frames has no speed");
-    return ::handemo::detail::detail_speed(c);
+    return ::handemo::detail::mean_speed_of(c);
 }
 
 /// @brief The clip as the network sees it: K uniform keyframes (Eq. 2) reconstructed by Catmull-Rom at the

@@ -398,17 +398,14 @@ struct method_outputs {
     const clip* input = nullptr;
     const clip* nearest = nullptr;
     const clip* real = nullptr;
-    bool has_amp = false, gated = false, has_oracle = false, has_detail = false;
+    bool has_amp = false, gated = false, has_oracle = false;
     std::vector<std::pair<std::string, clip>> extra;
 
     std::vector<std::pair<const char*, const clip*>> rows() const
     {
-        std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &stargan.motion}};
-        if (has_detail) outs.push_back({"stargan+detail", &detailed});
-        outs.insert(outs.end(), {{"identity", input},
-                                                                 {"mean-offset", &mean_offset},
-                                                                 {"nearest-neighbour", nearest},
-                                                                 {"real", real}});
+        std::vector<std::pair<const char*, const clip*>> outs = {{"stargan", &stargan.motion}, {"stargan+detail", &detailed},
+                                                                 {"identity", input},          {"mean-offset", &mean_offset},
+                                                                 {"nearest-neighbour", nearest}, {"real", real}};
         if (has_amp) outs.push_back({"stargan-g", &g_only}), outs.push_back({"amplitude-only", &amp_only});
         if (gated) outs.push_back({"stargan-ungated", &ungated});
         if (has_oracle) outs.push_back({"oracle", &oracle});
@@ -435,7 +432,7 @@ void add_detail_curves(std::vector<track_series>& curves, const std::string& tar
 {
     const auto st = measure_detail<K>(real);
     const std::size_t ch = static_cast<std::size_t>(std::max_element(st.amplitude.begin(), st.amplitude.end()) - st.amplitude.begin());
-    const std::string panel = target + ": " + real.skel.joints[ch / 3].name + " " + "xyz"[ch % 3];
+    const std::string panel = target + ": " + real.skel.joints[ch / 3].name + " " + axis_name(static_cast<axis>(ch % 3));
     double real_mean = 0;
     for (const auto& [name, c] : {std::pair<const char*, const clip*>{"real", &real}, {"stargan", &plain}, {"stargan+detail", &detailed}}) {
         clip u = *c;
@@ -678,7 +675,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 detail::method_outputs o;
                 o.stargan = models.model.transfer(input, target);
                 o.has_amp = models.has_amp, o.gated = models.gated;
-                o.detailed = fold_detail.apply(o.stargan.motion, input, info.neutral, target), o.has_detail = true;
+                o.detailed = fold_detail.apply(o.stargan.motion, input, info.neutral, target);
                 if (fi == 0 && (detail_take.empty() || detail_take == in->src->take)) {
                     detail_take = in->src->take;
                     detail::add_detail_curves<K>(detail_curves, target, real->src->motion, o.stargan.motion, o.detailed);

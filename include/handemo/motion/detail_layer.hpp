@@ -37,23 +37,21 @@ namespace handemo {
 namespace detail {
 /// Full-rate range of motion and mean speed as eval/metrics.hpp measures them (angles taken within 180 degrees of the
 /// first frame; speed on unwrapped angles), repeated here so the motion layer does not depend on the evaluation.
-inline double detail_rom(const clip& c)
+inline double range_of_motion_of(const clip& c)
 {
     const std::size_t C = c.skel.size() * 3;
     double total = 0;
     for (std::size_t ch = 0; ch < C; ++ch) {
         double lo = 0, hi = 0;
         for (std::size_t f = 1; f < c.frames; ++f) {
-            double d = std::fmod(c.angles[f * C + ch] - c.angles[ch], 360.0);
-            if (d > 180.0) d -= 360.0;
-            if (d <= -180.0) d += 360.0;
+            const double d = wrap_degrees(c.angles[f * C + ch] - c.angles[ch]);
             lo = std::min(lo, d), hi = std::max(hi, d);
         }
         total += hi - lo;
     }
     return C ? total / static_cast<double>(C) : 0.0;
 }
-inline double detail_speed(const clip& c)
+inline double mean_speed_of(const clip& c)
 {
     clip u = c;
     unwrap_angles(u);
@@ -176,13 +174,13 @@ struct detail_layer {
                         continue;
                     const clip spline = reconstruct(extract_keyframes<dynamic_keyframes>(*real.motion, k), real.motion->skel,
                                                     real.motion->frames, real.motion->fps);
-                    const double rom_real = detail::detail_rom(*real.motion), speed_real = detail::detail_speed(*real.motion);
+                    const double rom_real = detail::range_of_motion_of(*real.motion), speed_real = detail::mean_speed_of(*real.motion);
                     std::array<double, strength_candidates.size()> e{};
                     for (std::size_t i = 0; i < strength_candidates.size(); ++i) {
                         detail_layer l = inner;
                         l.strength = strength_candidates[i];
                         const clip out = l.apply(spline, *in.motion, neutral, real.emotion);
-                        e[i] = std::abs(std::log(detail::detail_rom(out) / rom_real)) + std::abs(std::log(detail::detail_speed(out) / speed_real));
+                        e[i] = std::abs(std::log(detail::range_of_motion_of(out) / rom_real)) + std::abs(std::log(detail::mean_speed_of(out) / speed_real));
                     }
                     // a motionless clip has no ratio to compare: the pair is left out (the check stays finite)
                     if (!std::all_of(e.begin(), e.end(), [](double x) { return std::isfinite(x); })) continue;

@@ -77,6 +77,15 @@ keyframes<To> keyframe_cast(const keyframes<From>& k)
     return r;
 }
 
+/// @brief An angle difference wrapped into (-180, 180] degrees.
+inline double wrap_degrees(double d) noexcept
+{
+    d = std::fmod(d, 360.0);
+    if (d > 180.0) d -= 360.0;
+    if (d <= -180.0) d += 360.0;
+    return d;
+}
+
 /// @brief Unwraps every joint/axis angle track in time: each step is moved by a multiple of 360 deg so
 /// that it lies in (-180, 180]. A joint passing 180 deg then continues to 181 instead of jumping to -179.
 inline void unwrap_angles(clip& c) noexcept

@@ -206,7 +206,7 @@ public:
             const auto a = static_cast<std::size_t>(ci);
             const vec3& o = st.org[a];
             const double r0 = p[0] - o[0], r1 = p[1] - o[1], r2 = p[2] - o[2];
-            for (std::size_t slot = 0; slot < 3; ++slot) {  // in rotation order (an axis may repeat)
+            for (std::size_t slot = 0; slot < 3; ++slot) {  // in rotation order (each axis once, joint::rotation_order())
                 const vec3& w = st.waxis[a * 3 + slot];
                 const auto ax = static_cast<std::size_t>(kin_[a].order[slot]);
                 double* col = jt + (a * 3 + ax) * m + row;

@@ -252,6 +252,24 @@ struct multiples_frame {
         return {10 + pw * static_cast<double>(k % per_row), top + ph * static_cast<double>(k / per_row)};
     }
 };
+/// Appends `s` to `v` unless it is there already (first-appearance order of panels, series and folds).
+inline void add_unique(std::vector<std::string>& v, const std::string& s)
+{
+    if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
+}
+
+/// Horizontal grid lines with their value labels for the ticks of `ay` inside [T, B] (the zero line in `zero_stroke`).
+inline void y_grid(std::string& out, const y_axis& ay, const std::vector<double>& ticks, double L, double R, double T, double B,
+                   std::string_view zero_stroke)
+{
+    for (double t : ticks) {
+        const double y = ay.pixel(t);
+        if (y < T - 0.5 || y > B + 0.5) continue;
+        svg_line(out, L, y, R, y, t == 0 ? zero_stroke : "#ececec");
+        svg_text(out, L - 6, y + 4, fmt_num(t), "end", 10);
+    }
+}
+
 inline multiples_frame open_multiples(std::string& out, std::size_t panels, const std::vector<std::string>& series, std::size_t per_row,
                                       double pw, double ph, const std::string& title, bool dots)
 {
@@ -537,10 +555,7 @@ inline std::string plot_folds_svg(std::span<const fold_point> points, const fold
 {
     if (points.empty()) throw value_error("plot_folds_svg: no points to draw (expected at least one panel,series,fold,value)");
     std::vector<std::string> panels, series, folds;
-    auto add = [](std::vector<std::string>& v, const std::string& s) {
-        if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
-    };
-    for (const auto& p : points) add(panels, p.panel), add(series, p.series), add(folds, p.fold);
+    for (const auto& p : points) detail::add_unique(panels, p.panel), detail::add_unique(series, p.series), detail::add_unique(folds, p.fold);
     std::string out;
     const auto fr = detail::open_multiples(out, panels.size(), series, opt.panels_per_row, double(std::max<std::size_t>(opt.panel_width, 160)),
                                            double(std::max<std::size_t>(opt.panel_height, 140)), opt.title, true);
@@ -556,12 +571,7 @@ inline std::string plot_folds_svg(std::span<const fold_point> points, const fold
             return folds.size() == 1 ? (L + R) / 2 : L + 10 + static_cast<double>(f) * (R - L - 20) / static_cast<double>(folds.size() - 1);
         };
         detail::svg_text(out, (L + R) / 2, oy + 16, panels[k], "middle", 13, "font-weight=\"bold\"");
-        for (double t : ticks) {
-            const double y = ay.pixel(t);
-            if (y < T - 0.5 || y > B + 0.5) continue;
-            detail::svg_line(out, L, y, R, y, t == 0 ? "#b0b0b0" : "#ececec");
-            detail::svg_text(out, L - 6, y + 4, detail::fmt_num(t), "end", 10);
-        }
+        detail::y_grid(out, ay, ticks, L, R, T, B, "#b0b0b0");
         for (std::size_t f = 0; f < folds.size(); ++f) {
             const double x = fx(f);
             detail::svg_line(out, x, B, x, B + 4, "#444");
@@ -612,16 +622,13 @@ inline std::string plot_tracks_svg(std::span<const track_series> curves, const t
 {
     if (curves.empty()) throw value_error("plot_tracks_svg: no curves to draw");
     std::vector<std::string> panels, series;
-    auto add = [](std::vector<std::string>& v, const std::string& s) {
-        if (std::find(v.begin(), v.end(), s) == v.end()) v.push_back(s);
-    };
     for (const auto& c : curves) {
         if (c.t.size() != c.v.size())
             throw value_error("plot_tracks_svg: curve '" + c.series + "' has " + std::to_string(c.t.size()) + " times and " +
                               std::to_string(c.v.size()) + " values");
         for (double t : c.t)
             if (!(t >= 0 && t <= 1)) throw value_error("plot_tracks_svg: curve '" + c.series + "' has a time outside [0, 1]");
-        add(panels, c.panel), add(series, c.series);
+        detail::add_unique(panels, c.panel), detail::add_unique(series, c.series);
     }
     std::string out;
     const auto fr = detail::open_multiples(out, panels.size(), series, opt.panels_per_row, double(std::max<std::size_t>(opt.panel_width, 200)),
@@ -637,12 +644,7 @@ inline std::string plot_tracks_svg(std::span<const track_series> curves, const t
         std::vector<double> ticks;
         const detail::y_axis ay = detail::make_y_axis(axis_scale::linear, vals, T, B, ticks);
         detail::svg_text(out, (L + R) / 2, oy + 16, panels[k], "middle", 13, "font-weight=\"bold\"");
-        for (double t : ticks) {
-            const double y = ay.pixel(t);
-            if (y < T - 0.5 || y > B + 0.5) continue;
-            detail::svg_line(out, L, y, R, y, "#ececec");
-            detail::svg_text(out, L - 6, y + 4, detail::fmt_num(t), "end", 10);
-        }
+        detail::y_grid(out, ay, ticks, L, R, T, B, "#ececec");
         detail::svg_text(out, ox + 14, (T + B) / 2, opt.y_label, "middle", 10,
                          "transform=\"rotate(-90 " + detail::fmt_px(ox + 14) + " " + detail::fmt_px((T + B) / 2) + ")\"");
         for (double x : {0.0, 0.25, 0.5, 0.75, 1.0}) {
