@@ -11,6 +11,7 @@
 #include <xsimd/xsimd.hpp>
 
 #include <handemo/kernels/conv.hpp>
+#include <handemo/kernels/packed.hpp>
 
 #include <cstdio>
 #include <random>
@@ -115,6 +116,52 @@ void run_generator(benchmark::State& state, int cd, int rep)
     state.counters["MMAC"] = macs * 1e-6;
 }
 
+/// The same layer with its weights packed once (kernels/packed.hpp, the path of stargan::frozen_generator).
+void run_packed_layer(benchmark::State& state, hk::conv_geometry g, bool transposed)
+{
+    buffers buf(g);
+    const auto p = transposed ? hk::packed_conv<float>::conv_transpose2d(g, buf.w.data()) : hk::packed_conv<float>::conv2d(g, buf.w.data());
+    std::vector<float> scratch(p.scratch_size());
+    for (auto _ : state) {
+        if (transposed) p.forward(buf.y.data(), nullptr, buf.x.data(), scratch.data());
+        else p.forward(buf.x.data(), nullptr, buf.y.data(), scratch.data());
+        benchmark::ClobberMemory();
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(2 * g.macs() * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+    state.SetLabel(p.weight_stationary() ? "weight-stationary" : "fallback");
+}
+
+/// The generator's conv stack at batch 1 with packed weights (each layer its own weights, as in the model).
+void run_packed_generator(benchmark::State& state, int cd, int rep)
+{
+    const auto all = stargan_layers(cd);
+    std::vector<layer> seq = {all[0], all[1], all[2]};
+    for (int r = 0; r < 2 * rep; ++r) seq.push_back(all[3]);
+    seq.insert(seq.end(), {all[4], all[5], all[6]});
+    std::vector<buffers> bufs;
+    std::vector<hk::packed_conv<float>> packed;
+    std::size_t ns = 0;
+    double macs = 0;
+    for (const auto& l : seq) {
+        bufs.emplace_back(l.g);
+        packed.push_back(l.transposed ? hk::packed_conv<float>::conv_transpose2d(l.g, bufs.back().w.data())
+                                      : hk::packed_conv<float>::conv2d(l.g, bufs.back().w.data()));
+        ns = std::max(ns, packed.back().scratch_size());
+        macs += l.g.macs();
+    }
+    std::vector<float> scratch(ns);
+    for (auto _ : state) {
+        for (std::size_t i = 0; i < seq.size(); ++i) {
+            auto& b = bufs[i];
+            if (seq[i].transposed) packed[i].forward(b.y.data(), nullptr, b.x.data(), scratch.data());
+            else packed[i].forward(b.x.data(), nullptr, b.y.data(), scratch.data());
+        }
+        benchmark::ClobberMemory();
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(2 * macs * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["MMAC"] = macs * 1e-6;
+}
+
 /// One run of the peak loop: 12 x n FMAs on B::size lanes; returns the sum so nothing is optimised away.
 float peak_loop(long n)
 {
@@ -189,6 +236,13 @@ int main(int argc, char** argv)
         ->Arg(2)->ArgName("threads")->UseManualTime()->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(false);
     benchmark::RegisterBenchmark("generator_convs/paper(64,6)/b1", run_generator, 64, 6)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark("generator_convs/embedded(32,3)/b1", run_generator, 32, 3)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("packed_generator_convs/paper(64,6)/b1", run_packed_generator, 64, 6)->Unit(benchmark::kMicrosecond);
+    benchmark::RegisterBenchmark("packed_generator_convs/embedded(32,3)/b1", run_packed_generator, 32, 3)->Unit(benchmark::kMicrosecond);
+    for (int cd : {64, 32})
+        for (const auto& l : stargan_layers(cd))
+            if (l.name[0] == 'G')
+                benchmark::RegisterBenchmark(("packed/cd" + std::to_string(cd) + "/" + l.name + "/fwd/b1").c_str(), run_packed_layer,
+                                             l.g, l.transposed)->Unit(benchmark::kMicrosecond);
     for (int cd : {64, 32})
         for (const auto& l : stargan_layers(cd)) {
             const std::string base = "cd" + std::to_string(cd) + "/" + l.name;

@@ -19,13 +19,16 @@ using autodiff::tape;
 
 namespace {
 
-template <class Config>
+/// frozen: frozen_generator (weights packed once, the path of transfer and the CLI); else generator::infer.
+template <class Config, bool frozen>
 void bm_infer(benchmark::State& st)
 {
     generator<float, Config> g;
     rng gen(1);
     init_pytorch_default(g, gen);
+    const auto f = g.freeze();
     typename generator<float, Config>::workspace ws;
+    typename frozen_generator<float, Config>::workspace fws(f);
     constexpr std::size_t H = dims<Config>::H, W = dims<Config>::W, C = Config::domains;
     std::vector<float> x(3 * H * W), lab(C, 0.f), out(x.size());
     std::mt19937 r(2);
@@ -33,7 +36,8 @@ void bm_infer(benchmark::State& st)
     for (auto& v : x) v = u(r);
     lab[2] = 1;
     for (auto _ : st) {
-        g.infer(x.data(), lab.data(), out.data(), ws);
+        if constexpr (frozen) f.infer(x.data(), lab.data(), out.data(), fws);
+        else g.infer(x.data(), lab.data(), out.data(), ws);
         benchmark::DoNotOptimize(out.data());
     }
     st.counters["GFLOP/s"] =
@@ -137,9 +141,11 @@ void bm_train(benchmark::State& st)
 
 }  // namespace
 
-BENCHMARK(bm_infer<hand_paper>)->Name("stargan_infer/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_embedded>)->Name("stargan_infer/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_micro>)->Name("stargan_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_paper, true>)->Name("stargan_infer/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_embedded, true>)->Name("stargan_infer/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_micro, true>)->Name("stargan_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_paper, false>)->Name("stargan_infer_unpacked/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_embedded, false>)->Name("stargan_infer_unpacked/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_train<hand_paper>)->Name("stargan_train/paper(64,6)/b16")->ArgName("threads")->Arg(2)->Arg(1)
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);

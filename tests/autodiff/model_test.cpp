@@ -129,6 +129,20 @@ TEST_CASE("stargan: infer equals the tape forward; thread-pool batch split equal
     decltype(g)::workspace ws;
     g.infer(x.data(), lab.data(), out.data(), ws);
     for (std::size_t i = 0; i < out.size(); ++i) REQUIRE(out[i] == doctest::Approx(y1.data()[i]).epsilon(1e-4));
+    {  // the frozen generator (packed weights) too, and it is a snapshot: later weight changes do not reach it
+        const auto f = g.freeze();
+        frozen_generator<float, cfg>::workspace fws(f);
+        std::vector<float> fo(out.size(), 5.f);
+        f.infer(x.data(), lab.data(), fo.data(), fws);
+        for (std::size_t i = 0; i < out.size(); ++i) REQUIRE(fo[i] == doctest::Approx(y1.data()[i]).epsilon(1e-4));
+        g.set_residual(true);
+        g.zero_last_conv();
+        std::vector<float> fo2(out.size());
+        f.infer(x.data(), lab.data(), fo2.data(), fws);
+        CHECK(fo2 == fo);
+        g.set_residual(false);
+        randomise(g, 1, 0.1);  // restore
+    }
 
     thread_pool pool(2);
     tape<float> t2(1 << 20, &pool);

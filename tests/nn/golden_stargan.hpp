@@ -121,6 +121,12 @@ struct suite {
         std::vector<T> out(image::size);
         n.g.infer(xv.data(), cv.data(), out.data(), ws);
         close("infer", out, ref<image>("out.g_fake"), tol);
+        // and so does the frozen generator (weights packed for the weight-stationary kernels)
+        const auto frozen = n.g.freeze();
+        typename stargan::frozen_generator<T, tiny_config>::workspace fws(frozen);
+        std::fill(out.begin(), out.end(), T(9));
+        frozen.infer(xv.data(), cv.data(), out.data(), fws);
+        close("frozen infer", out, ref<image>("out.g_fake"), tol);
     }
 
     static void gradient_penalty(tolerance tol)

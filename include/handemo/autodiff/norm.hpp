@@ -5,6 +5,7 @@
 #pragma once
 
 #include <handemo/autodiff/tape.hpp>
+#include <handemo/kernels/norm.hpp>
 
 #include <cmath>
 
@@ -64,16 +65,13 @@ int instance_norm_raw(tape<T>& t, int x, int gamma, int beta, int N, int C, int 
     for (int b = 0; b < N; ++b)
         for (int c = 0; c < C; ++c) {
             const std::size_t o = (std::size_t(b) * C + c) * M;
-            double s = 0;  // two-pass statistics, accumulated in double
-            for (int m = 0; m < M; ++m) s += xv[o + m];
-            const double mud = s / M;
-            double v = 0;
-            for (int m = 0; m < M; ++m) v += (xv[o + m] - mud) * (xv[o + m] - mud);
-            const T mu = T(mud), r = T(1.0 / std::sqrt(v / M + double(eps)));
+            double mud = 0, var = 0;  // two-pass statistics, accumulated in double
+            kernels::channel_moments(xv + o, M, mud, var);
+            const T mu = T(mud), r = T(1.0 / std::sqrt(var + double(eps)));
             n.aux[2 * (b * C + c)] = mu;
             n.aux[2 * (b * C + c) + 1] = r;
             const T k = gv[c] * r;  // k (x - mu) + beta: no cancellation between k x and k mu
-            for (int m = 0; m < M; ++m) n.value[o + m] = k * (xv[o + m] - mu) + bv[c];
+            kernels::scale_shift(xv + o, M, k, mu, bv[c], false, n.value + o);
         }
     return id;
 }

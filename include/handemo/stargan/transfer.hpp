@@ -319,6 +319,8 @@ public:
         load_parameters(f, g_, f.find("G_ema.main.0.weight") ? "G_ema." : "G.");  // the EMA weights when trained with them
         g_.set_residual(residual());
         g_.set_requires_grad(false);
+        frozen_.emplace(g_);  // weights packed once for every transfer of this model
+        fws_.emplace(*frozen_);
     }
 
 private:
@@ -328,11 +330,12 @@ private:
         if (target >= label.size()) throw value_error("transfer: target domain " + std::to_string(target) + " out of range");
         label[target] = 1.f;
         pad_image(x, K, J, in_.data(), H, W);
-        g_.infer(in_.data(), label.data(), out_.data(), ws_);
+        frozen_->infer(in_.data(), label.data(), out_.data(), *fws_);
         crop_image(out_.data(), H, W, out, K, J);
     }
     generator<float, cfg> g_;
-    mutable typename generator<float, cfg>::workspace ws_;
+    std::optional<frozen_generator<float, cfg>> frozen_;
+    mutable std::optional<typename frozen_generator<float, cfg>::workspace> fws_;
     mutable std::vector<float> in_ = std::vector<float>(3 * H * W), out_ = std::vector<float>(3 * H * W);
 };
 

@@ -1,0 +1,213 @@
+// The weight-stationary convolution path behind kernels/packed.hpp: for inference, where the weights do not
+// change between calls, they are reordered once into panels [panel][k][MR] (MR = NV SIMD vectors of output
+// channels, zero-padded) and every output tile is
+//     tile[j][0..MR) = sum_k panel[k][0..MR) * src[koff[k] + j * SJ],   j < NR output pixels of one row,
+// a register-blocked GEMM whose vectors run along the output channels and whose broadcasts gather the input
+// straight from a zero-padded copy of the image (no im2col). One kernel serves both layers of the StarGAN
+// generator (Chan et al. 2020, Sec. 3.3, Fig. 3) that dominate inference:
+//   - convolutions, any stride: koff[(c,u,v)] = c*Hp*Wp + u*Wp + v, pixel j of a row at j*stride;
+//   - transposed convolutions, split into stride^2 phases (output pixels h = m*s + r - p of one residue r):
+//     each phase is a stride-1 convolution of the zero-padded input with the taps u = r, r+s, ... of the
+//     kernel, so there is no col2im scatter and no per-call repacking of the weights.
+// Why: at batch 1 the generator's layers have 18-288 output pixels. The paths of conv_simd.hpp vectorise
+// along pixels (lanes idle) or along the reduction (a horizontal sum per output) and read the weights in
+// their PyTorch layout with strides; here every weight is loaded once per 6-12 output pixels, contiguously,
+// and the pixel count never leaves lanes idle. Measured per layer in bench_conv (`packed/...`).
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+#include <handemo/kernels/detail/conv_simd.hpp>
+
+namespace handemo::kernels::detail {
+
+/// Register tile of the weight-stationary kernel: NV vectors of output channels x NR output pixels.
+/// 32 registers (AVX-512): 4 x 6 and 2 x 12 (24 accumulators + NV + 1 broadcast); 16 registers (AVX2,
+/// SSE, and NEON, not measured there with 32): 2 x 6 and 1 x 12 (12 accumulators).
+struct ws_tile {
+    int nv, nr;
+};
+
+/// The tile for `co` output channels: the widest panel that leaves at most a quarter of its lanes idle.
+template <class T>
+constexpr ws_tile ws_tile_for(int co) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    if constexpr (wide_register_file) {
+        if (co >= 3 * L) return {4, 6};
+        if (co > L) return {2, 12};
+        return {1, 12};
+    } else {
+        if (co > L) return {2, 6};
+        return {1, 12};
+    }
+}
+
+/// Reduction block: one block of the panel ([kc][MR]) stays in L1 (32 KiB) while every pixel tile of the
+/// layer uses it.
+template <class T>
+constexpr int ws_kc(int nv) noexcept
+{
+    return std::max(16, int(32768 / (sizeof(T) * std::size_t(nv) * simd_lanes<T>)));
+}
+
+/// tile[j][0..MR) (+)= sum_{k<kc} wp[k*MR + 0..MR) * src[koff[k] + j*sj], j < NR. SJ > 0 fixes sj at
+/// compile time (stride 1 and 2 of the generator); SJ = 0 reads it from `sj`. PF: also prefetch (into L2)
+/// kc*MR elements of the weight stream starting at `pf`, spread over the loop.
+template <class T, int NV, int NR, int SJ, bool PF = false>
+[[gnu::noinline]] inline void micro_ws(int kc, const T* __restrict wp, const int* __restrict koff,
+                                       const T* __restrict src, int sj, T* __restrict tile, bool accumulate,
+                                       const T* pf = nullptr) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>, MR = NV * L;
+    B acc[NR][NV];
+    if (accumulate) {
+        for (int j = 0; j < NR; ++j)
+            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
+    } else {
+        for (int j = 0; j < NR; ++j)
+            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
+    }
+    const int step = SJ > 0 ? SJ : sj;
+    for (int k = 0; k < kc; ++k) {
+        if constexpr (PF) {
+            // one cache line per vector of the panel row: the next block's row k
+            for (int q = 0; q < NV * L * int(sizeof(T)); q += 64)
+                __builtin_prefetch(reinterpret_cast<const char*>(pf + std::ptrdiff_t(k) * MR) + q, 0, 2);
+        }
+        B a[NV];
+        for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_aligned(wp + q * L));
+        const T* s = src + koff[k];
+        for (int j = 0; j < NR; ++j) {
+            const B b(s[j * step]);
+            for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
+        }
+        wp += MR;
+    }
+    for (int j = 0; j < NR; ++j)
+        for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
+}
+
+/// micro_ws<T, NV, nr, SJ> for nr = 1..N.
+template <class T, int NV, int N, int SJ>
+inline void micro_ws_dispatch(int nr, int kc, const T* wp, const int* koff, const T* src, int sj, T* tile,
+                              bool accumulate) noexcept
+{
+    if constexpr (N <= 1) micro_ws<T, NV, 1, SJ>(kc, wp, koff, src, sj, tile, accumulate);
+    else if (nr >= N) micro_ws<T, NV, N, SJ>(kc, wp, koff, src, sj, tile, accumulate);
+    else micro_ws_dispatch<T, NV, N - 1, SJ>(nr, kc, wp, koff, src, sj, tile, accumulate);
+}
+
+/// One weight-stationary GEMM: `co` output channels from the panels `wp` ([ceil(co/MR)][K][MR]) and the
+/// offsets `koff` [K]; `rows` output rows of `cols` pixels each; pixel (r, q) reads the padded input at
+/// src + r*src_row + q*sj and is written to y[o*y_chan + y_row0 + r*y_row + q*y_col].
+struct ws_job {
+    int K, co, rows, cols, sj;
+    const int* koff;
+    std::ptrdiff_t src_row;
+    std::ptrdiff_t y_chan, y_row0, y_row, y_col;
+};
+
+/// Elements of the accumulator scratch of a job: every pixel tile of one panel.
+template <class T>
+inline std::size_t ws_acc_elements(int co, int rows, int cols) noexcept
+{
+    const ws_tile t = ws_tile_for<T>(co);
+    return std::size_t(rows) * ((cols + t.nr - 1) / t.nr) * t.nr * t.nv * simd_lanes<T>;
+}
+
+template <class T, int NV, int NR, int SJ>
+inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, bool accumulate_out,
+                         T* acc) noexcept
+{
+    constexpr int L = simd_lanes<T>, MR = NV * L;
+    const int kc_max = ws_kc<T>(NV);
+    const int panels = (j.co + MR - 1) / MR;
+    for (int pn = 0; pn < panels; ++pn) {
+        const T* wpanel = wp + std::ptrdiff_t(pn) * j.K * MR;
+        for (int k0 = 0; k0 < j.K; k0 += kc_max) {
+            const int kc = std::min(kc_max, j.K - k0);
+            // the weights of the next block (of this panel or the next: the panels are contiguous)
+            const std::ptrdiff_t next = std::ptrdiff_t(pn) * j.K + k0 + kc;
+            const bool pf = next + kc <= std::ptrdiff_t(panels) * j.K;
+            T* tile = acc;
+            for (int r = 0; r < j.rows; ++r) {
+                const T* srow = src + r * j.src_row;
+                for (int q0 = 0; q0 < j.cols; q0 += NR, tile += NR * MR) {
+                    const int nr = std::min(NR, j.cols - q0);
+                    const T* sp = srow + std::ptrdiff_t(q0) * (SJ > 0 ? SJ : j.sj);
+                    if (pf && r == 0 && q0 == 0 && nr == NR)
+                        micro_ws<T, NV, NR, SJ, true>(kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj, tile,
+                                                      k0 > 0, wp + next * MR);
+                    else
+                        micro_ws_dispatch<T, NV, NR, SJ>(nr, kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj,
+                                                         tile, k0 > 0);
+                }
+            }
+        }
+        // write the panel's tiles out: tile[q][i] -> y[o0 + i][pixel q]
+        const int o0 = pn * MR, no = std::min(MR, j.co - o0);
+        const T* tile = acc;
+        for (int r = 0; r < j.rows; ++r)
+            for (int q0 = 0; q0 < j.cols; q0 += NR, tile += NR * MR) {
+                const int nr = std::min(NR, j.cols - q0);
+                for (int i = 0; i < no; ++i) {
+                    const T b = bias ? bias[o0 + i] : T(0);
+                    T* yo = y + std::ptrdiff_t(o0 + i) * j.y_chan + j.y_row0 + r * j.y_row + q0 * j.y_col;
+                    for (int q = 0; q < nr; ++q) {
+                        T& d = yo[q * j.y_col];
+                        d = (accumulate_out ? d : T(0)) + tile[q * MR + i] + b;
+                    }
+                }
+            }
+    }
+}
+
+/// Runs a job with the tile ws_tile_for<T>(co) and the compile-time pixel stride when it is 1 or 2.
+template <class T>
+inline void ws_run(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, bool accumulate_out,
+                   T* acc) noexcept
+{
+    const ws_tile t = ws_tile_for<T>(j.co);
+    auto go = [&]<int NV, int NR>() {
+        if (j.sj == 1) ws_run_tiled<T, NV, NR, 1>(j, wp, src, bias, y, accumulate_out, acc);
+        else if (j.sj == 2) ws_run_tiled<T, NV, NR, 2>(j, wp, src, bias, y, accumulate_out, acc);
+        else ws_run_tiled<T, NV, NR, 0>(j, wp, src, bias, y, accumulate_out, acc);
+    };
+    if constexpr (wide_register_file) {
+        if (t.nv == 4) go.template operator()<4, 6>();
+        else if (t.nv == 2) go.template operator()<2, 12>();
+        else go.template operator()<1, 12>();
+    } else {
+        if (t.nv == 2) go.template operator()<2, 6>();
+        else go.template operator()<1, 12>();
+    }
+}
+
+/// Packs weights into panels: dst[(pn*K + k)*MR + i] = value(o = pn*MR + i, k), 0 for o >= co.
+template <class T, class F>
+inline void ws_pack(int co, int K, T* dst, F&& value)
+{
+    const ws_tile t = ws_tile_for<T>(co);
+    const int MR = t.nv * simd_lanes<T>, panels = (co + MR - 1) / MR;
+    for (int pn = 0; pn < panels; ++pn)
+        for (int k = 0; k < K; ++k)
+            for (int i = 0; i < MR; ++i) {
+                const int o = pn * MR + i;
+                dst[(std::ptrdiff_t(pn) * K + k) * MR + i] = o < co ? value(o, k) : T(0);
+            }
+}
+
+/// Elements of the packed panels of `co` output channels and reduction length K.
+template <class T>
+inline std::size_t ws_packed_elements(int co, int K) noexcept
+{
+    const ws_tile t = ws_tile_for<T>(co);
+    const std::size_t MR = std::size_t(t.nv) * simd_lanes<T>;
+    return (std::size_t(co) + MR - 1) / MR * MR * std::size_t(K);
+}
+
+}  // namespace handemo::kernels::detail

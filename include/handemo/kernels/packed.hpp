@@ -1,0 +1,208 @@
+// Convolutions whose weights are reordered once, for inference (the StarGAN generator of Chan et al. 2020,
+// Sec. 3.3, run many times with the same weights: stargan::frozen_generator). packed_conv<T> copies the
+// weights of one Conv2d or ConvTranspose2d into the panels of the weight-stationary kernel
+// (kernels/detail/packed_conv.hpp) when the layer has enough output channels to fill its vectors, and keeps
+// them as they are (and calls the kernels of kernels/conv.hpp) otherwise. The results are those of
+// conv2d_forward / conv_transpose2d_forward up to the order of the floating-point sums.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include <handemo/kernels/conv.hpp>
+#include <handemo/kernels/detail/packed_conv.hpp>
+#include <handemo/tensor/aligned.hpp>
+
+namespace handemo::kernels {
+
+/// @brief One convolution with its weights packed for repeated forward passes.
+/// A snapshot: later changes to the weights it was built from do not reach it (build it again).
+template <class T>
+class packed_conv {
+public:
+    packed_conv() = default;
+
+    /// @brief Conv2d with geometry g and weights w [out_channels, in_channels, kernel_h, kernel_w].
+    static packed_conv conv2d(const conv_geometry& g, const T* w) { return packed_conv(g, w, false); }
+    /// @brief ConvTranspose2d as in conv_transpose2d_forward: g is the convolution it is the adjoint of,
+    /// w [g.out_channels, g.in_channels, k, k] (PyTorch's [in, out, k, k] of the transposed layer).
+    static packed_conv conv_transpose2d(const conv_geometry& g, const T* w) { return packed_conv(g, w, true); }
+
+    /// @brief Elements of T that forward() needs as scratch (any alignment).
+    std::size_t scratch_size() const noexcept { return scratch_; }
+    /// @brief The geometry given at construction.
+    const conv_geometry& geometry() const noexcept { return g_; }
+    /// @brief Whether the weight-stationary kernel runs (false: the kernels of kernels/conv.hpp).
+    bool weight_stationary() const noexcept { return ws_; }
+
+    /// @brief conv2d: y = conv(x, w) + bias, x [batch, in_channels, in_h, in_w], y [batch, out_channels,
+    /// out_h, out_w]. conv_transpose2d: y = ConvTranspose2d(x, w) + bias, x [batch, g.out_channels,
+    /// g.out_h(), g.out_w()], y [batch, g.in_channels, g.in_h, g.in_w]. bias_or_null: one value per output
+    /// channel, or nullptr. y is overwritten.
+    void forward(const T* x, const T* bias_or_null, T* y, T* scratch) const noexcept
+    {
+        if (!ws_) return fallback(x, bias_or_null, y, scratch);
+        T* acc = align(scratch);
+        T* xp = acc + acc_elements_;
+        const std::size_t x_per = std::size_t(in_c_) * in_h_ * in_w_, y_per = std::size_t(out_c_) * out_h_ * out_w_;
+        const std::size_t HWp = std::size_t(Hp_) * Wp_;
+        std::memset(xp, 0, std::size_t(in_c_) * HWp * sizeof(T));
+        for (int n = 0; n < g_.batch; ++n) {
+            const T* xn = x + n * x_per;
+            for (int c = 0; c < in_c_; ++c)
+                for (int r = 0; r < in_h_; ++r)
+                    std::memcpy(xp + c * HWp + std::size_t(r + pad_h_) * Wp_ + pad_w_, xn + (std::size_t(c) * in_h_ + r) * in_w_,
+                                std::size_t(in_w_) * sizeof(T));
+            for (const auto& ph : phases_) {
+                detail::ws_job j = ph.job;
+                j.koff = koff_.data() + ph.koff_off;
+                detail::ws_run(j, w_.data() + ph.w_off, xp + ph.src0, bias_or_null, y + n * y_per, false, acc);
+            }
+        }
+    }
+
+private:
+    struct phase {
+        detail::ws_job job;      // koff filled in at run time
+        std::size_t w_off = 0;   // first element of this phase's panels in w_
+        std::size_t koff_off = 0;
+        std::ptrdiff_t src0 = 0; // offset of the phase's first source pixel in the padded input
+    };
+
+    packed_conv(const conv_geometry& g, const T* w, bool transposed) : g_(g), transposed_(transposed)
+    {
+        const int k_h = g.kernel_h, k_w = g.kernel_w, s = g.stride;
+        // the sub-pixel split of a transposed conv needs every phase to have a tap
+        const bool phases_ok = !transposed || (k_h >= s && k_w >= s);
+        const int co = transposed ? g.in_channels : g.out_channels;
+        ws_ = detail::fast_type<T> && g.valid() && phases_ok && co >= detail::simd_lanes<T>;
+        if (!ws_) {
+            w_ = aligned_buffer<T>(g.w_size());
+            std::memcpy(w_.data(), w, g.w_size() * sizeof(T));
+            scratch_ = conv2d_scratch_size<T>(g);
+            return;
+        }
+        if (!transposed) build_conv(w);
+        else build_transposed(w);
+        scratch_ = acc_elements_ + std::size_t(in_c_) * Hp_ * Wp_ + 64 / sizeof(T);
+    }
+
+    void build_conv(const T* w)
+    {
+        const conv_geometry& g = g_;
+        in_c_ = g.in_channels, in_h_ = g.in_h, in_w_ = g.in_w;
+        out_c_ = g.out_channels, out_h_ = g.out_h(), out_w_ = g.out_w();
+        pad_h_ = pad_w_ = g.pad;
+        Hp_ = g.in_h + 2 * g.pad, Wp_ = g.in_w + 2 * g.pad;
+        const int K = g.in_channels * g.kernel_h * g.kernel_w;
+        koff_.resize(std::size_t(K));
+        for (int c = 0, k = 0; c < g.in_channels; ++c)
+            for (int u = 0; u < g.kernel_h; ++u)
+                for (int v = 0; v < g.kernel_w; ++v) koff_[std::size_t(k++)] = (c * Hp_ + u) * Wp_ + v;
+        w_ = aligned_buffer<T>(detail::ws_packed_elements<T>(out_c_, K));
+        detail::ws_pack<T>(out_c_, K, w_.data(), [&](int o, int k) { return w[std::ptrdiff_t(o) * K + k]; });
+        phase ph;
+        ph.job = {K, out_c_, out_h_, out_w_, g.stride, nullptr, std::ptrdiff_t(g.stride) * Wp_,
+                  std::ptrdiff_t(out_h_) * out_w_, 0, out_w_, 1};
+        phases_.push_back(ph);
+        acc_elements_ = detail::ws_acc_elements<T>(out_c_, out_h_, out_w_);
+    }
+
+    // y[c][h][w] = sum_{o,i,j,u,v: h = i*s - p + u, w = j*s - p + v} x[o][i][j] w[o][c][u][v]. Outputs with
+    // (h + p) mod s = rh use the taps u = rh + t*s (t = 0, 1, ...) and i = m - t with m = (h + p - rh) / s:
+    // per residue pair (rh, rw), a stride-1 convolution of x (zero-padded) with a (taps_h x taps_w) kernel.
+    void build_transposed(const T* w)
+    {
+        const conv_geometry& g = g_;
+        const int s = g.stride, p = g.pad, kh = g.kernel_h, kw = g.kernel_w;
+        in_c_ = g.out_channels, in_h_ = g.out_h(), in_w_ = g.out_w();  // x of the transposed conv
+        out_c_ = g.in_channels, out_h_ = g.in_h, out_w_ = g.in_w;       // y of the transposed conv
+        auto ceil_div = [](int a, int b) { return a >= 0 ? (a + b - 1) / b : -((-a) / b); };
+        struct range {
+            int r, taps, lo, hi;  // residue, taps, first and last m (hi < lo: no output pixel)
+        };
+        auto ranges = [&](int k, int out) {
+            std::vector<range> v;
+            for (int r = 0; r < s; ++r) {
+                const int taps = (k - r + s - 1) / s;
+                const int lo = std::max(0, ceil_div(p - r, s)), hi = (out - 1 + p - r) >= 0 ? (out - 1 + p - r) / s : -1;
+                v.push_back({r, taps, lo, hi});
+            }
+            return v;
+        };
+        const auto rh = ranges(kh, out_h_), rw = ranges(kw, out_w_);
+        auto pads = [](const std::vector<range>& v, int in) {
+            int lo = 0, hi = 0;
+            for (const auto& r : v)
+                if (r.hi >= r.lo) lo = std::max(lo, r.taps - 1 - r.lo), hi = std::max(hi, r.hi - (in - 1));
+            return std::pair{lo, hi};
+        };
+        const auto [plh, phh] = pads(rh, in_h_);
+        const auto [plw, phw] = pads(rw, in_w_);
+        pad_h_ = plh, pad_w_ = plw;
+        Hp_ = in_h_ + plh + phh, Wp_ = in_w_ + plw + phw;
+        std::size_t wtotal = 0;
+        for (const auto& a : rh)
+            for (const auto& b : rw)
+                if (a.hi >= a.lo && b.hi >= b.lo) wtotal += detail::ws_packed_elements<T>(out_c_, in_c_ * a.taps * b.taps);
+        w_ = aligned_buffer<T>(wtotal);
+        std::size_t woff = 0;
+        for (const auto& a : rh)
+            for (const auto& b : rw) {
+                if (a.hi < a.lo || b.hi < b.lo) continue;
+                const int K = in_c_ * a.taps * b.taps;
+                phase ph;
+                ph.koff_off = koff_.size();
+                for (int o = 0; o < in_c_; ++o)
+                    for (int t = 0; t < a.taps; ++t)
+                        for (int q = 0; q < b.taps; ++q) koff_.push_back((o * Hp_ + plh - t) * Wp_ + plw - q);
+                detail::ws_pack<T>(out_c_, K, w_.data() + woff, [&](int c, int k) {
+                    const int o = k / (a.taps * b.taps), t = (k / b.taps) % a.taps, q = k % b.taps;
+                    const int u = a.r + t * s, v = b.r + q * s;
+                    return w[((std::ptrdiff_t(o) * out_c_ + c) * kh + u) * kw + v];
+                });
+                ph.w_off = woff;
+                woff += detail::ws_packed_elements<T>(out_c_, K);
+                const int rows = a.hi - a.lo + 1, cols = b.hi - b.lo + 1;
+                const int h0 = a.lo * s + a.r - p, w0 = b.lo * s + b.r - p;
+                ph.src0 = std::ptrdiff_t(a.lo) * Wp_ + b.lo;
+                ph.job = {K, out_c_, rows, cols, 1, nullptr, Wp_, std::ptrdiff_t(out_h_) * out_w_,
+                          std::ptrdiff_t(h0) * out_w_ + w0, std::ptrdiff_t(s) * out_w_, s};
+                phases_.push_back(ph);
+                acc_elements_ = std::max(acc_elements_, detail::ws_acc_elements<T>(out_c_, rows, cols));
+            }
+    }
+
+    void fallback(const T* x, const T* bias, T* y, T* scratch) const noexcept
+    {
+        if (!transposed_) return conv2d_forward<T>(g_, x, w_.data(), bias, y, scratch);
+        conv_transpose2d_forward<T>(g_, x, w_.data(), y, scratch);
+        if (bias) {
+            const std::size_t hw = std::size_t(g_.in_h) * g_.in_w;
+            for (int n = 0; n < g_.batch; ++n)
+                for (int c = 0; c < g_.in_channels; ++c) {
+                    T* yc = y + (std::size_t(n) * g_.in_channels + c) * hw;
+                    for (std::size_t i = 0; i < hw; ++i) yc[i] += bias[c];
+                }
+        }
+    }
+
+    static T* align(T* p) noexcept
+    {
+        const auto a = reinterpret_cast<std::uintptr_t>(p);
+        return reinterpret_cast<T*>((a + 63) / 64 * 64);
+    }
+
+    conv_geometry g_{};
+    bool transposed_ = false, ws_ = false;
+    aligned_buffer<T> w_;
+    std::vector<int> koff_;
+    std::vector<phase> phases_;
+    int in_c_ = 0, in_h_ = 0, in_w_ = 0, out_c_ = 0, out_h_ = 0, out_w_ = 0, pad_h_ = 0, pad_w_ = 0, Hp_ = 0, Wp_ = 0;
+    std::size_t acc_elements_ = 0, scratch_ = 0;
+};
+
+}  // namespace handemo::kernels
