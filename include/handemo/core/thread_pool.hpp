@@ -6,6 +6,8 @@
 // <handemo/kernels/thread_pool.hpp> still names it handemo::kernels::thread_pool for existing users.
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstddef>
 #include <exception>
@@ -19,6 +21,9 @@
 namespace handemo {
 
 /// @brief Fixed pool of `n - 1` worker threads plus the calling thread; parallel_for blocks until done.
+/// Waiting threads spin for up to spin_time before they sleep on a condition variable: a training step
+/// calls parallel_for hundreds of times with short serial work in between, and waking a sleeping thread
+/// (a futex, and on a VM an interrupt to an idle vCPU) cost more than the work of the small layers.
 class thread_pool {
 public:
     /// @brief Starts n - 1 workers (n = 0 is treated as 1: everything runs on the caller).
@@ -33,7 +38,7 @@ public:
     {
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            stop_ = true;
+            stop_.store(true, std::memory_order_release);
         }
         start_cv_.notify_all();
         for (auto& w : workers_) w.join();
@@ -59,17 +64,22 @@ public:
         job_begin_ = begin;
         job_end_ = end;
         error_ = nullptr;
+        pending_.store(size_ - 1, std::memory_order_relaxed);
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            pending_ = size_ - 1;
-            ++generation_;
+            generation_.fetch_add(1, std::memory_order_release);
         }
         start_cv_.notify_all();
         run_chunk(0);
-        std::unique_lock<std::mutex> lock(mutex_);
-        done_cv_.wait(lock, [this] { return pending_ == 0; });
+        if (!spin_until([this] { return pending_.load(std::memory_order_acquire) == 0; })) {
+            std::unique_lock<std::mutex> lock(mutex_);
+            done_cv_.wait(lock, [this] { return pending_.load(std::memory_order_acquire) == 0; });
+        }
         if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
     }
+
+    /// @brief How long a waiting thread spins before it sleeps.
+    static constexpr std::chrono::microseconds spin_time{200};
 
 private:
     void run_chunk(unsigned t)
@@ -83,19 +93,39 @@ private:
             if (!error_) error_ = std::current_exception();
         }
     }
+    /// Spins until ready() or spin_time has passed; returns ready().
+    template <class P>
+    static bool spin_until(P&& ready)
+    {
+        const auto until = std::chrono::steady_clock::now() + spin_time;
+        for (int n = 0;; ++n) {
+            if (ready()) return true;
+            if ((n & 63) == 63 && std::chrono::steady_clock::now() > until) return ready();
+#if defined(__x86_64__) || defined(__i386__)
+            __builtin_ia32_pause();
+#elif defined(__aarch64__)
+            __asm__ volatile("yield");
+#endif
+        }
+    }
     void worker_loop(unsigned t)
     {
         unsigned long seen = 0;
         for (;;) {
-            {
+            auto started = [&] {
+                return stop_.load(std::memory_order_acquire) || generation_.load(std::memory_order_acquire) != seen;
+            };
+            if (!spin_until(started)) {
                 std::unique_lock<std::mutex> lock(mutex_);
-                start_cv_.wait(lock, [&] { return stop_ || generation_ != seen; });
-                if (stop_) return;
-                seen = generation_;
+                start_cv_.wait(lock, started);
             }
+            if (stop_.load(std::memory_order_acquire)) return;
+            seen = generation_.load(std::memory_order_acquire);
             run_chunk(t);
-            std::lock_guard<std::mutex> lock(mutex_);
-            if (--pending_ == 0) done_cv_.notify_one();
+            if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+                std::lock_guard<std::mutex> lock(mutex_);  // the caller may be between its check and its wait
+                done_cv_.notify_one();
+            }
         }
     }
 
@@ -103,9 +133,9 @@ private:
     std::vector<std::thread> workers_;
     std::mutex mutex_;
     std::condition_variable start_cv_, done_cv_;
-    bool stop_ = false;
-    unsigned long generation_ = 0;
-    unsigned pending_ = 0;
+    std::atomic<bool> stop_{false};
+    std::atomic<unsigned long> generation_{0};
+    std::atomic<unsigned> pending_{0};
     void (*job_fn_)(void*, int) = nullptr;
     void* job_ctx_ = nullptr;
     int job_begin_ = 0, job_end_ = 0;
