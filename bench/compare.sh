@@ -68,7 +68,7 @@ fi
 echo "== handemo"
 "$build/bench/bench_conv" --benchmark_filter='peak_fma|generator_convs' --benchmark_min_time=0.5 \
   --benchmark_format=console --benchmark_out="$out/conv.json" --benchmark_out_format=json
-"$build/bench/bench_conv" --benchmark_filter='^cd' --benchmark_min_time=0.1 \
+"$build/bench/bench_conv" --benchmark_filter='^(cd|packed/)' --benchmark_min_time=0.1 \
   --benchmark_out="$out/conv_layers.json" --benchmark_out_format=json >/dev/null
 if [ -x "$build/bench/bench_stargan" ]; then
   "$build/bench/bench_stargan" --benchmark_out="$out/stargan.json" --benchmark_out_format=json

@@ -60,12 +60,22 @@ if inproc:
     peak = max(inproc)
 star = load_json(o.stargan) if os.path.exists(o.stargan) else []
 
-def star_find(cfg_keys, kind, extra=""):
+def star_bench(cfg_keys, kind, extra="", exclude=None):
     for b in star:
         n = b["name"].lower()
+        if exclude and exclude in n:
+            continue
         if any(k in n for k in cfg_keys) and kind in n and extra in n and b.get("run_type", "iteration") == "iteration":
-            return seconds(b)
+            return b
     return None
+
+def star_find(cfg_keys, kind, extra="", exclude=None):
+    b = star_bench(cfg_keys, kind, extra, exclude)
+    return seconds(b) if b else None
+
+def gflops(b):
+    g = b.get("GFLOPS", b.get("GFLOP/s", 0)) if b else 0
+    return g / 1e9 if g > 1e6 else g
 
 print(f"FP32 FMA peak (1 core, {isa}): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
 # the peak two threads get together (peak_fma_threads): on SMT siblings about the 1-thread peak, so a compute-bound
@@ -79,16 +89,25 @@ if peak2:
 print()
 print("| config | measure | handemo | PyTorch 1 thr | PyTorch 2 thr | best PyTorch / handemo | fraction of peak |")
 print("|---|---|---|---|---|---|---|")
-for cfg, keys, gname in (("paper", ("paper", "64"), "generator_convs/paper(64,6)/b1"),
-                         ("embedded", ("embedded", "32"), "generator_convs/embedded(32,3)/b1")):
-    g = conv.get(gname)
+def frac_of_peak(b):
+    gfl = gflops(b)
+    return f"{gfl/peak:.0%} ({gfl:.1f} GFLOP/s)" if peak and gfl else "n/a"
+
+for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedded", ("embedded", "32"), "embedded(32,3)/b1")):
     tp1 = t1.get(cfg, (None, None)); tp2 = t2.get(cfg, (None, None))
-    if g:
-        gs = seconds(g); gfl = g.get("GFLOPS", 0) / 1e9 if g.get("GFLOPS", 0) > 1e6 else g.get("GFLOPS", 0)
-        frac = f"{gfl/peak:.0%} ({gfl:.1f} GFLOP/s)" if peak else "n/a"
-        print(f"| {cfg} | G conv stack, batch 1 (bench_conv) | {fmt_t(gs)} | {fmt_t(tp1[0])} (whole G) | | {ratio(tp1[0], gs)} | {frac} |")
-    inf = star_find(keys, "infer")
-    print(f"| {cfg} | G inference, batch 1 | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(best(tp1[0], tp2[0]), inf)} | |")
+    for label, gname in (("G conv stack, weights packed once (bench_conv)", "packed_generator_convs/" + suffix),
+                         ("G conv stack, unpacked kernels (bench_conv)", "generator_convs/" + suffix)):
+        g = conv.get(gname)
+        if g:
+            print(f"| {cfg} | {label} | {fmt_t(seconds(g))} | | | | {frac_of_peak(g)} |")
+    # the G inference of the target: frozen_generator (weights packed once), what transfer and the CLI run
+    inf_b = star_bench(keys, "infer", exclude="unpacked")
+    inf = seconds(inf_b) if inf_b else None
+    print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}** |")
+    un_b = star_bench(keys, "infer_unpacked")
+    if un_b:
+        un = seconds(un_b)
+        print(f"| {cfg} | G inference, batch 1, generator::infer (unpacked) | {fmt_t(un)} | | | {ratio(best(tp1[0], tp2[0]), un)} | {frac_of_peak(un_b)} |")
     tr = star_find(keys, "train", "threads:2") or star_find(keys, "train")
     tr1 = star_find(keys, "train", "threads:1")
     print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")

@@ -131,6 +131,21 @@ void run_packed_layer(benchmark::State& state, hk::conv_geometry g, bool transpo
     state.SetLabel(p.weight_stationary() ? "weight-stationary" : "fallback");
 }
 
+/// Prototype measurement: pack the weights on every call (as a training step would) and run the batch.
+void run_repacked_layer(benchmark::State& state, hk::conv_geometry g, bool transposed)
+{
+    buffers buf(g);
+    std::vector<float> scratch;
+    for (auto _ : state) {
+        const auto p = transposed ? hk::packed_conv<float>::conv_transpose2d(g, buf.w.data()) : hk::packed_conv<float>::conv2d(g, buf.w.data());
+        if (scratch.size() < p.scratch_size()) scratch.resize(p.scratch_size());
+        if (transposed) p.forward(buf.y.data(), nullptr, buf.x.data(), scratch.data());
+        else p.forward(buf.x.data(), nullptr, buf.y.data(), scratch.data());
+        benchmark::ClobberMemory();
+    }
+    state.counters["GFLOPS"] = benchmark::Counter(2 * g.macs() * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+}
+
 /// The generator's conv stack at batch 1 with packed weights (each layer its own weights, as in the model).
 void run_packed_generator(benchmark::State& state, int cd, int rep)
 {
@@ -243,6 +258,15 @@ int main(int argc, char** argv)
             if (l.name[0] == 'G')
                 benchmark::RegisterBenchmark(("packed/cd" + std::to_string(cd) + "/" + l.name + "/fwd/b1").c_str(), run_packed_layer,
                                              l.g, l.transposed)->Unit(benchmark::kMicrosecond);
+    for (int cd : {64, 32})
+        for (const auto& l : stargan_layers(cd)) {
+            hk::conv_geometry g8 = l.g;
+            g8.batch = 8;
+            benchmark::RegisterBenchmark(("repacked/cd" + std::to_string(cd) + "/" + l.name + "/fwd/b8").c_str(), run_repacked_layer,
+                                         g8, l.transposed)->Unit(benchmark::kMicrosecond);
+            benchmark::RegisterBenchmark(("repacked/cd" + std::to_string(cd) + "/" + l.name + "/bwd_data/b8").c_str(), run_repacked_layer,
+                                         g8, !l.transposed)->Unit(benchmark::kMicrosecond);
+        }
     for (int cd : {64, 32})
         for (const auto& l : stargan_layers(cd)) {
             const std::string base = "cd" + std::to_string(cd) + "/" + l.name;
