@@ -56,3 +56,23 @@ TEST_CASE("thread_pool: the old header path and name still work")
     pool.parallel_for(0, 10, [&](int) { ++n; });
     CHECK(n == 10);
 }
+
+TEST_CASE("thread_pool: back-to-back calls (workers still spinning) and calls after a sleep both complete")
+{
+    // Waiting threads spin for spin_time, then sleep on a condition variable: calls that follow each other
+    // at once find the workers spinning, calls after a pause longer than spin_time must wake them.
+    hk::thread_pool pool(3);
+    std::vector<int> hits(300, 0);
+    for (int round = 0; round < 2000; ++round) {  // spinning path, many generations
+        pool.parallel_for(0, 300, [&](int i) { ++hits[std::size_t(i)]; });
+    }
+    for (int h : hits) REQUIRE(h == 2000);
+    for (int round = 0; round < 3; ++round) {  // sleeping path
+        std::this_thread::sleep_for(hk::thread_pool::spin_time * 5);
+        std::atomic<int> sum{0};
+        pool.parallel_for(0, 100, [&](int i) { sum += i; });
+        CHECK(sum.load() == 4950);
+    }
+    std::this_thread::sleep_for(hk::thread_pool::spin_time * 5);
+    CHECK_THROWS_AS(pool.parallel_for(0, 9, [](int i) { if (i == 8) throw std::runtime_error("last"); }), std::runtime_error);
+}

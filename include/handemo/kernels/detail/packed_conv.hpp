@@ -53,6 +53,13 @@ constexpr int ws_kc(int nv) noexcept
     return std::max(16, int(32768 / (sizeof(T) * std::size_t(nv) * simd_lanes<T>)));
 }
 
+/// How many reduction blocks ahead the first tile of a block prefetches the weight stream (-D override).
+#ifdef HANDEMO_WS_PREFETCH_BLOCKS
+inline constexpr int ws_prefetch_blocks = HANDEMO_WS_PREFETCH_BLOCKS;
+#else
+inline constexpr int ws_prefetch_blocks = 1;
+#endif
+
 /// tile[j][0..MR) (+)= sum_{k<kc} wp[k*MR + 0..MR) * src[koff[k] + j*sj], j < NR. SJ > 0 fixes sj at
 /// compile time (stride 1 and 2 of the generator); SJ = 0 reads it from `sj`. PF: also prefetch (into L2)
 /// kc*MR elements of the weight stream starting at `pf`, spread over the loop.
@@ -131,7 +138,7 @@ inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bi
         for (int k0 = 0; k0 < j.K; k0 += kc_max) {
             const int kc = std::min(kc_max, j.K - k0);
             // the weights of the next block (of this panel or the next: the panels are contiguous)
-            const std::ptrdiff_t next = std::ptrdiff_t(pn) * j.K + k0 + kc;
+            const std::ptrdiff_t next = std::ptrdiff_t(pn) * j.K + k0 + kc * ws_prefetch_blocks;
             const bool pf = next + kc <= std::ptrdiff_t(panels) * j.K;
             T* tile = acc;
             for (int r = 0; r < j.rows; ++r) {
