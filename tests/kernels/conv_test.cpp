@@ -12,7 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "random_values.hpp"
+
 namespace hk = handemo::kernels;
+using kernel_test::random_values;
 
 namespace {
 
@@ -24,13 +27,6 @@ std::string describe(const hk::conv_geometry& g)
     return buf;
 }
 
-std::vector<double> random_vector(std::size_t n, std::mt19937& rng)
-{
-    std::uniform_real_distribution<double> d(-1.0, 1.0);
-    std::vector<double> v(n);
-    for (auto& e : v) e = d(rng);
-    return v;
-}
 
 template <class T>
 std::vector<T> cast(const std::vector<double>& v)
@@ -68,10 +64,10 @@ void check_geometry(const hk::conv_geometry& g, double tol, unsigned seed)
     const char* type_name = sizeof(T) == 4 ? "float" : "double";  // INFO keeps a reference: no temporaries
     INFO(describe(g), " T=", type_name);
     std::mt19937 rng(seed);
-    const auto x = random_vector(g.x_size(), rng), w = random_vector(g.w_size(), rng),
-               b = random_vector(std::size_t(g.out_channels), rng), gy = random_vector(g.y_size(), rng),
-               gx0 = random_vector(g.x_size(), rng), gw0 = random_vector(g.w_size(), rng),
-               gb0 = random_vector(std::size_t(g.out_channels), rng);
+    const auto x = random_values(g.x_size(), rng), w = random_values(g.w_size(), rng),
+               b = random_values(std::size_t(g.out_channels), rng), gy = random_values(g.y_size(), rng),
+               gx0 = random_values(g.x_size(), rng), gw0 = random_values(g.w_size(), rng),
+               gb0 = random_values(std::size_t(g.out_channels), rng);
     const auto xt = cast<T>(x), wt = cast<T>(w), bt = cast<T>(b), gyt = cast<T>(gy);
     std::vector<T> scratch(hk::conv2d_scratch_size<T>(g) + guard, std::numeric_limits<T>::quiet_NaN());
     {  // independent of the batch size: a batch's scratch serves its chunks
@@ -120,7 +116,7 @@ void check_geometry(const hk::conv_geometry& g, double tol, unsigned seed)
         CHECK_MESSAGE(rel_error(got, want) <= tol, "conv_transpose2d_forward");
     }
     {
-        const auto gyT = random_vector(g.x_size(), rng);
+        const auto gyT = random_values(g.x_size(), rng);
         auto want = gy;  // gx of the transposed conv has its input's shape = conv output shape; accumulate
         hk::reference::conv_transpose2d_backward_data<double>(g, gyT.data(), w.data(), want.data(), nullptr);
         auto got = with_guard<T>(gy);

@@ -13,7 +13,10 @@
 #include <string>
 #include <vector>
 
+#include "random_values.hpp"
+
 namespace hk = handemo::kernels;
+using kernel_test::random_values;
 
 namespace {
 
@@ -25,13 +28,6 @@ std::string describe_packed(const hk::conv_geometry& g, bool transposed)
     return buf;
 }
 
-std::vector<double> random_values(std::size_t n, std::mt19937& rng)
-{
-    std::uniform_real_distribution<double> d(-1.0, 1.0);
-    std::vector<double> v(n);
-    for (auto& e : v) e = d(rng);
-    return v;
-}
 
 constexpr int tail_guard = 17;
 
