@@ -316,10 +316,10 @@ public:
         if (info_.joint_names.size() != J)
             throw format_error("checkpoint: " + f.source + ": " + std::to_string(info_.joint_names.size()) +
                                " joint names, configuration " + info_.config + " has " + std::to_string(J) + " joints");
-        load_parameters(f, g_, f.find("G_ema.main.0.weight") ? "G_ema." : "G.");  // the EMA weights when trained with them
-        g_.set_residual(residual());
-        g_.set_requires_grad(false);
-        frozen_.emplace(g_);  // weights packed once for every transfer of this model
+        generator<float, cfg> g;
+        load_parameters(f, g, f.find("G_ema.main.0.weight") ? "G_ema." : "G.");  // the EMA weights when trained with them
+        g.set_residual(residual());
+        frozen_.emplace(g);  // weights packed once for every transfer of this model; g itself is not kept
         fws_.emplace(*frozen_);
     }
 
@@ -333,7 +333,6 @@ private:
         frozen_->infer(in_.data(), label.data(), out_.data(), *fws_);
         crop_image(out_.data(), H, W, out, K, J);
     }
-    generator<float, cfg> g_;
     std::optional<frozen_generator<float, cfg>> frozen_;
     mutable std::optional<typename frozen_generator<float, cfg>::workspace> fws_;
     mutable std::vector<float> in_ = std::vector<float>(3 * H * W), out_ = std::vector<float>(3 * H * W);
