@@ -87,6 +87,7 @@ TEST_CASE("packed convolutions match the reference on the generator's layers at 
 {
     for (int cd : {8, 16, 32, 64})
         for (int b : {1, 2}) {
+            if (b == 2 && cd > 16) continue;  // batch 2 at the small widths is enough (and this runs under qemu too)
             const hk::conv_geometry layers[] = {
                 {b, 8, 12, 24, cd, 7, 7, 1, 3},          // conv7 3+5 -> cd
                 {b, cd, 12, 24, 2 * cd, 4, 4, 2, 1},     // down 1; its transpose is up 2
@@ -115,7 +116,7 @@ TEST_CASE("packed convolutions match the reference on random geometries (strides
     std::mt19937 rng(20261202u);
     auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
     int tested = 0, ws = 0, fallback = 0;
-    while (tested < 80) {
+    while (tested < 60) {
         const int kh = pick(1, 6), kw = pick(1, 6);
         // channel counts around the SIMD widths (4, 8, 16 lanes) and the panel widths (x2, x4)
         const int ch[] = {1, 3, 7, 8, 9, 15, 16, 17, 24, 33, 48, 64, 65};

@@ -78,8 +78,12 @@ public:
         if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
     }
 
-    /// @brief How long a waiting thread spins before it sleeps.
+    /// @brief How long a waiting thread spins before it sleeps (-DHANDEMO_POOL_SPIN_US overrides).
+#ifdef HANDEMO_POOL_SPIN_US
+    static constexpr std::chrono::microseconds spin_time{HANDEMO_POOL_SPIN_US};
+#else
     static constexpr std::chrono::microseconds spin_time{200};
+#endif
 
 private:
     void run_chunk(unsigned t)
