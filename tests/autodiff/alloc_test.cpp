@@ -110,4 +110,11 @@ TEST_CASE("autodiff: the second training step makes no heap allocation")
     g1.infer(s.x.data(), lab1.data(), out.data(), ws);
     g1.infer(s.x.data(), lab1.data(), out.data(), ws);
     CHECK(handemo_test::alloc_count.load() - before_infer == 0);
+    // the frozen generator allocates when it packs and when its workspace is made, never in infer()
+    const auto frozen = g1.freeze();
+    frozen_generator<float, hand_embedded>::workspace fws(frozen);
+    const long before_frozen = handemo_test::alloc_count.load();
+    frozen.infer(s.x.data(), lab1.data(), out.data(), fws);
+    frozen.infer(s.x.data(), lab1.data(), out.data(), fws);
+    CHECK(handemo_test::alloc_count.load() - before_frozen == 0);
 }

@@ -27,7 +27,6 @@ std::string describe(const hk::conv_geometry& g)
     return buf;
 }
 
-
 template <class T>
 std::vector<T> cast(const std::vector<double>& v)
 {

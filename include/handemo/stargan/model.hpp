@@ -304,8 +304,6 @@ public:
 
     private:
         friend class generator;
-        template <class, stargan_config>
-        friend class frozen_generator;
         std::array<aligned_buffer<T>, 4> buf_;
         aligned_buffer<T> scratch_;
     };
