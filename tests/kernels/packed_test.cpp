@@ -132,3 +132,14 @@ TEST_CASE("packed convolutions match the reference on random geometries (strides
     CHECK(fallback > 0);
     if constexpr (hk::detail::has_simd) CHECK(ws > 20);
 }
+
+TEST_CASE("packed convolutions refuse an invalid geometry, naming it")
+{
+    const std::vector<float> w(64, 1.f);
+    const hk::conv_geometry bad[] = {{1, 0, 4, 4, 2, 3, 3, 1, 1}, {1, 2, 2, 2, 2, 5, 5, 1, 0}, {1, 2, 4, 4, 2, 3, 3, 0, 1}};
+    for (const auto& g : bad) {
+        CHECK_THROWS_WITH_AS(hk::packed_conv<float>::conv2d(g, w.data()), doctest::Contains("packed_conv: invalid geometry"),
+                             handemo::value_error);
+        CHECK_THROWS_AS(hk::packed_conv<float>::conv_transpose2d(g, w.data()), handemo::value_error);
+    }
+}

@@ -9,9 +9,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include <handemo/core/error.hpp>
 #include <handemo/kernels/conv.hpp>
 #include <handemo/kernels/detail/packed_conv.hpp>
 #include <handemo/tensor/aligned.hpp>
@@ -26,6 +28,7 @@ public:
     packed_conv() = default;
 
     /// @brief Conv2d with geometry g and weights w [out_channels, in_channels, kernel_h, kernel_w].
+    /// @throws value_error when g is not valid() (naming its fields).
     static packed_conv conv2d(const conv_geometry& g, const T* w) { return packed_conv(g, w, false); }
     /// @brief ConvTranspose2d as in conv_transpose2d_forward: g is the convolution it is the adjoint of,
     /// w [g.out_channels, g.in_channels, k, k] (PyTorch's [in, out, k, k] of the transposed layer).
@@ -74,11 +77,17 @@ private:
 
     packed_conv(const conv_geometry& g, const T* w, bool transposed) : g_(g), transposed_(transposed)
     {
+        if (!g.valid())
+            throw value_error("packed_conv: invalid geometry (batch " + std::to_string(g.batch) + ", " +
+                              std::to_string(g.in_channels) + "x" + std::to_string(g.in_h) + "x" + std::to_string(g.in_w) +
+                              " -> " + std::to_string(g.out_channels) + ", kernel " + std::to_string(g.kernel_h) + "x" +
+                              std::to_string(g.kernel_w) + ", stride " + std::to_string(g.stride) + ", pad " +
+                              std::to_string(g.pad) + ")");
         const int k_h = g.kernel_h, k_w = g.kernel_w, s = g.stride;
         // the sub-pixel split of a transposed conv needs every phase to have a tap
         const bool phases_ok = !transposed || (k_h >= s && k_w >= s);
         const int co = transposed ? g.in_channels : g.out_channels;
-        ws_ = detail::fast_type<T> && g.valid() && phases_ok && co >= detail::simd_lanes<T>;
+        ws_ = detail::fast_type<T> && phases_ok && co >= detail::simd_lanes<T>;
         if (!ws_) {
             w_ = aligned_buffer<T>(g.w_size());
             std::memcpy(w_.data(), w, g.w_size() * sizeof(T));
