@@ -27,6 +27,11 @@ def torch_results(path):
         pass
     return r
 
+def gflops(b):
+    """A benchmark's GFLOPS (bench_conv) or GFLOP/s (bench_stargan) counter in GFLOP/s (JSON may hold FLOP/s)."""
+    g = b.get("GFLOPS", b.get("GFLOP/s", 0)) if b else 0
+    return g / 1e9 if g > 1e6 else g
+
 def fmt_t(s):
     return "n/a" if s is None else (f"{s*1e6:.0f} us" if s < 1e-2 else f"{s*1e3:.1f} ms")
 
@@ -53,8 +58,7 @@ isa = ctx.get("simd_arch") or o.isa or "unknown"
 print(f"Kernels compiled for: {isa} ({ctx.get('simd_float_lanes', '?')} float lanes); peak below is {isa}'s")
 # the FMA peak of the kernels' ISA measured inside bench_conv (same load as the kernels) wins over the
 # standalone one
-inproc = [b.get("GFLOPS", 0) for b in conv_all if b["name"].startswith("peak_fma/") and b.get("run_type") == "iteration"]
-inproc = [g / 1e9 if g > 1e6 else g for g in inproc]
+inproc = [gflops(b) for b in conv_all if b["name"].startswith("peak_fma/") and b.get("run_type") == "iteration"]
 if inproc:
     print(f"FMA peak ({isa}): standalone {peak:.1f} GFLOP/s, inside bench_conv {max(inproc):.1f} GFLOP/s (used below)")
     peak = max(inproc)
@@ -73,15 +77,11 @@ def star_find(cfg_keys, kind, extra="", exclude=None):
     b = star_bench(cfg_keys, kind, extra, exclude)
     return seconds(b) if b else None
 
-def gflops(b):
-    g = b.get("GFLOPS", b.get("GFLOP/s", 0)) if b else 0
-    return g / 1e9 if g > 1e6 else g
-
 print(f"FP32 FMA peak (1 core, {isa}): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
 # the peak two threads get together (peak_fma_threads): on SMT siblings about the 1-thread peak, so a compute-bound
 # 2-thread step cannot be below (1-thread peak / 2-thread peak) x the 1-thread step
-peak2 = [b.get("GFLOPS", 0) for b in conv_all if b["name"].startswith("peak_fma_threads/") and b.get("run_type") == "iteration"]
-peak2 = max([g / 1e9 if g > 1e6 else g for g in peak2], default=0)
+peak2 = max([gflops(b) for b in conv_all if b["name"].startswith("peak_fma_threads/") and b.get("run_type") == "iteration"],
+            default=0)
 bound = peak / peak2 if peak and peak2 else None
 if peak2:
     print(f"FMA peak of 2 threads together: {peak2:.1f} GFLOP/s = {peak2 / peak:.2f}x the 1-thread peak"
@@ -123,7 +123,6 @@ if layers:
     print("| layer / pass / batch | time | GFLOP/s | of peak |")
     print("|---|---|---|---|")
     for b in layers:
-        gfl = b.get("GFLOPS", 0)
-        gfl = gfl / 1e9 if gfl > 1e6 else gfl
+        gfl = gflops(b)
         print(f"| {b['name']} | {fmt_t(b['cpu_time'] * {'ns':1e-9,'us':1e-6,'ms':1e-3,'s':1.0}[b.get('time_unit','ns')])} | {gfl:.1f} | {gfl/peak:.0%} |" if peak else
               f"| {b['name']} | | {gfl:.1f} | n/a |")

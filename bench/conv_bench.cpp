@@ -85,17 +85,18 @@ void run_layer(benchmark::State& state, hk::conv_geometry g, bool transposed, pa
 }
 
 /// The generator's conv stack at batch 1 (rep residual blocks of two 3x3 convs), in network order.
+std::vector<layer> generator_sequence(int cd, int rep)
+{
+    const auto all = stargan_layers(cd);
+    std::vector<layer> seq = {all[0], all[1], all[2]};
+    for (int r = 0; r < 2 * rep; ++r) seq.push_back(all[3]);
+    seq.insert(seq.end(), {all[4], all[5], all[6]});
+    return seq;
+}
+
 void run_generator(benchmark::State& state, int cd, int rep)
 {
-    std::vector<layer> seq;
-    const auto all = stargan_layers(cd);
-    seq.push_back(all[0]);
-    seq.push_back(all[1]);
-    seq.push_back(all[2]);
-    for (int r = 0; r < 2 * rep; ++r) seq.push_back(all[3]);
-    seq.push_back(all[4]);
-    seq.push_back(all[5]);
-    seq.push_back(all[6]);
+    const std::vector<layer> seq = generator_sequence(cd, rep);
     std::vector<buffers> bufs;
     double macs = 0;
     for (const auto& l : seq) {
@@ -116,15 +117,26 @@ void run_generator(benchmark::State& state, int cd, int rep)
     state.counters["MMAC"] = macs * 1e-6;
 }
 
+hk::packed_conv<float> pack(const hk::conv_geometry& g, const float* w, bool transposed)
+{
+    return transposed ? hk::packed_conv<float>::conv_transpose2d(g, w) : hk::packed_conv<float>::conv2d(g, w);
+}
+
+/// One packed forward pass on a layer's buffers: a transposed layer reads y and writes x (g's sides).
+void packed_forward(const hk::packed_conv<float>& p, bool transposed, buffers& b, float* scratch)
+{
+    if (transposed) p.forward(b.y.data(), nullptr, b.x.data(), scratch);
+    else p.forward(b.x.data(), nullptr, b.y.data(), scratch);
+}
+
 /// The same layer with its weights packed once (kernels/packed.hpp, the path of stargan::frozen_generator).
 void run_packed_layer(benchmark::State& state, hk::conv_geometry g, bool transposed)
 {
     buffers buf(g);
-    const auto p = transposed ? hk::packed_conv<float>::conv_transpose2d(g, buf.w.data()) : hk::packed_conv<float>::conv2d(g, buf.w.data());
+    const auto p = pack(g, buf.w.data(), transposed);
     std::vector<float> scratch(p.scratch_size());
     for (auto _ : state) {
-        if (transposed) p.forward(buf.y.data(), nullptr, buf.x.data(), scratch.data());
-        else p.forward(buf.x.data(), nullptr, buf.y.data(), scratch.data());
+        packed_forward(p, transposed, buf, scratch.data());
         benchmark::ClobberMemory();
     }
     state.counters["GFLOPS"] = benchmark::Counter(2 * g.macs() * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
@@ -137,10 +149,9 @@ void run_repacked_layer(benchmark::State& state, hk::conv_geometry g, bool trans
     buffers buf(g);
     std::vector<float> scratch;
     for (auto _ : state) {
-        const auto p = transposed ? hk::packed_conv<float>::conv_transpose2d(g, buf.w.data()) : hk::packed_conv<float>::conv2d(g, buf.w.data());
+        const auto p = pack(g, buf.w.data(), transposed);
         if (scratch.size() < p.scratch_size()) scratch.resize(p.scratch_size());
-        if (transposed) p.forward(buf.y.data(), nullptr, buf.x.data(), scratch.data());
-        else p.forward(buf.x.data(), nullptr, buf.y.data(), scratch.data());
+        packed_forward(p, transposed, buf, scratch.data());
         benchmark::ClobberMemory();
     }
     state.counters["GFLOPS"] = benchmark::Counter(2 * g.macs() * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
@@ -149,28 +160,20 @@ void run_repacked_layer(benchmark::State& state, hk::conv_geometry g, bool trans
 /// The generator's conv stack at batch 1 with packed weights (each layer its own weights, as in the model).
 void run_packed_generator(benchmark::State& state, int cd, int rep)
 {
-    const auto all = stargan_layers(cd);
-    std::vector<layer> seq = {all[0], all[1], all[2]};
-    for (int r = 0; r < 2 * rep; ++r) seq.push_back(all[3]);
-    seq.insert(seq.end(), {all[4], all[5], all[6]});
+    const std::vector<layer> seq = generator_sequence(cd, rep);
     std::vector<buffers> bufs;
     std::vector<hk::packed_conv<float>> packed;
     std::size_t ns = 0;
     double macs = 0;
     for (const auto& l : seq) {
         bufs.emplace_back(l.g);
-        packed.push_back(l.transposed ? hk::packed_conv<float>::conv_transpose2d(l.g, bufs.back().w.data())
-                                      : hk::packed_conv<float>::conv2d(l.g, bufs.back().w.data()));
+        packed.push_back(pack(l.g, bufs.back().w.data(), l.transposed));
         ns = std::max(ns, packed.back().scratch_size());
         macs += l.g.macs();
     }
     std::vector<float> scratch(ns);
     for (auto _ : state) {
-        for (std::size_t i = 0; i < seq.size(); ++i) {
-            auto& b = bufs[i];
-            if (seq[i].transposed) packed[i].forward(b.y.data(), nullptr, b.x.data(), scratch.data());
-            else packed[i].forward(b.x.data(), nullptr, b.y.data(), scratch.data());
-        }
+        for (std::size_t i = 0; i < seq.size(); ++i) packed_forward(packed[i], seq[i].transposed, bufs[i], scratch.data());
         benchmark::ClobberMemory();
     }
     state.counters["GFLOPS"] = benchmark::Counter(2 * macs * 1e-9, benchmark::Counter::kIsIterationInvariantRate);

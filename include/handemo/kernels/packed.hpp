@@ -62,7 +62,7 @@ public:
             for (const auto& ph : phases_) {
                 detail::ws_job j = ph.job;
                 j.koff = koff_.data() + ph.koff_off;
-                detail::ws_run(j, w_.data() + ph.w_off, xp + ph.src0, bias_or_null, y + n * y_per, false, acc);
+                detail::ws_run(j, w_.data() + ph.w_off, xp + ph.src0, bias_or_null, y + n * y_per, acc);
             }
         }
     }
@@ -96,7 +96,7 @@ private:
         }
         if (!transposed) build_conv(w);
         else build_transposed(w);
-        scratch_ = acc_elements_ + std::size_t(in_c_) * Hp_ * Wp_ + 64 / sizeof(T);
+        scratch_ = acc_elements_ + std::size_t(in_c_) * Hp_ * Wp_ + tensor_alignment / sizeof(T);
     }
 
     void build_conv(const T* w)
@@ -199,10 +199,11 @@ private:
         }
     }
 
+    /// The first tensor_alignment-aligned element of p (the tiles are loaded and stored aligned).
     static T* align(T* p) noexcept
     {
         const auto a = reinterpret_cast<std::uintptr_t>(p);
-        return reinterpret_cast<T*>((a + 63) / 64 * 64);
+        return reinterpret_cast<T*>((a + tensor_alignment - 1) / tensor_alignment * tensor_alignment);
     }
 
     conv_geometry g_{};

@@ -293,10 +293,8 @@ public:
     /// @brief Buffers for infer(): sized at construction, reused by every call.
     class workspace {
     public:
-        workspace()
+        workspace() : buf_(activation_buffers())
         {
-            const std::size_t act = N * std::max<std::size_t>(cd, 3 + C) * H * W;
-            for (auto& b : buf_) b = aligned_buffer<T>(act);
             std::size_t s = 0;
             for (const auto& g : geometries()) s = std::max(s, kernels::conv2d_scratch_size<T>(g));
             scratch_ = aligned_buffer<T>(std::max<std::size_t>(s, 1));
@@ -328,6 +326,14 @@ public:
             k += 2;
         };
         run_layers(x, label, out, ws.buf_, conv, convt, norm, residual_);
+    }
+
+    /// @brief The four activation buffers run_layers() needs, each the size of the largest activation
+    /// (max(conv_dim, 3 + domains) channels of the H x W image, the batch).
+    static std::array<aligned_buffer<T>, 4> activation_buffers()
+    {
+        const std::size_t act = N * std::max<std::size_t>(cd, 3 + C) * H * W;
+        return {aligned_buffer<T>(act), aligned_buffer<T>(act), aligned_buffer<T>(act), aligned_buffer<T>(act)};
     }
 
     /// @brief The layer sequence of infer() with the convolutions and norms given as callables:
@@ -436,10 +442,8 @@ public:
     /// @brief Buffers for infer() of one frozen generator: sized at construction, reused by every call.
     class workspace {
     public:
-        explicit workspace(const frozen_generator& f)
+        explicit workspace(const frozen_generator& f) : buf_(generator_type::activation_buffers())
         {
-            const std::size_t act = N * std::max<std::size_t>(cd, 3 + C) * H * W;
-            for (auto& b : buf_) b = aligned_buffer<T>(act);
             std::size_t s = 1;
             for (const auto& c : f.convs_) s = std::max(s, c.scratch_size());
             scratch_ = aligned_buffer<T>(s);

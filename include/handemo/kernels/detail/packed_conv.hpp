@@ -127,8 +127,7 @@ inline std::size_t ws_acc_elements(int co, int rows, int cols) noexcept
 }
 
 template <class T, int NV, int NR, int SJ>
-inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, bool accumulate_out,
-                         T* acc) noexcept
+inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, T* acc) noexcept
 {
     constexpr int L = simd_lanes<T>, MR = NV * L;
     const int kc_max = ws_kc<T>(NV);
@@ -165,32 +164,30 @@ inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bi
                     const T b = bias ? bias[o0 + i] : T(0);
                     T* yo = y + std::ptrdiff_t(o0 + i) * j.y_chan + j.y_row0 + r * j.y_row + q0 * j.y_col;
                     for (int q = 0; q < nr; ++q) {
-                        T& d = yo[q * j.y_col];
-                        d = (accumulate_out ? d : T(0)) + tile[q * MR + i] + b;
+                        yo[q * j.y_col] = tile[q * MR + i] + b;
                     }
                 }
             }
     }
 }
 
-/// Runs a job with the tile ws_tile_for<T>(co) and the compile-time pixel stride when it is 1 or 2.
+/// Runs a job (y = result + bias, overwritten) with the tile ws_tile_for<T>(co) and the compile-time pixel
+/// stride when it is 1 or 2.
 template <class T>
-inline void ws_run(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, bool accumulate_out,
-                   T* acc) noexcept
+inline void ws_run(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, T* acc) noexcept
 {
-    const ws_tile t = ws_tile_for<T>(j.co);
-    auto go = [&]<int NV, int NR>() {
-        if (j.sj == 1) ws_run_tiled<T, NV, NR, 1>(j, wp, src, bias, y, accumulate_out, acc);
-        else if (j.sj == 2) ws_run_tiled<T, NV, NR, 2>(j, wp, src, bias, y, accumulate_out, acc);
-        else ws_run_tiled<T, NV, NR, 0>(j, wp, src, bias, y, accumulate_out, acc);
+    constexpr int L = simd_lanes<T>;
+    // the tile of a panel of CO channels, as ws_tile_for gives it (the instantiations follow that one table)
+    auto go = [&]<int CO>() {
+        constexpr ws_tile t = ws_tile_for<T>(CO);
+        if (j.sj == 1) ws_run_tiled<T, t.nv, t.nr, 1>(j, wp, src, bias, y, acc);
+        else if (j.sj == 2) ws_run_tiled<T, t.nv, t.nr, 2>(j, wp, src, bias, y, acc);
+        else ws_run_tiled<T, t.nv, t.nr, 0>(j, wp, src, bias, y, acc);
     };
-    if constexpr (wide_register_file) {
-        if (t.nv == 4) go.template operator()<4, 6>();
-        else if (t.nv == 2) go.template operator()<2, 12>();
-        else go.template operator()<1, 12>();
-    } else {
-        if (t.nv == 2) go.template operator()<2, 6>();
-        else go.template operator()<1, 12>();
+    switch (ws_tile_for<T>(j.co).nv) {
+    case 4: go.template operator()<4 * L>(); break;
+    case 2: go.template operator()<2 * L>(); break;
+    default: go.template operator()<L>(); break;
     }
 }
 
