@@ -1,10 +1,12 @@
 // Whole-StarGAN benchmarks (hand paper Sec. 3.3) side by side with reference_stargan.py: batch-1 generator
-// inference, single thread, tape-free (generator::infer); one training step (D step with WGAN-GP + G step,
-// batch 16, Adam on both) on the autodiff tape with the batch split over 2 threads and over 1 (threads:N). GFLOP/s counters are
+// inference, single thread, tape-free (frozen_generator and generator::infer); one training step of the
+// library's trainer (D step with WGAN-GP + G step, batch 16, Adam on both), data-parallel on 2 threads and on 1
+// (threads:N). GFLOP/s counters are
 // multiply-adds x 2 / time (for training, an estimate: 7 G-forward + 14 D-forward equivalents per step).
 #include <handemo/nn/adam.hpp>
 #include <handemo/nn/init.hpp>
 #include <handemo/stargan/model.hpp>
+#include <handemo/stargan/train.hpp>
 
 #include <benchmark/benchmark.h>
 
@@ -68,80 +70,47 @@ void bm_infer_micro(benchmark::State& st)
                                                 benchmark::Counter::kIs1000);
 }
 
+/// One trainer::train_step() (the library's own, data-parallel over `threads`): a D step with WGAN-GP and a
+/// G step (n_critic 1), batch 16, the paper's losses (lambda_cls 1, lambda_rec 10, lambda_gp 10) and Adam
+/// (0.5, 0.999) on both, as reference_stargan.py's step; on 64 random images with random labels.
 template <class Base>
 void bm_train(benchmark::State& st)
 {
-    using cfg = with_batch<Base, 16>;
-    constexpr std::size_t N = 16, C = Base::domains, H = dims<cfg>::H, W = dims<cfg>::W;
-    using img = shape<N, 3, H, W>;
-    generator<float, cfg> g;
-    discriminator<float, cfg> d;
-    rng gen(1);
-    init_pytorch_default(g, gen);
-    init_pytorch_default(d, gen);
-    adam_options opt;
-    opt.beta1 = 0.5;
-    opt.beta2 = 0.999;
-    adam<float> og(g, opt), od(d, opt);
-    // threads = the benchmark's argument (1 and 2: the parallel efficiency of issue 13), 0 = all cores
-    const unsigned threads = st.range(0) > 0 ? unsigned(st.range(0)) : std::max(1u, std::thread::hardware_concurrency());
-    thread_pool pool(threads);
-    tape<float> t(std::size_t{1} << 22, &pool);
+    using tr_t = trainer<Base, 16>;
+    constexpr std::size_t C = Base::domains, H = tr_t::H, W = tr_t::W, count = 64;
+    prepared_data data;
+    data.H = H, data.W = W, data.K = Base::keyframes, data.J = Base::joints, data.domains = C;
     std::mt19937 r(3);
-    std::uniform_real_distribution<float> u(-1, 1), a01(0, 1);
-    std::vector<float> x(img::size), xh(img::size), org(N * C, 0.f), trg(N * C, 0.f);
-    std::array<int, N> lab{}, tl{};
-    for (auto& v : x) v = u(r);
-    for (std::size_t n = 0; n < N; ++n) {
-        lab[n] = int(r() % C);
-        tl[n] = int(r() % C);
-        org[n * C + lab[n]] = 1;
-        trg[n * C + tl[n]] = 1;
+    std::uniform_real_distribution<float> u(-1, 1);
+    data.images.resize(count * 3 * H * W);
+    for (auto& v : data.images) v = u(r);
+    for (std::size_t m = 0; m < count; ++m) {
+        data.labels.push_back(int(m % C));
+        data.contents.push_back("c" + std::to_string(m / C));
+        data.sources.push_back("random" + std::to_string(m));
     }
-    auto step = [&]() {
-        // D step: real, fake (G without grads), gradient penalty at x_hat = a x + (1 - a) fake
-        t.reset();
-        d.zero_grad();
-        g.set_requires_grad(false);
-        d.set_requires_grad(true);
-        auto xv = t.input<img>(x.data());
-        auto real = d.forward(t, xv);
-        auto fake = g.forward(t, xv, t.input<shape<N, C>>(trg.data()));
-        auto fk = d.forward(t, fake);
-        const std::size_t per = img::size / N;
-        for (std::size_t n = 0; n < N; ++n) {
-            const float a = a01(r);
-            for (std::size_t i = 0; i < per; ++i) xh[n * per + i] = a * x[n * per + i] + (1 - a) * fake.data()[n * per + i];
-        }
-        auto xhv = t.input<img>(xh.data(), true);
-        auto oh = d.forward(t, xhv);
-        auto gp = mean(square(l2_norm_per_sample(t.grad(sum(oh.src), xhv)) - 1.0f));
-        auto ld = -mean(real.src) + mean(fk.src) + cross_entropy(real.cls, std::span<const int, N>(lab)) + 10.0f * gp;
-        t.backward(ld);
-        od.step(d, 1e-4);
-        // G step: adversarial + classification + 10 x L1 reconstruction
-        t.reset();
-        g.zero_grad();
-        g.set_requires_grad(true);
-        d.set_requires_grad(false);
-        auto x2 = t.input<img>(x.data());
-        auto f2 = g.forward(t, x2, t.input<shape<N, C>>(trg.data()));
-        auto o2 = d.forward(t, f2);
-        auto rec = g.forward(t, f2, t.input<shape<N, C>>(org.data()));
-        auto lg = -mean(o2.src) + 10.0f * autodiff::l1_loss(x2, rec) + cross_entropy(o2.cls, std::span<const int, N>(tl));
-        t.backward(lg);
-        og.step(g, 1e-4);
-        return lg.item();
-    };
-    // two steps before timing, as reference_stargan.py does: the first ones touch the tape's arena and the
+    data.tempo.assign(C, 1.0);
+    data.amplitude.assign(C, 1.0);
+    train_options opt;  // the paper's options
+    opt.n_critic = 1;
+    opt.iters = 1 << 30;  // the learning rate stays constant
+    opt.progress_out = nullptr;
+    // threads = the benchmark's argument (1 and 2: the parallel efficiency of issue 13), 0 = all cores
+    opt.threads = st.range(0) > 0 ? unsigned(st.range(0)) : std::max(1u, std::thread::hardware_concurrency());
+    std::vector<std::string> names;
+    for (std::size_t c = 0; c < C; ++c) names.push_back("e" + std::to_string(c));
+    tr_t tr(make_info<Base>("bench", names, "e0"), std::move(data), opt);
+    // two steps before timing, as reference_stargan.py does: the first ones touch the tapes' arenas and the
     // pool's threads for the first time (page faults), which no later step repeats
-    step();
-    step();
-    for (auto _ : st) benchmark::DoNotOptimize(step());
-    const double macs = 7 * generator<float, cfg>::forward_macs() + 14 * discriminator<float, cfg>::forward_macs();
+    tr.train_step();
+    tr.train_step();
+    for (auto _ : st) tr.train_step();
+    benchmark::DoNotOptimize(tr.log());
+    const double macs = 7 * generator<float, with_batch<Base, 16>>::forward_macs() +
+                        14 * discriminator<float, with_batch<Base, 16>>::forward_macs();
     st.counters["GFLOP/s"] = benchmark::Counter(2.0 * macs, benchmark::Counter::kIsIterationInvariantRate,
                                                 benchmark::Counter::kIs1000);
-    st.counters["threads"] = double(pool.size());
+    st.counters["threads"] = double(opt.threads);
 }
 
 }  // namespace

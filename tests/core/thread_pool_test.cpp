@@ -76,3 +76,25 @@ TEST_CASE("thread_pool: back-to-back calls (workers still spinning) and calls af
     std::this_thread::sleep_for(hk::thread_pool::spin_time * 5);
     CHECK_THROWS_AS(pool.parallel_for(0, 9, [](int i) { if (i == 8) throw std::runtime_error("last"); }), std::runtime_error);
 }
+
+TEST_CASE("parallel_blocks: every element once, cut at multiples of 16, small ranges on the caller")
+{
+    for (unsigned threads : {1u, 2u, 3u})
+        for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{17}, std::size_t{100000}, std::size_t{100003}}) {
+            handemo::thread_pool pool(threads);
+            std::vector<int> hits(n, 0);
+            std::vector<std::pair<std::size_t, std::size_t>> parts(threads + 1, {0, 0});
+            std::atomic<int> calls{0};
+            handemo::parallel_blocks(pool, n, [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t i = lo; i < hi; ++i) ++hits[i];
+                const int k = calls.fetch_add(1);
+                parts[std::size_t(k)] = {lo, hi};
+            });
+            for (std::size_t i = 0; i < n; ++i) CHECK(hits[i] == 1);
+            CHECK(calls.load() == (n == 0 ? 0 : n < (std::size_t{1} << 14) ? 1 : int(threads)));
+            for (int k = 0; k < calls.load(); ++k) {
+                CHECK(parts[std::size_t(k)].first % 16 == 0);
+                CHECK((parts[std::size_t(k)].second % 16 == 0 || parts[std::size_t(k)].second == n));
+            }
+        }
+}

@@ -92,6 +92,29 @@ TEST_CASE("adam over a model: same result as per-tensor steps, state exposed and
             CHECK(prm.value[j] == doctest::Approx(j % 2 ? -0.01 : 0.01).epsilon(1e-6));
 }
 
+TEST_CASE("adam split over a thread pool: the same bits as on one thread")
+{
+    // a long tensor (split in parts cut at multiples of 16, the last with the SIMD loop's scalar tail)
+    const std::size_t n = 100003;
+    const std::size_t sizes[] = {n, 7};
+    std::vector<float> pa(n), pb, ga(n), qa(7, 0.5f), qb(7, 0.5f), gq(7, -0.25f);
+    for (std::size_t j = 0; j < n; ++j) pa[j] = std::sin(float(j)), ga[j] = std::cos(float(j) * 0.37f);
+    pb = pa;
+    handemo::adam<float> oa(sizes, {0.5, 0.999, 1e-8}), ob(sizes, {0.5, 0.999, 1e-8});
+    handemo::thread_pool pool(3);
+    for (int k = 0; k < 3; ++k) {
+        oa.step_tensor(0, pa, ga, 1e-3);
+        ob.step_tensor(0, pb, ga, 1e-3, &pool);
+        oa.step_tensor(1, qa, gq, 1e-3);
+        ob.step_tensor(1, qb, gq, 1e-3, &pool);
+    }
+    CHECK(pa == pb);
+    CHECK(qa == qb);
+    CHECK(std::equal(oa.m().begin(), oa.m().end(), ob.m().begin()));
+    CHECK(std::equal(oa.v().begin(), oa.v().end(), ob.v().begin()));
+    CHECK(pa != std::vector<float>(n, 0.f));
+}
+
 TEST_CASE("adam::step allocates nothing after construction")
 {
     handemo::test::tiny_model<float> a;

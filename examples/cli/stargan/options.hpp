@@ -32,6 +32,11 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "'paper' (StarGAN as the paper trains it); the options below override it")
         ->capture_default_str();
     sub->add_option("--threads", t.threads, "Worker threads (0: all cores)")->capture_default_str();
+    sub->add_option("--shards", t.shards,
+                    "Data-parallel parts of a batch: 2 = two halves, each on its own thread (the same result on 1, 2 or 3 "
+                    "threads); 1 = the whole batch on one tape; 0 = 1 on one thread, else 2")
+        ->check(CLI::Range(0, 2))
+        ->capture_default_str();
     sub->add_option("--lr", o.lr, "Learning rate of both G and D (overrides --g-lr and --d-lr)");
     sub->add_option("--g-lr", o.g_lr, "Learning rate of G (preset: 1e-4)");
     sub->add_option("--d-lr", o.d_lr, "Learning rate of D (preset: 1e-4)");

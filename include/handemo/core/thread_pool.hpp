@@ -6,6 +6,7 @@
 // <handemo/kernels/thread_pool.hpp> still names it handemo::kernels::thread_pool for existing users.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -145,5 +146,24 @@ private:
     int job_begin_ = 0, job_end_ = 0;
     std::exception_ptr error_;
 };
+
+/// @brief Calls f(lo, hi) on pool.size() contiguous parts of [0, n), each thread one part, the cut points
+/// multiples of 16 elements (a 64-byte line of floats), for element-wise loops over long arrays (the
+/// optimiser, gradient reductions). Below `min_parallel` elements, f(0, n) on the caller.
+template <class F>
+void parallel_blocks(thread_pool& pool, std::size_t n, F&& f, std::size_t min_parallel = std::size_t{1} << 14)
+{
+    const std::size_t parts = pool.size();
+    if (parts == 1 || n < min_parallel) {
+        if (n) f(std::size_t{0}, n);
+        return;
+    }
+    const std::size_t lines = (n + 15) / 16;
+    pool.parallel_for(0, int(parts), [&](int k) {
+        const std::size_t lo = std::min(n, lines * std::size_t(k) / parts * 16);
+        const std::size_t hi = std::min(n, lines * std::size_t(k + 1) / parts * 16);
+        if (hi > lo) f(lo, hi);
+    });
+}
 
 }  // namespace handemo

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <handemo/core/error.hpp>
+#include <handemo/core/thread_pool.hpp>
 #include <handemo/nn/parameters.hpp>
 
 #include <xsimd/xsimd.hpp>
@@ -102,10 +103,11 @@ public:
 
     /// @brief One Adam step on every parameter of `model` with its current gradients.
     /// @param lr learning rate of this step (e.g. schedule(step)).
+    /// @param pool splits the elements of long tensors over its threads (element-wise: the same result).
     /// @throws shape_error when the model's parameter list differs from the one at construction
     ///         (name or element count), naming the parameter.
     template <parameterised M>
-    void step(M& model, double lr)
+    void step(M& model, double lr, thread_pool* pool = nullptr)
     {
         std::size_t i = 0;
         model.for_each_parameter([&]<class U>(std::string_view name, std::span<U> value, std::span<U> grad,
@@ -117,7 +119,7 @@ public:
                                   (i < names_.size() ? names_[i] + " with " +
                                                            std::to_string(offsets_[i + 1] - offsets_[i]) + " elements"
                                                      : std::string("no more parameters")));
-            step_tensor(i, value, grad, lr);
+            step_tensor(i, value, grad, lr, pool);
             ++i;
         });
         if (i != names_.size())
@@ -127,7 +129,7 @@ public:
 
     /// @brief One Adam step on tensor `index` (value and grad of its registered size).
     /// @throws shape_error when the index or the sizes are wrong.
-    void step_tensor(std::size_t index, std::span<T> value, std::span<const T> grad, double lr)
+    void step_tensor(std::size_t index, std::span<T> value, std::span<const T> grad, double lr, thread_pool* pool = nullptr)
     {
         if (index >= steps_.size())
             throw shape_error("adam::step_tensor: index " + std::to_string(index) + " is not below " +
@@ -140,10 +142,15 @@ public:
         const std::int64_t t = ++steps_[index];
         const double bc1 = 1.0 - std::pow(opt_.beta1, static_cast<double>(t));
         const double bc2 = 1.0 - std::pow(opt_.beta2, static_cast<double>(t));
-        update(value.data(), grad.data(), m_.data() + offsets_[index], v_.data() + offsets_[index], n,
-               static_cast<T>(opt_.beta1), static_cast<T>(1.0 - opt_.beta1), static_cast<T>(opt_.beta2),
-               static_cast<T>(1.0 - opt_.beta2), static_cast<T>(std::sqrt(bc2)), static_cast<T>(opt_.eps),
-               static_cast<T>(-(lr / bc1)));
+        T* m = m_.data() + offsets_[index];
+        T* v = v_.data() + offsets_[index];
+        auto run = [&](std::size_t lo, std::size_t hi) {
+            update(value.data() + lo, grad.data() + lo, m + lo, v + lo, hi - lo, static_cast<T>(opt_.beta1),
+                   static_cast<T>(1.0 - opt_.beta1), static_cast<T>(opt_.beta2), static_cast<T>(1.0 - opt_.beta2),
+                   static_cast<T>(std::sqrt(bc2)), static_cast<T>(opt_.eps), static_cast<T>(-(lr / bc1)));
+        };
+        if (pool) parallel_blocks(*pool, n, run);
+        else run(0, n);
     }
 
     /// @brief First moments of every element, tensors concatenated in registration order.

@@ -11,6 +11,7 @@
 
 #include <handemo/autodiff.hpp>
 #include <handemo/core/error.hpp>
+#include <handemo/core/thread_pool.hpp>
 #include <handemo/kernels/norm.hpp>
 #include <handemo/kernels/packed.hpp>
 #include <handemo/tensor/aligned.hpp>
@@ -120,6 +121,9 @@ public:
     T* value(std::size_t i) noexcept { return values_.data() + entries_[i].offset; }
     const T* value(std::size_t i) const noexcept { return values_.data() + entries_[i].offset; }
     T* grad(std::size_t i) noexcept { return grads_.data() + entries_[i].offset; }
+    /// Elements of the flat value (and grad) buffer, entries padded to 16.
+    std::size_t total() const noexcept { return total_; }
+    T* grads() noexcept { return grads_.data(); }
     std::size_t count() const noexcept { return entries_.size(); }
     const param_entry& entry(std::size_t i) const noexcept { return entries_[i]; }
     template <class F>
@@ -157,16 +161,54 @@ public:
     {
         p_.for_each(f);
     }
-    /// @brief Sets every parameter gradient to zero.
-    void zero_grad() noexcept { p_.zero_grad(); }
+    /// @brief Sets every parameter gradient to zero (every gradient shard's too).
+    void zero_grad() noexcept
+    {
+        p_.zero_grad();
+        for (auto& b : shards_) std::memset(b.data(), 0, b.size() * sizeof(T));
+    }
+    /// @brief Data-parallel training: `s` gradient shards. forward(..., shard) of shard k accumulates its
+    /// parameter gradients into shard k's buffer (shard 0: the gradients for_each_parameter gives), so that
+    /// k tapes can run a batch's k parts on k threads at once; reduce_grad_shards() then adds them up.
+    void set_grad_shards(std::size_t s)
+    {
+        if (s == 0) throw value_error("set_grad_shards: 0 shards (at least 1)");
+        shards_.clear();
+        for (std::size_t k = 1; k < s; ++k) shards_.emplace_back(std::max<std::size_t>(p_.total(), 1));
+    }
+    std::size_t grad_shards() const noexcept { return shards_.size() + 1; }
+    /// @brief Gradient += shard 1 + shard 2 + ... element by element in shard order, the elements split over
+    /// `pool` (nullptr: this thread): the same sums on any number of threads.
+    void reduce_grad_shards(thread_pool* pool = nullptr)
+    {
+        if (shards_.empty()) return;
+        T* g = p_.grads();
+        auto add = [&](std::size_t lo, std::size_t hi) {
+            for (const auto& b : shards_) {
+                const T* src = b.data();
+                for (std::size_t i = lo; i < hi; ++i) g[i] += src[i];
+            }
+        };
+        if (pool) parallel_blocks(*pool, p_.total(), add);
+        else add(0, p_.total());
+    }
     /// @brief Whether forward() makes parameters trainable leaves (false: constants, no weight grads).
     void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
     /// @brief Number of scalar parameters.
     std::size_t parameter_count() const noexcept { return p_.numel(); }
 
 protected:
-    T* grad_or_null(std::size_t i) noexcept { return requires_grad_ ? p_.grad(i) : nullptr; }
+    T* grad_or_null(std::size_t i, std::size_t shard = 0)
+    {
+        if (!requires_grad_) return nullptr;
+        if (shard == 0) return p_.grad(i);
+        if (shard > shards_.size())
+            throw value_error("forward: gradient shard " + std::to_string(shard) + " of " + std::to_string(shards_.size() + 1) +
+                              " (set_grad_shards)");
+        return shards_[shard - 1].data() + p_.entry(i).offset;
+    }
     param_store<T> p_;
+    std::vector<aligned_buffer<T>> shards_;  ///< gradient shards 1..s-1 (set_grad_shards)
     bool requires_grad_ = true;
 };
 
@@ -250,13 +292,17 @@ public:
 
 
     /// @brief Records G(x, label) on the tape.
-    /// @param x [N, 3, H, W] padded motion images  @param label [N, C] one-hot target domains
-    var<T, image_shape> forward(tape<T>& t, const var<T, image_shape>& x, const var<T, label_shape>& label)
+    /// @param x [M, 3, H, W] padded motion images  @param label [M, C] one-hot target domains; any batch M
+    /// (data-parallel training runs the config's N in parts)
+    /// @param shard whose gradient buffer the parameters accumulate into (set_grad_shards)
+    template <std::size_t M>
+    var<T, shape<M, 3, H, W>> forward(tape<T>& t, const var<T, shape<M, 3, H, W>>& x, const var<T, shape<M, C>>& label,
+                                      std::size_t shard = 0)
     {
         using namespace handemo::autodiff;
         using autodiff::tanh;
         std::size_t k = 0;
-        auto w = [&]<class S>() { ++k; return t.template parameter<S>(p_.value(k - 1), grad_or_null(k - 1)); };
+        auto w = [&]<class S>() { ++k; return t.template parameter<S>(p_.value(k - 1), grad_or_null(k - 1, shard)); };
         auto in_relu = [&]<std::size_t Ch, class V>(const V& v, bool with_relu) {
             auto g = w.template operator()<shape<Ch>>();
             auto b = w.template operator()<shape<Ch>>();
@@ -494,10 +540,13 @@ public:
     using cls_shape = shape<N, C>;
 
     /// @brief Output of forward(): the two heads.
-    struct outputs {
-        var<T, src_shape> src;
-        var<T, cls_shape> cls;
+    /// D's two heads for a batch of M images.
+    template <std::size_t M>
+    struct outputs_of {
+        var<T, shape<M, 1, Hd, Wd>> src;
+        var<T, shape<M, C>> cls;
     };
+    using outputs = outputs_of<N>;
 
     /// @brief Allocates the parameters (all zero; initialise them through for_each_parameter).
     discriminator()
@@ -514,13 +563,14 @@ public:
 
 
     /// @brief Records D(x) on the tape.
-    outputs forward(tape<T>& t, const var<T, image_shape>& x)
+    template <std::size_t M>
+    outputs_of<M> forward(tape<T>& t, const var<T, shape<M, 3, H, W>>& x, std::size_t shard = 0)
     {
-        auto h = layers<0>(t, x);
-        auto src = conv2d<1, 1>(h, t.template parameter<shape<1, Cd, 3, 3>>(p_.value(2 * rep), grad_or_null(2 * rep)));
+        auto h = layers<0>(t, x, shard);
+        auto src = conv2d<1, 1>(h, t.template parameter<shape<1, Cd, 3, 3>>(p_.value(2 * rep), grad_or_null(2 * rep, shard)));
         auto cls = conv2d<1, 0>(h, t.template parameter<shape<C, Cd, Hd, Wd>>(p_.value(2 * rep + 1),
-                                                                              grad_or_null(2 * rep + 1)));
-        return {src, var<T, cls_shape>{cls.t, cls.id}};
+                                                                              grad_or_null(2 * rep + 1, shard)));
+        return {src, var<T, shape<M, C>>{cls.t, cls.id}};
     }
 
     /// @brief Multiply-adds of one forward pass.
@@ -535,15 +585,15 @@ public:
 
 private:
     template <std::size_t I, class S>
-    auto layers(tape<T>& t, const var<T, S>& x)
+    auto layers(tape<T>& t, const var<T, S>& x, std::size_t shard)
     {
         if constexpr (I == rep) {
             return x;
         } else {
             constexpr std::size_t co = dims_type::d_ch(I + 1), ci = dims_type::d_ch(I);
-            auto w = t.template parameter<shape<co, ci, 4, 4>>(p_.value(2 * I), grad_or_null(2 * I));
-            auto b = t.template parameter<shape<co>>(p_.value(2 * I + 1), grad_or_null(2 * I + 1));
-            return layers<I + 1>(t, autodiff::leaky_relu(autodiff::conv2d<2, 1>(x, w, b), T(0.01)));
+            auto w = t.template parameter<shape<co, ci, 4, 4>>(p_.value(2 * I), grad_or_null(2 * I, shard));
+            auto b = t.template parameter<shape<co>>(p_.value(2 * I + 1), grad_or_null(2 * I + 1, shard));
+            return layers<I + 1>(t, autodiff::leaky_relu(autodiff::conv2d<2, 1>(x, w, b), T(0.01)), shard);
         }
     }
 };

@@ -36,6 +36,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <set>
 #include <numeric>
 #include <optional>
@@ -54,6 +55,10 @@ struct train_options {
     double decay_start = 0.5;   ///< the learning rate decays linearly to 0 over [decay_start * iters, iters]
     std::uint64_t seed = 1;
     unsigned threads = 0;       ///< 0: all cores
+    /// data-parallel parts of a batch (trainer::train_step): 2 halves on their own tapes and threads, or 1 (the
+    /// whole batch on one tape, its convolutions split over the threads); 0: 1 on one thread, else 2. The
+    /// result depends on it (float sums in another order), not on the thread count for 2 (up to 3 threads).
+    std::size_t shards = 0;
     long checkpoint_every = 500;
     long log_every = 10;
     long stop_at = -1;          ///< stop (after a checkpoint) at this step, as if interrupted; -1: never
@@ -114,6 +119,7 @@ struct train_options {
         if (range != "global" && range != "channel") bad("range '" + range + "' is not 'global' or 'channel'");
         if (gate_folds != 0 && (gate_folds < 2 || gate_folds > 16)) bad("gate_folds " + std::to_string(gate_folds) + " is not 0 or in [2, 16]");
         if (gate_folds != 0 && !residual) bad("gate_folds needs a residual G (the gate blends G's change)");
+        if (shards > 2) bad("shards " + std::to_string(shards) + " is not 0, 1 or 2");
         if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; <= -1: off)");
     }
     nlohmann::json to_json() const
@@ -647,13 +653,28 @@ public:
     static constexpr std::size_t N = Batch, C = Base::domains, H = dims<cfg>::H, W = dims<cfg>::W;
     using image_shape = shape<N, 3, H, W>;
     using label_shape = shape<N, C>;
+    /// the most data-parallel parts of a batch (train_step) and the batch of each
+    static constexpr std::size_t S = N % 2 == 0 ? 2 : 1, M = N / S;
 
     trainer(config_info info, prepared_data data, train_options opt)
         : info_(std::move(info)), data_(std::move(data)), opt_(opt),
-          pool_(opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency())),
-          tape_(std::size_t{1} << 22, &pool_), gen_(opt.seed)
+          shards_(resolve_shards(opt)),
+          pool_(shards_ == 1 ? all_threads(opt.threads) : std::min(all_threads(opt.threads), unsigned(shards_))),
+          gen_(opt.seed)
     {
         opt_.validate();
+        if (shards_ == 1) {  // the whole batch on one tape, its convolutions split over every thread
+            tapes_[0] = std::make_unique<autodiff::tape<float>>(std::size_t{1} << 22, pool_.size() > 1 ? &pool_ : nullptr);
+        } else {  // a tape per half; with 4 or more threads each half splits its convolutions again
+            const unsigned per_shard = all_threads(opt_.threads) / unsigned(shards_);
+            for (std::size_t s = 0; s < shards_; ++s) {
+                thread_pool* p = per_shard > 1 ? shard_pools_.emplace_back(std::make_unique<thread_pool>(per_shard)).get() : nullptr;
+                tapes_[s] = std::make_unique<autodiff::tape<float>>(std::size_t{1} << 22, p);
+            }
+        }
+        g_.set_grad_shards(shards_);
+        d_.set_grad_shards(shards_);
+        logits_.resize(N * C);
         if (data_.H != H || data_.W != W) throw shape_error("train: prepared data is for another configuration");
         rng init_rng(opt_.seed ^ 0x9E3779B97F4A7C15ULL);
         init_pytorch_default(g_, init_rng);
@@ -698,89 +719,126 @@ public:
     const prepared_data& data() const noexcept { return data_; }
 
     /// @brief One D iteration (and a G iteration every n_critic).
+    /// Data-parallel (shards() = 2, the default on 2 or more threads): the batch is cut into two halves, each
+    /// recorded on its own tape and run on its own thread (every loss is a mean over samples, so a half's
+    /// terms scaled by 1/2 add up to the batch's loss); the halves' gradients are then added in a fixed
+    /// order, so the same seed gives the same bits on any thread count up to 3. One shard (the default on one
+    /// thread): the whole batch on one tape, its convolutions split over the threads.
     /// @throws value_error naming the step and the term when a loss is not finite (before any update).
     void train_step()
     {
         next_batch();
         const double lr_d = lr_schedule{opt_.d_lr, opt_.iters, opt_.decay_start}(step_);
         const double lr_g = lr_schedule{opt_.g_lr, opt_.iters, opt_.decay_start}(step_);
-        auto& t = tape_;
-        // ---- D: real, fake (G without gradients), gradient penalty at x_hat
-        t.reset();
-        d_.zero_grad();
-        g_.set_requires_grad(false);
-        d_.set_requires_grad(true);
-        auto xv = t.template input<image_shape>(x_.data());
-        auto real = d_.forward(t, xv);
-        auto fake = g_.forward(t, xv, t.template input<label_shape>(trg_.data()));
-        auto fk = d_.forward(t, fake);
-        constexpr std::size_t per = image_shape::size / N;
-        for (std::size_t n = 0; n < N; ++n) {
-            const float a = static_cast<float>(gen_.uniform01());
-            const float* f = fake.data() + n * per;
-            for (std::size_t i = 0; i < per; ++i) xh_[n * per + i] = a * x_[n * per + i] + (1 - a) * f[i];
-        }
-        auto xhv = t.template input<image_shape>(xh_.data(), true);
-        auto oh = d_.forward(t, xhv);
-        using namespace handemo::autodiff;
-        auto gp = mean(square(l2_norm_per_sample(t.grad(sum(oh.src), xhv)) - 1.0f));
-        auto d_real = -mean(real.src);
-        auto d_fake = mean(fk.src);
-        auto d_cls = cross_entropy(real.cls, std::span<const int, N>(lab_));
-        auto ld = d_real + d_fake + float(opt_.lambda_cls) * d_cls + float(opt_.lambda_gp) * gp;
-        check_finite({{"D/real", d_real.item()}, {"D/fake", d_fake.item()}, {"D/cls", d_cls.item()},
-                      {"D/gp", gp.item()}});
-        last_[0] = d_real.item(), last_[1] = d_fake.item(), last_[2] = d_cls.item(), last_[3] = gp.item();
-        last_[4] = ld.item();
-        last_[5] = accuracy(real.cls.data());
-        t.backward(ld);
-        od_->step(d_, lr_d);
-        // ---- G: adversarial + classification + reconstruction
-        if ((step_ + 1) % opt_.n_critic == 0) {
-            t.reset();
-            g_.zero_grad();
-            g_.set_requires_grad(true);
-            d_.set_requires_grad(false);
-            auto x2 = t.template input<image_shape>(x_.data());
-            auto f2 = g_.forward(t, x2, t.template input<label_shape>(trg_.data()));
-            auto o2 = d_.forward(t, f2);
-            auto rec = g_.forward(t, f2, t.template input<label_shape>(org_.data()));
-            auto g_fake = -mean(o2.src);
-            auto g_cls = cross_entropy(o2.cls, std::span<const int, N>(tl_));
-            auto g_rec = l1_loss(x2, rec);
-            auto lg = g_fake + float(opt_.lambda_cls) * g_cls + float(opt_.lambda_rec) * g_rec;
-            check_finite({{"G/fake", g_fake.item()}, {"G/cls", g_cls.item()}, {"G/rec", g_rec.item()}});
-            last_[11] = last_[12] = last_[13] = 0;
-            if (opt_.lambda_id > 0) {  // identity: G(x, c_org) = x
-                auto g_id = l1_loss(x2, g_.forward(t, x2, t.template input<label_shape>(org_.data())));
-                check_finite({{"G/id", g_id.item()}});
-                last_[11] = g_id.item();
-                lg = lg + float(opt_.lambda_id) * g_id;
-            }
-            if (opt_.lambda_pair > 0 && paired_ > 0) {  // paired: G(x, c) = the same take performed in c
-                auto yv = t.template input<image_shape>(y_.data());
-                auto mv = t.template input<image_shape>(mask_.data());
-                auto g_pair = float(double(image_shape::size) / double(paired_)) * mean(abs((f2 - yv) * mv));
-                check_finite({{"G/pair", g_pair.item()}});
-                last_[12] = g_pair.item();
-                lg = lg + float(opt_.lambda_pair) * g_pair;
-            }
-            if (opt_.lambda_delta > 0) {  // size of the change
-                auto g_delta = l1_loss(f2, x2);
-                last_[13] = g_delta.item();
-                lg = lg + float(opt_.lambda_delta) * g_delta;
-            }
-            last_[6] = g_fake.item(), last_[7] = g_cls.item(), last_[8] = g_rec.item(), last_[9] = lg.item();
-            t.backward(lg);
-            og_->step(g_, lr_g);
-            if (ema_) update_ema();
-            d_.set_requires_grad(true);
-        }
+        for (std::size_t n = 0; n < N; ++n) alpha_[n] = static_cast<float>(gen_.uniform01());
+        if constexpr (S == 1) step_parts<N>(lr_d, lr_g);
+        else if (shards_ == 1) step_parts<N>(lr_d, lr_g);
+        else step_parts<M>(lr_d, lr_g);
         last_[10] = lr_d;
         ++step_;
         if (step_ % opt_.log_every == 0 || step_ == opt_.iters) log_.push_back({step_, std::vector<double>(last_.begin(), last_.end())});
     }
 
+    /// @brief Parts a batch is cut into by train_step (train_options::shards, resolved).
+    std::size_t shards() const noexcept { return shards_; }
+    /// @brief The most parts a batch of N can be cut into: 2 for an even batch, else 1.
+    static constexpr std::size_t max_shards() noexcept { return S; }
+
+private:
+    /// The step on parts of B samples (N / B of them, each on tapes_[part]).
+    template <std::size_t B>
+    void step_parts(double lr_d, double lr_g)
+    {
+        using namespace handemo::autodiff;
+        using part_image = shape<B, 3, H, W>;
+        using part_label = shape<B, C>;
+        constexpr std::size_t per = image_shape::size / N;
+        constexpr float share = float(B) / float(N);  // exact: 1 or 1/2
+        // ---- D: real, fake (G without gradients), gradient penalty at x_hat
+        d_.zero_grad();
+        g_.set_requires_grad(false);
+        d_.set_requires_grad(true);
+        run_parts<N / B>([&](tape<float>& t, std::size_t s) {
+            const std::size_t o = s * B;
+            auto xv = t.template input<part_image>(x_.data() + o * per);
+            auto real = d_.forward(t, xv, s);
+            auto fake = g_.forward(t, xv, t.template input<part_label>(trg_.data() + o * C), s);
+            auto fk = d_.forward(t, fake, s);
+            for (std::size_t n = 0; n < B; ++n) {
+                const float a = alpha_[o + n];
+                const float* f = fake.data() + n * per;
+                const float* x = x_.data() + (o + n) * per;
+                float* xh = xh_.data() + (o + n) * per;
+                for (std::size_t i = 0; i < per; ++i) xh[i] = a * x[i] + (1 - a) * f[i];
+            }
+            auto xhv = t.template input<part_image>(xh_.data() + o * per, true);
+            auto oh = d_.forward(t, xhv, s);
+            auto gp = share * mean(square(l2_norm_per_sample(t.grad(sum(oh.src), xhv)) - 1.0f));
+            auto d_real = -share * mean(real.src);
+            auto d_fake = share * mean(fk.src);
+            auto d_cls = share * cross_entropy(real.cls, std::span<const int, B>(lab_.data() + o, B));
+            auto ld = d_real + d_fake + float(opt_.lambda_cls) * d_cls + float(opt_.lambda_gp) * gp;
+            std::copy_n(real.cls.data(), B * C, logits_.data() + o * C);
+            part_[s] = {d_real.item(), d_fake.item(), d_cls.item(), gp.item(), ld.item()};
+            t.backward(ld);
+        });
+        const auto dl = sum_parts<N / B>();
+        check_finite({{"D/real", dl[0]}, {"D/fake", dl[1]}, {"D/cls", dl[2]}, {"D/gp", dl[3]}});
+        for (std::size_t k = 0; k < 5; ++k) last_[k] = dl[k];
+        last_[5] = accuracy(logits_.data());
+        d_.reduce_grad_shards(&pool_);
+        od_->step(d_, lr_d, &pool_);
+        // ---- G: adversarial + classification + reconstruction
+        if ((step_ + 1) % opt_.n_critic == 0) {
+            g_.zero_grad();
+            g_.set_requires_grad(true);
+            d_.set_requires_grad(false);
+            const float pair_scale = paired_ > 0 ? float(double(part_image::size) / double(paired_)) : 0.f;
+            run_parts<N / B>([&](tape<float>& t, std::size_t s) {
+                const std::size_t o = s * B;
+                auto x2 = t.template input<part_image>(x_.data() + o * per);
+                auto f2 = g_.forward(t, x2, t.template input<part_label>(trg_.data() + o * C), s);
+                auto o2 = d_.forward(t, f2, s);
+                auto rec = g_.forward(t, f2, t.template input<part_label>(org_.data() + o * C), s);
+                auto g_fake = -share * mean(o2.src);
+                auto g_cls = share * cross_entropy(o2.cls, std::span<const int, B>(tl_.data() + o, B));
+                auto g_rec = share * l1_loss(x2, rec);
+                auto lg = g_fake + float(opt_.lambda_cls) * g_cls + float(opt_.lambda_rec) * g_rec;
+                std::array<float, 7> p{g_fake.item(), g_cls.item(), g_rec.item(), 0.f, 0.f, 0.f, 0.f};
+                if (opt_.lambda_id > 0) {  // identity: G(x, c_org) = x
+                    auto g_id = share * l1_loss(x2, g_.forward(t, x2, t.template input<part_label>(org_.data() + o * C), s));
+                    p[4] = g_id.item();
+                    lg = lg + float(opt_.lambda_id) * g_id;
+                }
+                if (opt_.lambda_pair > 0 && paired_ > 0) {  // paired: G(x, c) = the same take performed in c
+                    auto yv = t.template input<part_image>(y_.data() + o * per);
+                    auto mv = t.template input<part_image>(mask_.data() + o * per);
+                    auto g_pair = pair_scale * mean(abs((f2 - yv) * mv));  // the batch's sum / paired_
+                    p[5] = g_pair.item();
+                    lg = lg + float(opt_.lambda_pair) * g_pair;
+                }
+                if (opt_.lambda_delta > 0) {  // size of the change
+                    auto g_delta = share * l1_loss(f2, x2);
+                    p[6] = g_delta.item();
+                    lg = lg + float(opt_.lambda_delta) * g_delta;
+                }
+                p[3] = lg.item();
+                part_[s] = p;
+                t.backward(lg);
+            });
+            const auto gl = sum_parts<N / B>();
+            check_finite({{"G/fake", gl[0]}, {"G/cls", gl[1]}, {"G/rec", gl[2]}, {"G/id", gl[4]}, {"G/pair", gl[5]},
+                          {"G/total", gl[3]}});
+            last_[6] = gl[0], last_[7] = gl[1], last_[8] = gl[2], last_[9] = gl[3];
+            last_[11] = gl[4], last_[12] = gl[5], last_[13] = gl[6];
+            g_.reduce_grad_shards(&pool_);
+            og_->step(g_, lr_g, &pool_);
+            if (ema_) update_ema();
+            d_.set_requires_grad(true);
+        }
+    }
+
+public:
     /// @brief Trains to opt.iters (or opt.stop_at) with progress, checkpoints into `out_dir`.
     /// With `resume`, continues from out_dir/checkpoint.safetensors.
     void run(const std::filesystem::path& out_dir, bool resume = false)
@@ -981,8 +1039,10 @@ private:
     {
         const double u = static_cast<double>((step_ + 1) / opt_.n_critic);
         const float d = static_cast<float>(std::min(opt_.ema, (1.0 + u) / (10.0 + u)));
-        zip_parameters(g_, *ema_, [d](std::span<const float> g, std::span<float> v) {
-            for (std::size_t k = 0; k < v.size(); ++k) v[k] = d * v[k] + (1 - d) * g[k];
+        zip_parameters(g_, *ema_, [&](std::span<const float> g, std::span<float> v) {
+            parallel_blocks(pool_, v.size(), [&](std::size_t lo, std::size_t hi) {
+                for (std::size_t k = lo; k < hi; ++k) v[k] = d * v[k] + (1 - d) * g[k];
+            });
         });
     }
 
@@ -996,7 +1056,40 @@ private:
         return static_cast<double>(ok) / N;
     }
 
-    void check_finite(std::initializer_list<std::pair<const char*, float>> terms) const
+    /// Runs f(tape, part) for parts 0..P-1, each on tapes_[part], on the pool's threads when P > 1.
+    template <std::size_t P, class F>
+    void run_parts(F&& f)
+    {
+        auto one = [&](int s) {
+            tapes_[std::size_t(s)]->reset();
+            f(*tapes_[std::size_t(s)], std::size_t(s));
+        };
+        if constexpr (P == 1) one(0);
+        else pool_.parallel_for(0, int(P), one);
+    }
+    /// The loss terms of parts 0..P-1 added up in part order.
+    template <std::size_t P>
+    std::array<double, 7> sum_parts() const noexcept
+    {
+        std::array<double, 7> r{};
+        for (std::size_t s = 0; s < P; ++s)
+            for (std::size_t k = 0; k < r.size(); ++k) r[k] += double(part_[s][k]);
+        return r;
+    }
+    static unsigned all_threads(unsigned requested) noexcept
+    {
+        return requested ? requested : std::max(1u, std::thread::hardware_concurrency());
+    }
+    /// train_options::shards resolved: 0 = 1 on one thread, else max_shards().
+    static std::size_t resolve_shards(const train_options& o)
+    {
+        if (o.shards > 2 || (o.shards == 2 && S == 1))
+            throw value_error("train: shards " + std::to_string(o.shards) + " for a batch of " + std::to_string(N) +
+                              " (0, 1, or 2 for an even batch)");
+        if (o.shards) return o.shards;
+        return all_threads(o.threads) == 1 ? 1 : S;
+    }
+    void check_finite(std::initializer_list<std::pair<const char*, double>> terms) const
     {
         for (const auto& [name, v] : terms)
             if (!std::isfinite(v))
@@ -1008,8 +1101,13 @@ private:
     config_info info_;
     prepared_data data_;
     train_options opt_;
-    thread_pool pool_;
-    autodiff::tape<float> tape_;
+    std::size_t shards_;  ///< parts of a batch (train_options::shards resolved)
+    thread_pool pool_;  ///< runs the shards (or one tape's convolutions) and splits the optimiser's elements
+    std::vector<std::unique_ptr<thread_pool>> shard_pools_;  ///< each shard's convolutions, with threads to spare
+    std::array<std::unique_ptr<autodiff::tape<float>>, S> tapes_;
+    std::array<std::array<float, 7>, S> part_{};  ///< each shard's loss terms of the current phase
+    std::array<float, N> alpha_{};                ///< the gradient penalty's interpolation factors
+    std::vector<float> logits_;                   ///< D's class logits of the real batch (accuracy)
     rng gen_;
     generator<float, cfg> g_;
     discriminator<float, cfg> d_;
