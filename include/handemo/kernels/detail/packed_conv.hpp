@@ -66,7 +66,7 @@ inline constexpr int ws_prefetch_blocks = 1;
 template <class T, int NV, int NR, int SJ, bool PF = false>
 [[gnu::noinline]] inline void micro_ws(int kc, const T* __restrict wp, const int* __restrict koff,
                                        const T* __restrict src, int sj, T* __restrict tile, bool accumulate,
-                                       const T* pf = nullptr) noexcept
+                                       const T* pf = nullptr, int pf_rows = 0) noexcept
 {
     using B = simd_t<T>;
     constexpr int L = simd_lanes<T>, MR = NV * L;
@@ -81,9 +81,10 @@ template <class T, int NV, int NR, int SJ, bool PF = false>
     const int step = SJ > 0 ? SJ : sj;
     for (int k = 0; k < kc; ++k) {
         if constexpr (PF) {
-            // one cache line per vector of the panel row: the next block's row k
-            for (int q = 0; q < NV * L * int(sizeof(T)); q += 64)
-                __builtin_prefetch(reinterpret_cast<const char*>(pf + std::ptrdiff_t(k) * MR) + q, 0, 2);
+            // one cache line per vector of the panel row: row k of this tile's share of the next block
+            if (k < pf_rows)
+                for (int q = 0; q < NV * L * int(sizeof(T)); q += 64)
+                    __builtin_prefetch(reinterpret_cast<const char*>(pf + std::ptrdiff_t(k) * MR) + q, 0, 2);
         }
         B a[NV];
         for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_aligned(wp + q * L));
@@ -139,16 +140,24 @@ inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bi
             // the weights of the next block (of this panel or the next: the panels are contiguous)
             const std::ptrdiff_t next = std::ptrdiff_t(pn) * j.K + k0 + kc * ws_prefetch_blocks;
             const bool pf = next + kc <= std::ptrdiff_t(panels) * j.K;
+            // the next block's kc rows are prefetched in equal shares by the full tiles of this block, each
+            // share spread over the start of the tile's loop (one burst of a whole block overflowed the
+            // outstanding-miss queues on the 18-pixel layers)
+            const int full_tiles = j.rows * (j.cols / NR);
+            const int share = full_tiles ? (kc + full_tiles - 1) / full_tiles : 0;
+            int ti = 0;
             T* tile = acc;
             for (int r = 0; r < j.rows; ++r) {
                 const T* srow = src + r * j.src_row;
                 for (int q0 = 0; q0 < j.cols; q0 += NR, tile += NR * MR) {
                     const int nr = std::min(NR, j.cols - q0);
                     const T* sp = srow + std::ptrdiff_t(q0) * (SJ > 0 ? SJ : j.sj);
-                    if (pf && r == 0 && q0 == 0 && nr == NR)
+                    if (pf && nr == NR) {
+                        const int r0 = std::min(kc, ti * share), rows = std::min(kc - r0, share);
+                        ++ti;
                         micro_ws<T, NV, NR, SJ, true>(kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj, tile,
-                                                      k0 > 0, wp + next * MR);
-                    else
+                                                          k0 > 0, wp + (next + r0) * MR, rows);
+                    } else
                         micro_ws_dispatch<T, NV, NR, SJ>(nr, kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj,
                                                          tile, k0 > 0);
                 }
