@@ -35,6 +35,18 @@ void randomise(M& m, unsigned seed)
     });
 }
 
+/// Every parameter gradient of G, then of D, concatenated.
+std::vector<float> all_grads(generator<float, cfg>& g, discriminator<float, cfg>& d)
+{
+    std::vector<float> out;
+    auto collect = [&](std::string_view, std::span<float>, std::span<float> gr, std::span<const std::size_t>) {
+        out.insert(out.end(), gr.begin(), gr.end());
+    };
+    g.for_each_parameter(collect);
+    d.for_each_parameter(collect);
+    return out;
+}
+
 /// One D step of the training loss on tape t (G forward, D on real/fake/x_hat, the penalty's double
 /// backward): returns every parameter gradient of G and D, then the penalty value, concatenated.
 std::vector<float> d_step(tape<float>& t, generator<float, cfg>& g, discriminator<float, cfg>& d)
@@ -56,12 +68,7 @@ std::vector<float> d_step(tape<float>& t, generator<float, cfg>& g, discriminato
     auto gp = mean(square(l2_norm_per_sample(t.grad(sum(oh.src), xhv)) - 1.0f));
     auto loss = mean(d.forward(t, fake).src) - mean(d.forward(t, xv).src) + 10.0f * gp;
     t.backward(loss);
-    std::vector<float> out;
-    auto collect = [&](std::string_view, std::span<float>, std::span<float> gr, std::span<const std::size_t>) {
-        out.insert(out.end(), gr.begin(), gr.end());
-    };
-    g.for_each_parameter(collect);
-    d.for_each_parameter(collect);
+    std::vector<float> out = all_grads(g, d);
     out.push_back(gp.item());
     return out;
 }
@@ -101,12 +108,7 @@ std::vector<float> d_step_sharded(thread_pool* pool, generator<float, cfg>& g, d
     else shard(0), shard(1);
     g.reduce_grad_shards(pool);
     d.reduce_grad_shards(pool);
-    std::vector<float> out;
-    auto collect = [&](std::string_view, std::span<float>, std::span<float> gr, std::span<const std::size_t>) {
-        out.insert(out.end(), gr.begin(), gr.end());
-    };
-    g.for_each_parameter(collect);
-    d.for_each_parameter(collect);
+    std::vector<float> out = all_grads(g, d);
     out.push_back(gps[0] + gps[1]);
     g.set_grad_shards(1);
     d.set_grad_shards(1);
