@@ -33,6 +33,9 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
 
     REQUIRE(r.folds.size() == 2);
     CHECK(r.folds[0].held_out == "patting");
+    // the options that decide the trained bits, as the report lists them: the thread count and the shards
+    CHECK(r.options_text.find("threads " + std::to_string(o.train.threads) + "\n") != std::string::npos);
+    CHECK(r.options_text.find("shards " + std::to_string(o.train.shards) + " ") != std::string::npos);
     CHECK(r.folds[0].train_clips == 10);
     CHECK(r.folds[0].test_inputs == 1);
     // 2 folds x 4 targets x 1 take x 8 methods (the handemo preset's amplitude stage adds stargan-g and

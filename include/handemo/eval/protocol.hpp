@@ -124,7 +124,8 @@ inline std::string options_text(const eval_options& o)
     std::string s;
     const auto j = o.train.to_json();
     for (auto it = j.begin(); it != j.end(); ++it) s += it.key() + " " + it.value().dump() + "\n";
-    s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nfold seed train.seed + fold index\n";
+    s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nshards " + std::to_string(o.train.shards) +
+         " (0: one on one thread, else two halves of the batch)\nfold seed train.seed + fold index\n";
     s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
     if (o.synth_seed) s += "synthetic set seed " + std::to_string(*o.synth_seed) + " at " + std::to_string(o.synth_fps) + " fps (oracle row)\n";
     for (const auto& x : o.extensions) s += x->options_text();
