@@ -115,6 +115,17 @@ std::vector<float> d_step_sharded(thread_pool* pool, generator<float, cfg>& g, d
     return out;
 }
 
+/// The largest |a[i]| and the largest |a[i] - b[i]| (a tolerance check: diff <= tol * scale).
+std::pair<double, double> scale_and_diff(const std::vector<float>& a, const std::vector<float>& b)
+{
+    double scale = 0, diff = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        scale = std::max(scale, double(std::abs(a[i])));
+        diff = std::max(diff, double(std::abs(a[i] - b[i])));
+    }
+    return {scale, diff};
+}
+
 bool bitwise_equal(const std::vector<float>& a, const std::vector<float>& b)
 {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
@@ -145,11 +156,7 @@ TEST_CASE("autodiff through a thread pool: a D step with the penalty is bitwise 
     tape<float> t1(1 << 22);
     const auto single = d_step(t1, g, d);
     REQUIRE(single.size() == first.size());
-    double scale = 0, diff = 0;
-    for (std::size_t i = 0; i < first.size(); ++i) {
-        scale = std::max(scale, double(std::abs(single[i])));
-        diff = std::max(diff, double(std::abs(first[i] - single[i])));
-    }
+    const auto [scale, diff] = scale_and_diff(single, first);
     CHECK(diff <= 1e-4 * scale);
     CHECK(bitwise_equal(d_step(t1, g, d), single));
 }
@@ -164,11 +171,7 @@ TEST_CASE("data-parallel shards: two half batches on two tapes add up to the who
     const auto whole = d_step(t1, g, d);
     const auto seq = d_step_sharded(nullptr, g, d);
     REQUIRE(seq.size() == whole.size());
-    double scale = 0, diff = 0;
-    for (std::size_t i = 0; i < whole.size(); ++i) {
-        scale = std::max(scale, double(std::abs(whole[i])));
-        diff = std::max(diff, double(std::abs(whole[i] - seq[i])));
-    }
+    const auto [scale, diff] = scale_and_diff(whole, seq);
     CHECK(scale > 0);
     CHECK(diff <= 1e-4 * scale);  // the same sums in another order
     // on two threads: the same bits as one after the other (each shard has its own tape and gradients;

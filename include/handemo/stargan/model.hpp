@@ -176,7 +176,6 @@ public:
         shards_.clear();
         for (std::size_t k = 1; k < s; ++k) shards_.emplace_back(std::max<std::size_t>(p_.total(), 1));
     }
-    std::size_t grad_shards() const noexcept { return shards_.size() + 1; }
     /// @brief Gradient += shard 1 + shard 2 + ... element by element in shard order, the elements split over
     /// `pool` (nullptr: this thread): the same sums on any number of threads.
     void reduce_grad_shards(thread_pool* pool = nullptr)
@@ -539,8 +538,7 @@ public:
     using src_shape = shape<N, 1, Hd, Wd>;
     using cls_shape = shape<N, C>;
 
-    /// @brief Output of forward(): the two heads.
-    /// D's two heads for a batch of M images.
+    /// @brief Output of forward(): the two heads, for a batch of M images.
     template <std::size_t M>
     struct outputs_of {
         var<T, shape<M, 1, Hd, Wd>> src;

@@ -657,12 +657,11 @@ public:
     static constexpr std::size_t S = N % 2 == 0 ? 2 : 1, M = N / S;
 
     trainer(config_info info, prepared_data data, train_options opt)
-        : info_(std::move(info)), data_(std::move(data)), opt_(opt),
-          shards_(resolve_shards(opt)),
-          pool_(shards_ == 1 ? all_threads(opt.threads) : std::min(all_threads(opt.threads), unsigned(shards_))),
+        : info_(std::move(info)), data_(std::move(data)), opt_(validated(opt)),
+          shards_(resolve_shards(opt_)),
+          pool_(shards_ == 1 ? all_threads(opt_.threads) : std::min(all_threads(opt_.threads), unsigned(shards_))),
           gen_(opt.seed)
     {
-        opt_.validate();
         if (shards_ == 1) {  // the whole batch on one tape, its convolutions split over every thread
             tapes_[0] = std::make_unique<autodiff::tape<float>>(std::size_t{1} << 22, pool_.size() > 1 ? &pool_ : nullptr);
         } else {  // a tape per half; with 4 or more threads each half splits its convolutions again
@@ -1080,12 +1079,17 @@ private:
     {
         return requested ? requested : std::max(1u, std::thread::hardware_concurrency());
     }
-    /// train_options::shards resolved: 0 = 1 on one thread, else max_shards().
+    /// The options, validated before anything is built from them.
+    static train_options validated(train_options o)
+    {
+        o.validate();
+        return o;
+    }
+    /// train_options::shards (validated: 0, 1 or 2) resolved: 0 = 1 on one thread, else max_shards().
     static std::size_t resolve_shards(const train_options& o)
     {
-        if (o.shards > 2 || (o.shards == 2 && S == 1))
-            throw value_error("train: shards " + std::to_string(o.shards) + " for a batch of " + std::to_string(N) +
-                              " (0, 1, or 2 for an even batch)");
+        if (o.shards == 2 && S == 1)
+            throw value_error("train: shards 2 for a batch of " + std::to_string(N) + " (2 needs an even batch)");
         if (o.shards) return o.shards;
         return all_threads(o.threads) == 1 ? 1 : S;
     }

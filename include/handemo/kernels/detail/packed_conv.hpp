@@ -53,7 +53,7 @@ constexpr int ws_kc(int nv) noexcept
     return std::max(16, int(32768 / (sizeof(T) * std::size_t(nv) * simd_lanes<T>)));
 }
 
-/// How many reduction blocks ahead the first tile of a block prefetches the weight stream (-D override).
+/// How many reduction blocks ahead the tiles of a block prefetch the weight stream (-D override).
 #ifdef HANDEMO_WS_PREFETCH_BLOCKS
 inline constexpr int ws_prefetch_blocks = HANDEMO_WS_PREFETCH_BLOCKS;
 #else
@@ -62,7 +62,7 @@ inline constexpr int ws_prefetch_blocks = 1;
 
 /// tile[j][0..MR) (+)= sum_{k<kc} wp[k*MR + 0..MR) * src[koff[k] + j*sj], j < NR. SJ > 0 fixes sj at
 /// compile time (stride 1 and 2 of the generator); SJ = 0 reads it from `sj`. PF: also prefetch (into L2)
-/// kc*MR elements of the weight stream starting at `pf`, spread over the loop.
+/// pf_rows rows (MR elements each) of the weight stream starting at `pf`, one row per iteration.
 template <class T, int NV, int NR, int SJ, bool PF = false>
 [[gnu::noinline]] inline void micro_ws(int kc, const T* __restrict wp, const int* __restrict koff,
                                        const T* __restrict src, int sj, T* __restrict tile, bool accumulate,
