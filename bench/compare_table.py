@@ -101,9 +101,15 @@ for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedd
         if g:
             print(f"| {cfg} | {label} | {fmt_t(seconds(g))} | | | | {frac_of_peak(g)} |")
     # the G inference of the target: frozen_generator (weights packed once), what transfer and the CLI run
-    inf_b = star_bench(keys, "infer", exclude="unpacked")
+    inf_b = next((b for b in star if any(k in b["name"].lower() for k in keys) and b["name"].lower().startswith("stargan_infer/")
+                  and b.get("run_type", "iteration") == "iteration"), None)
     inf = seconds(inf_b) if inf_b else None
     print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}** |")
+    h_b = star_bench(keys, "infer_f16")
+    if h_b:
+        h = seconds(h_b)
+        mb = h_b.get("weight_MB")
+        print(f"| {cfg} | G inference, batch 1, 1 thread, binary16 weights (`weight_storage::f16`{f', {mb:.1f} MB' if mb else ''}) | {fmt_t(h)} | | | {ratio(best(tp1[0], tp2[0]), h)} | {frac_of_peak(h_b)} |")
     un_b = star_bench(keys, "infer_unpacked")
     if un_b:
         un = seconds(un_b)

@@ -22,13 +22,15 @@ using autodiff::tape;
 namespace {
 
 /// frozen: frozen_generator (weights packed once, the path of transfer and the CLI); else generator::infer.
-template <class Config, bool frozen>
+/// storage: the frozen generator's weight storage (kernels::weight_storage::f16: binary16 panels).
+template <class Config, bool frozen, kernels::weight_storage storage = kernels::weight_storage::native>
 void bm_infer(benchmark::State& st)
 {
     generator<float, Config> g;
     rng gen(1);
     init_pytorch_default(g, gen);
-    const auto f = g.freeze();
+    const auto f = g.freeze(storage);
+    st.counters["weight_MB"] = double(f.weight_bytes()) / 1e6;
     typename generator<float, Config>::workspace ws;
     typename frozen_generator<float, Config>::workspace fws(f);
     constexpr std::size_t H = dims<Config>::H, W = dims<Config>::W, C = Config::domains;
@@ -118,6 +120,8 @@ void bm_train(benchmark::State& st)
 BENCHMARK(bm_infer<hand_paper, true>)->Name("stargan_infer/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer<hand_embedded, true>)->Name("stargan_infer/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer<hand_micro, true>)->Name("stargan_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_paper, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_embedded, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer<hand_paper, false>)->Name("stargan_infer_unpacked/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer<hand_embedded, false>)->Name("stargan_infer_unpacked/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
 BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);

@@ -20,6 +20,7 @@ Fixtures (seeded with torch.manual_seed; float32 except the StarGAN one, compute
                        L_D (with WGAN-GP), of the gradient penalty alone (create_graph=True double backward)
                        and of L_G
   adam.safetensors     torch.optim.Adam steps on a small tensor with given gradients (F32 and F64)
+  f16.safetensors      binary16 rounding (Tensor.half()) of special values, ties and random values of every scale
 """
 import array
 import json
@@ -328,6 +329,26 @@ def main(out_dir):
     st_write(os.path.join(out_dir, "adam.safetensors"), ad,
              {"generator": "scripts/make_golden.py", "torch": torch.__version__,
               "betas": "0.5,0.999", "eps": "1e-8", "steps": "5", "optimizer": "torch.optim.Adam"})
+
+    # ---------------- 5. binary16 rounding (Tensor.half(): round to nearest, ties to even), for
+    # handemo::float_to_half / half_to_float (core/half.hpp) and weight_storage::f16 of the packed kernels
+    torch.manual_seed(3)
+    vals = [0.0, -0.0, 1.0, -1.0, 65504.0, -65504.0, 65519.0, 65520.0, 1e6, -1e6, float("inf"), float("-inf"),
+            float("nan"), 2.0 ** -14, 2.0 ** -24, 2.0 ** -25, 2.0 ** -26, 3 * 2.0 ** -26, 1.5 * 2.0 ** -24,
+            2.0 ** -14 - 2.0 ** -25, 1.0 + 2.0 ** -11, 1.0 + 3 * 2.0 ** -11, 1.0 + 2.0 ** -11 + 2.0 ** -20]
+    # every tie between two neighbouring halves is a value of the form (h + 1/2 ulp): sample them over the range
+    hb = torch.randint(0, 0x7BFF, (2000,), dtype=torch.int32)
+    lo = hb.to(torch.int16).view(torch.float16).double()
+    hi = (hb + 1).to(torch.int16).view(torch.float16).double()
+    ties = ((lo + hi) / 2).float()  # exact in float32: 12 significant bits
+    scaled = torch.cat([torch.randn(4000) * (10.0 ** e) for e in range(-9, 6)])
+    x = torch.cat([torch.tensor(vals, dtype=torch.float32), ties, -ties, scaled])
+    bits = [v & 0xFFFF for v in x.half().view(torch.int16).tolist()]
+    st_write(os.path.join(out_dir, "f16.safetensors"),
+             [("x", "F32", [x.numel()], flat(x)), ("half_bits", "U16", [x.numel()], bits),
+              ("half_as_float", "F32", [x.numel()], flat(x.half().float()))],
+             {"generator": "scripts/make_golden.py", "torch": torch.__version__,
+              "half_bits": "x.half().view(torch.int16) as unsigned 16-bit", "half_as_float": "x.half().float()"})
     print("wrote", out_dir)
 
 

@@ -3,11 +3,13 @@
 // fallback, float and double, bias or none, batch 1 and 2.
 #include <doctest/doctest.h>
 
+#include <handemo/core/half.hpp>
 #include <handemo/kernels/packed.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <string>
@@ -142,4 +144,83 @@ TEST_CASE("packed convolutions refuse an invalid geometry, naming it")
                              handemo::value_error);
         CHECK_THROWS_AS(hk::packed_conv<float>::conv_transpose2d(g, w.data()), handemo::value_error);
     }
+}
+
+namespace {
+
+/// Packed conv2d and conv_transpose2d of g with weight_storage::f16 against the native storage of the same
+/// weights rounded to binary16 beforehand: the same values through the same kernel, so the same bits.
+/// Returns how many of the two stored binary16 panels.
+int check_f16_storage(const hk::conv_geometry& g, unsigned seed)
+{
+    std::mt19937 rng(seed);
+    const auto wd = random_values(g.w_size(), rng), xd = random_values(std::max(g.x_size(), g.y_size()), rng);
+    std::vector<float> w(wd.begin(), wd.end()), x(xd.begin(), xd.end()), wr(w.size());
+    for (auto& v : w) v *= 3.f;  // spread over several binary16 exponents
+    for (std::size_t i = 0; i < w.size(); ++i) wr[i] = handemo::half_to_float(handemo::float_to_half(w[i]));
+    int halves = 0;
+    for (int transposed = 0; transposed < 2; ++transposed) {
+        INFO(describe_packed(g, transposed));
+        auto make = [&](const std::vector<float>& ww, hk::weight_storage s) {
+            return transposed ? hk::packed_conv<float>::conv_transpose2d(g, ww.data(), s) : hk::packed_conv<float>::conv2d(g, ww.data(), s);
+        };
+        const auto half = make(w, hk::weight_storage::f16), rounded = make(wr, hk::weight_storage::native),
+                   plain = make(w, hk::weight_storage::native);
+        CHECK(half.storage() == hk::weight_storage::f16);
+        const std::size_t ny = transposed ? g.x_size() : g.y_size();
+        std::vector<float> a(ny), b(ny), c(ny), scratch(std::max(half.scratch_size(), rounded.scratch_size()) + 16);
+        half.forward(x.data(), nullptr, a.data(), scratch.data());
+        rounded.forward(x.data(), nullptr, b.data(), scratch.data());
+        plain.forward(x.data(), nullptr, c.data(), scratch.data());
+        CHECK(std::memcmp(a.data(), b.data(), ny * sizeof(float)) == 0);
+        // and rounding the weights moves the output by about binary16's relative precision, no more
+        double num = 0, den = 1e-30;
+        for (std::size_t i = 0; i < ny; ++i) num = std::max(num, double(std::abs(a[i] - c[i]))), den = std::max(den, double(std::abs(c[i])));
+        CHECK(num / den < 4e-3);
+        const bool stored_half = half.weight_bytes() * 2 == plain.weight_bytes();
+        CHECK((stored_half || half.weight_bytes() == plain.weight_bytes()));
+        if (stored_half) CHECK(half.weight_stationary());
+        halves += stored_half;
+    }
+    return halves;
+}
+
+}  // namespace
+
+TEST_CASE("weight_storage::f16: the kernels' result on the rounded weights, bit for bit, in half the bytes")
+{
+    int halves = 0, cases = 0;
+    for (int cd : {8, 16, 32, 64}) {
+        const hk::conv_geometry layers[] = {
+            {1, 8, 12, 24, cd, 7, 7, 1, 3}, {1, cd, 12, 24, 2 * cd, 4, 4, 2, 1}, {1, 2 * cd, 6, 12, 4 * cd, 4, 4, 2, 1},
+            {1, 4 * cd, 3, 6, 4 * cd, 3, 3, 1, 1}, {1, cd, 12, 24, 3, 7, 7, 1, 3}};
+        for (const auto& g : layers) halves += check_f16_storage(g, unsigned(cd) + 3u), cases += 2;
+    }
+    std::mt19937 rng(16u);
+    auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    for (int tested = 0; tested < 20;) {
+        const int ch[] = {3, 8, 16, 17, 33, 64};
+        hk::conv_geometry g{pick(1, 2), ch[pick(0, 5)], pick(1, 9), pick(1, 9), ch[pick(0, 5)], pick(1, 5), pick(1, 5), pick(1, 3), pick(0, 2)};
+        if (!g.valid()) continue;
+        halves += check_f16_storage(g, unsigned(tested) + 40u), cases += 2;
+        ++tested;
+    }
+    INFO("binary16 panels in ", halves, " of ", cases);
+    if constexpr (hk::detail::ws_f16_native<float>) CHECK(halves > cases / 3);
+    else CHECK(halves == 0);
+}
+
+TEST_CASE("weight_storage::f16 refuses weights binary16 cannot hold, naming the weight")
+{
+    const hk::conv_geometry g{1, 16, 4, 4, 32, 3, 3, 1, 1};
+    std::vector<float> w(g.w_size(), 0.5f);
+    w[77] = 65520.f;  // rounds to infinity in binary16 (65504 is the largest finite)
+    CHECK_THROWS_WITH_AS(hk::packed_conv<float>::conv2d(g, w.data(), hk::weight_storage::f16),
+                         doctest::Contains("weight 77 is 65520"), handemo::value_error);
+    w[77] = 65519.f;  // rounds down to 65504: accepted
+    CHECK_NOTHROW(hk::packed_conv<float>::conv2d(g, w.data(), hk::weight_storage::f16));
+    w[5] = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_WITH_AS(hk::packed_conv<float>::conv_transpose2d(g, w.data(), hk::weight_storage::f16),
+                         doctest::Contains("weight 5 is nan"), handemo::value_error);
+    CHECK_NOTHROW(hk::packed_conv<float>::conv2d(g, w.data()));  // native storage keeps what it is given
 }

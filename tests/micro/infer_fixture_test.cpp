@@ -9,6 +9,7 @@
 
 #include "helpers.hpp"
 
+#include <handemo/core/half.hpp>
 #include <handemo/micro.hpp>
 #include <handemo/nn/safetensors.hpp>
 #include <handemo/stargan/configs.hpp>
@@ -22,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
@@ -118,6 +120,48 @@ TEST_CASE("G output equals the x86 fixture within 1e-5 (hand-embedded on the SIM
     CHECK(de <= 1e-5f);
     CHECK(df <= 1e-5f);
     CHECK(dm <= 1e-5f);
+}
+
+TEST_CASE("frozen_generator with binary16 weights: G of the rounded weights, bit for bit, in half the bytes")
+{
+    // with weight_storage::f16 the packed panels hold binary16 where the kernels widen it natively (AVX-512,
+    // AVX2 + F16C, NEON: this test also runs under qemu-aarch64); either way the output is exactly that of the
+    // float kernels on the weights rounded to binary16 beforehand (the norm parameters stay float)
+    using emb = stargan::with_batch<stargan::hand_embedded, 1>;
+    constexpr std::size_t H = 12, W = 24, C = 5;
+    stargan::generator<float, emb> g, rounded;
+    test::seed_generator(g, 21);
+    test::seed_generator(rounded, 21);
+    rounded.for_each_parameter([](std::string_view, std::span<float> v, std::span<float>, std::span<const std::size_t> shape) {
+        if (shape.size() == 4)
+            for (auto& x : v) x = half_to_float(float_to_half(x));
+    });
+    const auto half = g.freeze(kernels::weight_storage::f16), want = rounded.freeze(), plain = g.freeze();
+    CHECK(half.storage() == kernels::weight_storage::f16);
+    std::vector<float> xp(3 * H * W), label(C), y_half(xp.size()), y_want(xp.size()), y_plain(xp.size());
+    handemo::rng r(5);
+    for (auto& v : xp) v = float(r.uniform(-1, 1));
+    label[1] = 1.f;
+    typename stargan::frozen_generator<float, emb>::workspace w1(half), w2(want), w3(plain);
+    half.infer(xp.data(), label.data(), y_half.data(), w1);
+    want.infer(xp.data(), label.data(), y_want.data(), w2);
+    plain.infer(xp.data(), label.data(), y_plain.data(), w3);
+    CHECK(std::memcmp(y_half.data(), y_want.data(), y_half.size() * sizeof(float)) == 0);
+    const float d = max_abs_diff(y_half, y_plain);
+    std::printf("hand-embedded G, binary16 weights: %zu of %zu weight bytes, max |y_f16 - y_f32| %.3g\n", half.weight_bytes(),
+                plain.weight_bytes(), double(d));
+    CHECK(d > 0.f);     // the rounding is real
+    CHECK(d < 2e-2f);   // and small next to the output's range (-1, 1)
+    if constexpr (kernels::detail::ws_f16_native<float>) CHECK(half.weight_bytes() < plain.weight_bytes() * 52 / 100);
+    else CHECK(half.weight_bytes() == plain.weight_bytes());
+    // a weight binary16 cannot hold is refused, naming the parameter
+    stargan::generator<float, emb> big;
+    test::seed_generator(big, 21);
+    big.for_each_parameter([](std::string_view name, std::span<float> v, std::span<float>, auto) {
+        if (name == "main.3.weight") v[4] = 1e5f;
+    });
+    CHECK_THROWS_WITH_AS(big.freeze(kernels::weight_storage::f16), doctest::Contains("parameter main.3.weight: packed_conv: weight 4 is 100000"),
+                         value_error);
 }
 
 TEST_CASE("the fixture's hand-micro weights as an exported header (HANDEMO_WRITE_MICRO_HEADER=path)")

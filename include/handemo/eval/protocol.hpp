@@ -57,6 +57,10 @@ struct eval_options {
     /// name must parse with parse_file_stem() and every neutral clip must be reproduced by this seed and synth_fps.
     std::optional<std::uint64_t> synth_seed;
     double synth_fps = 60.0;  ///< frame rate the synthetic set was generated at (`handemo synth --fps`)
+    /// How the trained G's convolution weights are held for the transfers scored (f16: rounded to binary16, the
+    /// half-size inference of kernels::weight_storage; training is unchanged). With --reuse-models this scores
+    /// the same trained models both ways: the accuracy cost of binary16 weights.
+    kernels::weight_storage inference_weights = kernels::weight_storage::native;
     /// Methods and scores added from outside the core, in the same folds and tables (eval/extension.hpp; the
     /// circumplex method of eval/rcm.hpp).
     std::vector<std::shared_ptr<method_extension>> extensions;
@@ -127,6 +131,7 @@ inline std::string options_text(const eval_options& o)
     s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nshards " + std::to_string(o.train.shards) +
          " (0: one on one thread, else two halves of the batch)\nfold seed train.seed + fold index\n";
     s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
+    s += std::string("inference weights ") + kernels::weight_storage_name(o.inference_weights) + "\n";
     if (o.synth_seed) s += "synthetic set seed " + std::to_string(*o.synth_seed) + " at " + std::to_string(o.synth_fps) + " fps (oracle row)\n";
     for (const auto& x : o.extensions) s += x->options_text();
     return s;
@@ -307,12 +312,12 @@ void train_fold_model(const std::vector<stargan::labelled_clip>& train, const st
 template <stargan::stargan_config Config>
 struct fold_models {
     using model_type = stargan::detail::emotion_model_impl<Config>;
-    fold_models(const safetensors_file& f, const stargan::checkpoint_info& info)
-        : model(f, info),
+    fold_models(const safetensors_file& f, const stargan::checkpoint_info& info, kernels::weight_storage storage)
+        : model(f, info, storage),
           has_amp(model.amplitude_stage()),
-          g_only(f, without_amplitude(info, has_amp)),
+          g_only(f, without_amplitude(info, has_amp), storage),
           gated(has_gate(info)),
-          ungated(f, without_gate(info))
+          ungated(f, without_gate(info), storage)
     {
     }
     model_type model;
@@ -643,7 +648,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         fsum.train_seconds = std::chrono::duration<double>(clock::now() - t0).count();
         t0 = clock::now();
         auto [ckf, ckinfo] = stargan::read_checkpoint(fold_dir / "checkpoint.safetensors");
-        const detail::fold_models<Config> models(ckf, ckinfo);
+        const detail::fold_models<Config> models(ckf, ckinfo, opt.inference_weights);
 
         // ---- baselines and the independent emotion classifier, from the training clips only
         const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);

@@ -6,6 +6,7 @@
 // conv2d_forward / conv_transpose2d_forward up to the order of the floating-point sums.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -14,11 +15,26 @@
 #include <vector>
 
 #include <handemo/core/error.hpp>
+#include <handemo/core/half.hpp>
 #include <handemo/kernels/conv.hpp>
 #include <handemo/kernels/detail/packed_conv.hpp>
 #include <handemo/tensor/aligned.hpp>
 
 namespace handemo::kernels {
+
+/// @brief How packed_conv keeps its weights.
+/// - native: as given (T).
+/// - f16: every weight rounded to IEEE binary16 (to nearest, ties to even, as PyTorch's Tensor.half()), the
+///   activations and the sums staying in T. Where the weight-stationary kernel can widen binary16 in one
+///   instruction (float with AVX-512, AVX2 + F16C or aarch64 NEON: detail::ws_f16_native) the panels are
+///   stored as binary16, half the bytes to stream per inference; elsewhere (and for the layers that keep
+///   the kernels of kernels/conv.hpp) the rounded weights are stored as T. Either way the result is that of
+///   the native storage of the rounded weights, bit for bit (tests/kernels/packed_test.cpp). Weights whose
+///   magnitude rounds above 65504 (binary16's largest) are refused.
+enum class weight_storage { native, f16 };
+
+/// @brief "native" or "f16".
+inline const char* weight_storage_name(weight_storage s) noexcept { return s == weight_storage::f16 ? "f16" : "native"; }
 
 /// @brief One convolution with its weights packed for repeated forward passes.
 /// A snapshot: later changes to the weights it was built from do not reach it (build it again).
@@ -28,11 +44,18 @@ public:
     packed_conv() = default;
 
     /// @brief Conv2d with geometry g and weights w [out_channels, in_channels, kernel_h, kernel_w].
-    /// @throws value_error when g is not valid() (naming its fields).
-    static packed_conv conv2d(const conv_geometry& g, const T* w) { return packed_conv(g, w, false); }
+    /// @throws value_error when g is not valid() (naming its fields), or with weight_storage::f16 when a
+    /// weight is not finite or rounds beyond binary16's range (naming its index).
+    static packed_conv conv2d(const conv_geometry& g, const T* w, weight_storage ws = weight_storage::native)
+    {
+        return packed_conv(g, w, false, ws);
+    }
     /// @brief ConvTranspose2d as in conv_transpose2d_forward: g is the convolution it is the adjoint of,
     /// w [g.out_channels, g.in_channels, k, k] (PyTorch's [in, out, k, k] of the transposed layer).
-    static packed_conv conv_transpose2d(const conv_geometry& g, const T* w) { return packed_conv(g, w, true); }
+    static packed_conv conv_transpose2d(const conv_geometry& g, const T* w, weight_storage ws = weight_storage::native)
+    {
+        return packed_conv(g, w, true, ws);
+    }
 
     /// @brief Elements of T that forward() needs as scratch (any alignment).
     std::size_t scratch_size() const noexcept { return scratch_; }
@@ -40,6 +63,11 @@ public:
     const conv_geometry& geometry() const noexcept { return g_; }
     /// @brief Whether the weight-stationary kernel runs (false: the kernels of kernels/conv.hpp).
     bool weight_stationary() const noexcept { return ws_; }
+    /// @brief The storage asked for at construction.
+    weight_storage storage() const noexcept { return storage_; }
+    /// @brief Bytes of the stored weights (packed panels with their zero padding, or the plain copy): what
+    /// one forward pass streams.
+    std::size_t weight_bytes() const noexcept { return w_.size() * sizeof(T) + wh_.size() * sizeof(std::uint16_t); }
 
     /// @brief conv2d: y = conv(x, w) + bias, x [batch, in_channels, in_h, in_w], y [batch, out_channels,
     /// out_h, out_w]. conv_transpose2d: y = ConvTranspose2d(x, w) + bias, x [batch, g.out_channels,
@@ -62,6 +90,12 @@ public:
             for (const auto& ph : phases_) {
                 detail::ws_job j = ph.job;
                 j.koff = koff_.data() + ph.koff_off;
+                if constexpr (detail::ws_f16_native<T>) {
+                    if (wh_.size()) {
+                        detail::ws_run(j, wh_.data() + ph.w_off, xp + ph.src0, bias_or_null, y + n * y_per, acc);
+                        continue;
+                    }
+                }
                 detail::ws_run(j, w_.data() + ph.w_off, xp + ph.src0, bias_or_null, y + n * y_per, acc);
             }
         }
@@ -75,7 +109,8 @@ private:
         std::ptrdiff_t src0 = 0; // offset of the phase's first source pixel in the padded input
     };
 
-    packed_conv(const conv_geometry& g, const T* w, bool transposed) : g_(g), transposed_(transposed)
+    packed_conv(const conv_geometry& g, const T* w, bool transposed, weight_storage storage)
+        : g_(g), transposed_(transposed), storage_(storage)
     {
         if (!g.valid())
             throw value_error("packed_conv: invalid geometry (batch " + std::to_string(g.batch) + ", " +
@@ -88,6 +123,18 @@ private:
         const bool phases_ok = !transposed || (k_h >= s && k_w >= s);
         const int co = transposed ? g.in_channels : g.out_channels;
         ws_ = detail::fast_type<T> && phases_ok && co >= detail::simd_lanes<T>;
+        std::vector<T> rounded;
+        if (storage == weight_storage::f16) {
+            rounded.resize(g.w_size());
+            for (std::size_t i = 0; i < rounded.size(); ++i) {
+                const float v = static_cast<float>(w[i]);
+                if (!std::isfinite(w[i]) || !std::isfinite(half_to_float(float_to_half(v))))
+                    throw value_error("packed_conv: weight " + std::to_string(i) + " is " + std::to_string(double(w[i])) +
+                                      ", which binary16 storage (weight_storage::f16) cannot hold (largest 65504)");
+                rounded[i] = static_cast<T>(half_to_float(float_to_half(v)));
+            }
+            w = rounded.data();
+        }
         if (!ws_) {
             w_ = aligned_buffer<T>(g.w_size());
             std::memcpy(w_.data(), w, g.w_size() * sizeof(T));
@@ -96,6 +143,13 @@ private:
         }
         if (!transposed) build_conv(w);
         else build_transposed(w);
+        if constexpr (detail::ws_f16_native<T>) {
+            if (storage == weight_storage::f16) {  // exact: every panel value is a binary16 value already
+                wh_ = aligned_buffer<std::uint16_t>(w_.size());
+                for (std::size_t i = 0; i < w_.size(); ++i) wh_.data()[i] = float_to_half(w_.data()[i]);
+                w_ = aligned_buffer<T>();
+            }
+        }
         scratch_ = acc_elements_ + std::size_t(in_c_) * Hp_ * Wp_ + tensor_alignment / sizeof(T);
     }
 
@@ -208,7 +262,9 @@ private:
 
     conv_geometry g_{};
     bool transposed_ = false, ws_ = false;
+    weight_storage storage_ = weight_storage::native;
     aligned_buffer<T> w_;
+    aligned_buffer<std::uint16_t> wh_;  // binary16 panels (weight_storage::f16 where ws_f16_native), else empty
     std::vector<int> koff_;
     std::vector<phase> phases_;
     int in_c_ = 0, in_h_ = 0, in_w_ = 0, out_c_ = 0, out_h_ = 0, out_w_ = 0, pad_h_ = 0, pad_w_ = 0, Hp_ = 0, Wp_ = 0;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <handemo/core/error.hpp>
+#include <handemo/core/half.hpp>
 #include <handemo/nn/parameters.hpp>
 
 #include <algorithm>
@@ -99,27 +100,7 @@ void store_le(char* p, U u) noexcept
     std::memcpy(p, &u, sizeof(U));
 }
 
-// IEEE binary16 -> binary32 (normals, subnormals, infinities, NaN).
-inline float half_to_float(std::uint16_t h) noexcept
-{
-    const std::uint32_t sign = static_cast<std::uint32_t>(h & 0x8000u) << 16;
-    const std::uint32_t exp = (h >> 10) & 0x1Fu;
-    std::uint32_t man = h & 0x3FFu;
-    std::uint32_t bits;
-    if (exp == 0) {
-        if (man == 0) bits = sign;
-        else {  // subnormal: normalise
-            int e = -1;
-            do {
-                man <<= 1;
-                ++e;
-            } while ((man & 0x400u) == 0);
-            bits = sign | static_cast<std::uint32_t>(127 - 15 - e) << 23 | (man & 0x3FFu) << 13;
-        }
-    } else if (exp == 0x1F) bits = sign | 0x7F800000u | man << 13;
-    else bits = sign | (exp + 127 - 15) << 23 | man << 13;
-    return std::bit_cast<float>(bits);
-}
+// binary16 -> binary32: handemo::half_to_float (core/half.hpp).
 
 // Reads element i of raw little-endian data of dtype t as a double (exact for every dtype but
 // 64-bit integers beyond 2^53) or, for the integer target path, as the integer itself.

@@ -424,7 +424,11 @@ public:
     }
 
     /// @brief A snapshot of the weights packed for fast repeated inference (see frozen_generator).
-    frozen_generator<T, Config> freeze() const { return frozen_generator<T, Config>(*this); }
+    /// storage f16: the convolution weights rounded to binary16 (kernels::weight_storage).
+    frozen_generator<T, Config> freeze(kernels::weight_storage storage = kernels::weight_storage::native) const
+    {
+        return frozen_generator<T, Config>(*this, storage);
+    }
 
     /// @brief Multiply-adds of one forward pass (for GFLOP/s counters).
     static double forward_macs() noexcept
@@ -464,15 +468,24 @@ public:
     static constexpr std::size_t N = generator_type::N, C = generator_type::C, H = generator_type::H,
                                  W = generator_type::W, cd = generator_type::cd, R = generator_type::R;
 
-    /// @brief Packs the weights of g (and copies its norm parameters and residual flag).
-    explicit frozen_generator(const generator_type& g) : residual_(g.residual_)
+    /// @brief Packs the weights of g (and copies its norm parameters and residual flag). storage f16: every
+    /// convolution weight rounded to binary16 (kernels::weight_storage; half the bytes per inference where
+    /// the kernels widen binary16 natively), the norm parameters and activations staying in T.
+    /// @throws value_error with weight_storage::f16 when a weight does not fit binary16 (naming it).
+    explicit frozen_generator(const generator_type& g, kernels::weight_storage storage = kernels::weight_storage::native)
+        : residual_(g.residual_), storage_(storage)
     {
         const auto geo = generator_type::geometries();
         std::size_t k = 0;
         auto conv = [&](std::size_t i, bool transposed) {
-            const T* w = g.p_.value(k++);
-            convs_.push_back(transposed ? kernels::packed_conv<T>::conv_transpose2d(geo[i], w)
-                                        : kernels::packed_conv<T>::conv2d(geo[i], w));
+            const T* w = g.p_.value(k);
+            try {
+                convs_.push_back(transposed ? kernels::packed_conv<T>::conv_transpose2d(geo[i], w, storage)
+                                            : kernels::packed_conv<T>::conv2d(geo[i], w, storage));
+            } catch (const value_error& e) {
+                throw value_error("frozen_generator: parameter " + g.p_.entry(k).name + ": " + e.what());
+            }
+            ++k;
         };
         auto norm = [&]() {
             const std::size_t n = g.p_.entry(k).size;
@@ -515,9 +528,19 @@ public:
 
     /// @brief The packed convolutions in network order (conv7, down1, down2, 2R residual convs, up1, up2, conv7).
     const std::vector<kernels::packed_conv<T>>& convolutions() const noexcept { return convs_; }
+    /// @brief The weight storage asked for at construction.
+    kernels::weight_storage storage() const noexcept { return storage_; }
+    /// @brief Bytes of the convolution weights one inference streams (kernels::packed_conv::weight_bytes).
+    std::size_t weight_bytes() const noexcept
+    {
+        std::size_t b = 0;
+        for (const auto& c : convs_) b += c.weight_bytes();
+        return b;
+    }
 
 private:
     bool residual_;
+    kernels::weight_storage storage_;
     std::vector<kernels::packed_conv<T>> convs_;
     std::vector<std::pair<std::vector<T>, std::vector<T>>> norms_;
 };

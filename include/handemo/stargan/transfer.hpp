@@ -302,7 +302,9 @@ class emotion_model_impl final : public emotion_model {
 public:
     using cfg = with_batch<Base, 1>;
     static constexpr std::size_t H = dims<cfg>::H, W = dims<cfg>::W, K = Base::keyframes, J = Base::joints;
-    emotion_model_impl(const safetensors_file& f, checkpoint_info info) : emotion_model(std::move(info))
+    emotion_model_impl(const safetensors_file& f, checkpoint_info info,
+                       kernels::weight_storage storage = kernels::weight_storage::native)
+        : emotion_model(std::move(info))
     {
         if (info_.range.keyframes != K || info_.range.joints != J)
             throw format_error("checkpoint: " + f.source + ": range is for " + std::to_string(info_.range.keyframes) + "x" +
@@ -319,7 +321,13 @@ public:
         generator<float, cfg> g;
         load_parameters(f, g, f.find("G_ema.main.0.weight") ? "G_ema." : "G.");  // the EMA weights when trained with them
         g.set_residual(residual());
-        frozen_.emplace(g);  // weights packed once for every transfer of this model; g itself is not kept
+        // weights packed once for every transfer of this model (g itself is not kept); a weight binary16
+        // cannot hold (storage f16) is refused naming the checkpoint and the parameter
+        try {
+            frozen_.emplace(g, storage);
+        } catch (const value_error& e) {
+            throw value_error("checkpoint: " + f.source + ": " + e.what());
+        }
         fws_.emplace(*frozen_);
     }
 
@@ -340,24 +348,28 @@ private:
 
 }  // namespace detail
 
-/// @brief Builds a model from a verified checkpoint (parse_checkpoint / read_checkpoint).
+/// @brief Builds a model from a verified checkpoint (parse_checkpoint / read_checkpoint). storage f16: G's
+/// convolution weights rounded to binary16 for inference (kernels::weight_storage; README "Performance").
 /// @throws format_error when a field does not fit the configuration (domain or joint count, image size,
-///         missing or misshapen tensors), value_error (unknown configuration).
-inline std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info)
+///         missing or misshapen tensors), value_error (unknown configuration; with f16, a weight binary16
+///         cannot hold).
+inline std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info,
+                                                 kernels::weight_storage storage = kernels::weight_storage::native)
 {
     return with_config(info.config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
-        return std::make_unique<detail::emotion_model_impl<Config>>(f, info);
+        return std::make_unique<detail::emotion_model_impl<Config>>(f, info, storage);
     });
 }
 
 /// @brief Loads a model from a checkpoint file, or from a training output folder holding one.
 /// @throws io_error, format_error (corrupted, truncated, foreign file), value_error (unknown configuration).
-inline std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path)
+inline std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path,
+                                                 kernels::weight_storage storage = kernels::weight_storage::native)
 {
     const auto file = std::filesystem::is_directory(path) ? path / "checkpoint.safetensors" : path;
     // No structured binding here: clang 14 cannot capture one in a lambda (C++20's P1091 came in clang 16).
     const auto loaded = read_checkpoint(file);
-    return load_model(loaded.first, loaded.second);
+    return load_model(loaded.first, loaded.second, storage);
 }
 
 }  // namespace handemo::stargan

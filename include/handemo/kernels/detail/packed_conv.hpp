@@ -17,9 +17,16 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
+#include <type_traits>
 #include <vector>
 
+#include <handemo/core/half.hpp>
 #include <handemo/kernels/detail/conv_simd.hpp>
+
+#if defined(__aarch64__) && defined(__ARM_NEON)
+#include <arm_neon.h>
+#endif
 
 namespace handemo::kernels::detail {
 
@@ -45,12 +52,12 @@ constexpr ws_tile ws_tile_for(int co) noexcept
     }
 }
 
-/// Reduction block: one block of the panel ([kc][MR]) stays in L1 (32 KiB) while every pixel tile of the
-/// layer uses it.
-template <class T>
+/// Reduction block: one block of the panel ([kc][MR], stored as W) stays in L1 (32 KiB) while every pixel
+/// tile of the layer uses it.
+template <class T, class W = T>
 constexpr int ws_kc(int nv) noexcept
 {
-    return std::max(16, int(32768 / (sizeof(T) * std::size_t(nv) * simd_lanes<T>)));
+    return std::max(16, int(32768 / (sizeof(W) * std::size_t(nv) * simd_lanes<T>)));
 }
 
 /// How many reduction blocks ahead the tiles of a block prefetch the weight stream (-D override).
@@ -60,13 +67,52 @@ inline constexpr int ws_prefetch_blocks = HANDEMO_WS_PREFETCH_BLOCKS;
 inline constexpr int ws_prefetch_blocks = 1;
 #endif
 
+/// Whether the panels of float weights can be stored as IEEE binary16 and widened in the micro-kernel by
+/// one instruction per vector: AVX-512 (vcvtph2ps zmm), AVX2 with F16C (vcvtph2ps ymm), aarch64 NEON
+/// (fcvtl). Elsewhere kernels/packed.hpp keeps binary16-rounded weights as floats (same values, no saving).
+#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
+inline constexpr int ws_f16_lanes = 16;
+#elif defined(__F16C__) && defined(__AVX2__) && (defined(__x86_64__) || defined(__i386__))
+inline constexpr int ws_f16_lanes = 8;
+#elif defined(__aarch64__) && defined(__ARM_NEON)
+inline constexpr int ws_f16_lanes = 4;
+#else
+inline constexpr int ws_f16_lanes = 0;
+#endif
+template <class T>
+inline constexpr bool ws_f16_native = std::is_same_v<T, float> && simd_lanes<float> == ws_f16_lanes;
+
+/// One vector of panel weights: an aligned load of T, or of binary16 widened to float (ws_f16_native).
+template <class T, class W>
+inline simd_t<T> ws_load(const W* p) noexcept
+{
+    if constexpr (std::is_same_v<W, T>) {
+        return simd_t<T>::load_aligned(p);
+    } else {
+        static_assert(std::is_same_v<W, std::uint16_t> && ws_f16_native<T>, "binary16 panels need ws_f16_native");
+#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
+        if constexpr (simd_lanes<float> == 16)
+            return simd_t<T>(_mm512_cvtph_ps(_mm256_load_si256(reinterpret_cast<const __m256i*>(p))));
+#endif
+#if defined(__F16C__) && (defined(__x86_64__) || defined(__i386__))
+        if constexpr (simd_lanes<float> == 8)
+            return simd_t<T>(_mm256_cvtph_ps(_mm_load_si128(reinterpret_cast<const __m128i*>(p))));
+#endif
+#if defined(__aarch64__) && defined(__ARM_NEON)
+        if constexpr (simd_lanes<float> == 4) return simd_t<T>(vcvt_f32_f16(vreinterpret_f16_u16(vld1_u16(p))));
+#endif
+        return simd_t<T>(T(0));  // unreachable: ws_f16_native<T> is false for every other target
+    }
+}
+
 /// tile[j][0..MR) (+)= sum_{k<kc} wp[k*MR + 0..MR) * src[koff[k] + j*sj], j < NR. SJ > 0 fixes sj at
 /// compile time (stride 1 and 2 of the generator); SJ = 0 reads it from `sj`. PF: also prefetch (into L2)
-/// pf_rows rows (MR elements each) of the weight stream starting at `pf`, one row per iteration.
-template <class T, int NV, int NR, int SJ, bool PF = false>
-[[gnu::noinline]] inline void micro_ws(int kc, const T* __restrict wp, const int* __restrict koff,
+/// pf_rows rows (MR elements each) of the weight stream starting at `pf`, one row per iteration. W: the
+/// stored weight type, T or binary16 (std::uint16_t, widened exactly by ws_load).
+template <class T, class W, int NV, int NR, int SJ, bool PF = false>
+[[gnu::noinline]] inline void micro_ws(int kc, const W* __restrict wp, const int* __restrict koff,
                                        const T* __restrict src, int sj, T* __restrict tile, bool accumulate,
-                                       const T* pf = nullptr, int pf_rows = 0) noexcept
+                                       const W* pf = nullptr, int pf_rows = 0) noexcept
 {
     using B = simd_t<T>;
     constexpr int L = simd_lanes<T>, MR = NV * L;
@@ -83,11 +129,11 @@ template <class T, int NV, int NR, int SJ, bool PF = false>
         if constexpr (PF) {
             // one cache line per vector of the panel row: row k of this tile's share of the next block
             if (k < pf_rows)
-                for (int q = 0; q < NV * L * int(sizeof(T)); q += 64)
+                for (int q = 0; q < NV * L * int(sizeof(W)); q += 64)
                     __builtin_prefetch(reinterpret_cast<const char*>(pf + std::ptrdiff_t(k) * MR) + q, 0, 2);
         }
         B a[NV];
-        for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_aligned(wp + q * L));
+        for (int q = 0; q < NV; ++q) a[q] = keep_in_register(ws_load<T>(wp + q * L));
         const T* s = src + koff[k];
         for (int j = 0; j < NR; ++j) {
             const B b(s[j * step]);
@@ -99,14 +145,14 @@ template <class T, int NV, int NR, int SJ, bool PF = false>
         for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
 }
 
-/// micro_ws<T, NV, nr, SJ> for nr = 1..N.
-template <class T, int NV, int N, int SJ>
-inline void micro_ws_dispatch(int nr, int kc, const T* wp, const int* koff, const T* src, int sj, T* tile,
+/// micro_ws<T, W, NV, nr, SJ> for nr = 1..N.
+template <class T, class W, int NV, int N, int SJ>
+inline void micro_ws_dispatch(int nr, int kc, const W* wp, const int* koff, const T* src, int sj, T* tile,
                               bool accumulate) noexcept
 {
-    if constexpr (N <= 1) micro_ws<T, NV, 1, SJ>(kc, wp, koff, src, sj, tile, accumulate);
-    else if (nr >= N) micro_ws<T, NV, N, SJ>(kc, wp, koff, src, sj, tile, accumulate);
-    else micro_ws_dispatch<T, NV, N - 1, SJ>(nr, kc, wp, koff, src, sj, tile, accumulate);
+    if constexpr (N <= 1) micro_ws<T, W, NV, 1, SJ>(kc, wp, koff, src, sj, tile, accumulate);
+    else if (nr >= N) micro_ws<T, W, NV, N, SJ>(kc, wp, koff, src, sj, tile, accumulate);
+    else micro_ws_dispatch<T, W, NV, N - 1, SJ>(nr, kc, wp, koff, src, sj, tile, accumulate);
 }
 
 /// One weight-stationary GEMM: `co` output channels from the panels `wp` ([ceil(co/MR)][K][MR]) and the
@@ -127,14 +173,16 @@ inline std::size_t ws_acc_elements(int co, int rows, int cols) noexcept
     return std::size_t(rows) * ((cols + t.nr - 1) / t.nr) * t.nr * t.nv * simd_lanes<T>;
 }
 
-template <class T, int NV, int NR, int SJ>
-inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, T* acc) noexcept
+template <class T, class W, int NV, int NR, int SJ>
+inline void ws_run_tiled(const ws_job& j, const W* wp, const T* src, const T* bias, T* y, T* acc) noexcept
 {
     constexpr int L = simd_lanes<T>, MR = NV * L;
-    const int kc_max = ws_kc<T>(NV);
+    // the block is sized in bytes of the stored weights (binary16 panels: twice the rows per block); the
+    // tiles accumulate over the blocks in k order, so the block size does not change the sums
+    const int kc_max = ws_kc<T, W>(NV);
     const int panels = (j.co + MR - 1) / MR;
     for (int pn = 0; pn < panels; ++pn) {
-        const T* wpanel = wp + std::ptrdiff_t(pn) * j.K * MR;
+        const W* wpanel = wp + std::ptrdiff_t(pn) * j.K * MR;
         for (int k0 = 0; k0 < j.K; k0 += kc_max) {
             const int kc = std::min(kc_max, j.K - k0);
             // the weights of the next block (of this panel or the next: the panels are contiguous)
@@ -155,10 +203,10 @@ inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bi
                     if (pf && nr == NR) {
                         const int r0 = std::min(kc, ti * share), rows = std::min(kc - r0, share);
                         ++ti;
-                        micro_ws<T, NV, NR, SJ, true>(kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj, tile,
+                        micro_ws<T, W, NV, NR, SJ, true>(kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj, tile,
                                                           k0 > 0, wp + (next + r0) * MR, rows);
                     } else
-                        micro_ws_dispatch<T, NV, NR, SJ>(nr, kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj,
+                        micro_ws_dispatch<T, W, NV, NR, SJ>(nr, kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj,
                                                          tile, k0 > 0);
                 }
             }
@@ -181,17 +229,17 @@ inline void ws_run_tiled(const ws_job& j, const T* wp, const T* src, const T* bi
 }
 
 /// Runs a job (y = result + bias, overwritten) with the tile ws_tile_for<T>(co) and the compile-time pixel
-/// stride when it is 1 or 2.
-template <class T>
-inline void ws_run(const ws_job& j, const T* wp, const T* src, const T* bias, T* y, T* acc) noexcept
+/// stride when it is 1 or 2. W: the stored weight type (T, or std::uint16_t binary16 when ws_f16_native<T>).
+template <class T, class W>
+inline void ws_run(const ws_job& j, const W* wp, const T* src, const T* bias, T* y, T* acc) noexcept
 {
     constexpr int L = simd_lanes<T>;
     // the tile of a panel of CO channels, as ws_tile_for gives it (the instantiations follow that one table)
     auto go = [&]<int CO>() {
         constexpr ws_tile t = ws_tile_for<T>(CO);
-        if (j.sj == 1) ws_run_tiled<T, t.nv, t.nr, 1>(j, wp, src, bias, y, acc);
-        else if (j.sj == 2) ws_run_tiled<T, t.nv, t.nr, 2>(j, wp, src, bias, y, acc);
-        else ws_run_tiled<T, t.nv, t.nr, 0>(j, wp, src, bias, y, acc);
+        if (j.sj == 1) ws_run_tiled<T, W, t.nv, t.nr, 1>(j, wp, src, bias, y, acc);
+        else if (j.sj == 2) ws_run_tiled<T, W, t.nv, t.nr, 2>(j, wp, src, bias, y, acc);
+        else ws_run_tiled<T, W, t.nv, t.nr, 0>(j, wp, src, bias, y, acc);
     };
     switch (ws_tile_for<T>(j.co).nv) {
     case 4: go.template operator()<4 * L>(); break;
