@@ -4,6 +4,8 @@
 
 #include "../stargan/helpers.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <unistd.h>
@@ -154,6 +156,22 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     for (std::size_t i = 0; i < r.samples.size(); ++i) CHECK(again.samples[i].rmse_real == r.samples[i].rmse_real);
     CHECK(again.folds[0].reused_model);
     CHECK(again.folds[1].seen_rmse_stargan == r.folds[1].seen_rmse_stargan);
+    // the same models scored with binary16 weights (kernels::weight_storage::f16): stargan's rows move by
+    // rounding only, the baselines not at all, and the report says which weights were scored
+    o.inference_weights = handemo::kernels::weight_storage::f16;
+    const auto half = run_eval<hand_tiny>(clips, info, o, dir);
+    REQUIRE(half.samples.size() == r.samples.size());
+    double moved = 0;
+    for (std::size_t i = 0; i < r.samples.size(); ++i) {
+        const double d = std::abs(half.samples[i].rmse_real - r.samples[i].rmse_real);
+        if (r.samples[i].method == "identity" || r.samples[i].method == "mean-offset") CHECK(d == 0);
+        if (r.samples[i].method == "stargan") moved = std::max(moved, d);
+    }
+    CHECK(moved > 0);
+    CHECK(moved < 0.05);  // degrees, on clips whose transfers are a few degrees from the real ones
+    CHECK(half.options_text.find("inference weights f16\n") != std::string::npos);
+    CHECK(again.options_text.find("inference weights native\n") != std::string::npos);
+    o.inference_weights = handemo::kernels::weight_storage::native;
     // only the gate's options differ: the same G, its gate fitted again from the stored inner models
     o.train.gate_margin = -1;
     o.train.gate_prior = false;

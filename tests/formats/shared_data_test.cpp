@@ -1,5 +1,5 @@
 // BVH and CSV on the real files of ../shared/data (label shared-data: without the data this program exits
-// 77 and is reported as skipped, see tests/shared_data_main.cpp): every Bandai clip (64) and the Xia clip
+// 77 and is reported as skipped, see tests/test_main.cpp): every Bandai clip (64) and the Xia clip
 // read, values land in the right joint and component, read-write-read round trips (BVH within 1e-4, CSV
 // exact).
 #include <doctest/doctest.h>
@@ -16,6 +16,9 @@
 #include <unistd.h>
 
 #include "helpers.hpp"
+
+// run by `<program> --shared-data` only (tests/test_main.cpp)
+TEST_SUITE_BEGIN("shared-data");
 
 namespace fs = std::filesystem;
 using namespace handemo;
@@ -140,3 +143,5 @@ TEST_CASE("csv: round trip of real clips is exact (Bandai with underscores in na
     }
     fs::remove_all(dir);
 }
+
+TEST_SUITE_END();

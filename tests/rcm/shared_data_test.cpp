@@ -9,6 +9,9 @@
 #include <cmath>
 #include <filesystem>
 
+// run by `<program> --shared-data` only (tests/test_main.cpp)
+TEST_SUITE_BEGIN("shared-data");
+
 using namespace handemo;
 
 namespace {
@@ -62,3 +65,5 @@ TEST_CASE("shared data: fit on three Bandai contents and analyse a held-out clip
     CHECK(std::abs(a.valence) <= 1);
     CHECK(std::abs(a.arousal) <= 1);
 }
+
+TEST_SUITE_END();

@@ -5,6 +5,9 @@
 
 #include <filesystem>
 
+// run by `<program> --shared-data` only (tests/test_main.cpp)
+TEST_SUITE_BEGIN("shared-data");
+
 using namespace handemo;
 
 namespace {
@@ -51,3 +54,5 @@ TEST_CASE("rcm stylise on Bandai: lower, slower and more closed reaches its targ
         for (std::size_t j = 1; j < c.skel.size(); ++j)
             if (static_cast<int>(j) != r.translation_joint) CHECK(L1[f][j] == doctest::Approx(L0[0][j]).epsilon(1e-6));
 }
+
+TEST_SUITE_END();

@@ -1,5 +1,5 @@
-// Filmstrips of real Bandai BVH clips (../shared/data, label shared-data: without the data this program
-// exits 77 and is reported as skipped, see tests/shared_data_main.cpp).
+// Filmstrips of real Bandai BVH clips (../shared/data, label shared-data: without the data
+// `--shared-data` exits 77 and is reported as skipped, see tests/test_main.cpp).
 #include "framing.hpp"
 
 #include <handemo/motion/bvh.hpp>
@@ -9,6 +9,9 @@
 
 #include <filesystem>
 #include <vector>
+
+// run by `<program> --shared-data` only (tests/test_main.cpp)
+TEST_SUITE_BEGIN("shared-data");
 
 using namespace handemo;
 using handemo::test::check_framing;
@@ -28,3 +31,5 @@ TEST_CASE("filmstrip: real Bandai clips")
     opt.cell_height = 160;
     check_framing(clips, opt);
 }
+
+TEST_SUITE_END();

@@ -29,6 +29,16 @@ file(READ ${WORK_DIR}/sad_detail.bvh detailed)
 if(plain STREQUAL detailed)
   message(FATAL_ERROR "transfer --detail wrote the same motion as without it")
 endif()
+# binary16 weights (--inference-weights f16): a motion that differs from the float one by rounding only
+run_ok(transfer_f16 transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion sad --out ${WORK_DIR}/sad_f16.bvh
+       --inference-weights f16)
+file(READ ${WORK_DIR}/sad_f16.bvh half)
+if(NOT EXISTS ${WORK_DIR}/sad_f16.bvh OR half STREQUAL "")
+  message(FATAL_ERROR "transfer --inference-weights f16 wrote no motion")
+endif()
+run_fail(bad_weights transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion sad --out ${WORK_DIR}/x.bvh
+         --inference-weights f8)
+expect_error_matches("--inference-weights")
 run_fail(detail_image transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion sad --out ${WORK_DIR}/x.bmp --detail)
 expect_error_matches("--detail adds full-rate motion")
 run_ok(transfer_bmp transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion angry --out ${WORK_DIR}/angry.bmp)

@@ -1,5 +1,5 @@
-// StarGAN cases that read ../shared/data (label shared-data: without the data this program exits 77 and is
-// reported as skipped, see tests/shared_data_main.cpp): transfer refuses a body clip (Xia) for a hand model,
+// StarGAN cases that read ../shared/data (label shared-data: without the data `--shared-data` exits 77 and is
+// reported as skipped, see tests/test_main.cpp): transfer refuses a body clip (Xia) for a hand model,
 // a body's root translation (Bandai walk) is stretched in time (both moved unchanged from train_test.cpp);
 // load_folder on Bandai and on mixed skeletons, tempo_fit on Bandai (moved from dataset_test.cpp).
 #include <doctest/doctest.h>
@@ -13,6 +13,9 @@
 #include <string>
 #include <vector>
 #include <filesystem>
+
+// run by `<program> --shared-data` only (tests/test_main.cpp)
+TEST_SUITE_BEGIN("shared-data");
 
 namespace fs = std::filesystem;
 using namespace handemo;
@@ -126,3 +129,5 @@ TEST_CASE("tempo_fit on Bandai: its choice predicts left-out contents' durations
     MESSAGE("Bandai tempo, nested LOO-content mean |log error|: tempo_fit " << chosen << ", keep " << keep);
     CHECK(chosen <= keep);
 }
+
+TEST_SUITE_END();
