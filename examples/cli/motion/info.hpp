@@ -6,7 +6,8 @@
 
 #include "../registry.hpp"
 
-#include <handemo.hpp>
+#include <handemo/core/io.hpp>
+#include <handemo/motion.hpp>
 #include <handemo/image.hpp>
 
 #include <nlohmann/json.hpp>
