@@ -101,8 +101,7 @@ for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedd
         if g:
             print(f"| {cfg} | {label} | {fmt_t(seconds(g))} | | | | {frac_of_peak(g)} |")
     # the G inference of the target: frozen_generator (weights packed once), what transfer and the CLI run
-    inf_b = next((b for b in star if any(k in b["name"].lower() for k in keys) and b["name"].lower().startswith("stargan_infer/")
-                  and b.get("run_type", "iteration") == "iteration"), None)
+    inf_b = star_bench(keys, "stargan_infer/")  # not stargan_infer_f16/ nor stargan_infer_unpacked/
     inf = seconds(inf_b) if inf_b else None
     print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}** |")
     h_b = star_bench(keys, "infer_f16")

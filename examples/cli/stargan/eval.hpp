@@ -23,7 +23,6 @@ struct eval_cli {
     handemo::cli::train_overrides ov;
     std::uint64_t synth_seed = 0;
     bool has_synth_seed = false;
-    std::string weights = "native";
     handemo::eval::eval_options opt{.train = handemo::eval::default_train_options()};
     std::string command;
 };
@@ -34,7 +33,6 @@ void run_eval_cli(eval_cli& o)
     finish_train_options(o.opt.train, o.ov);
     o.opt.command = o.command;
     if (o.has_synth_seed) o.opt.synth_seed = o.synth_seed;
-    o.opt.inference_weights = o.weights == "f16" ? kernels::weight_storage::f16 : kernels::weight_storage::native;
     const auto r = eval::run_eval_named(o.data, o.config, o.opt, o.report);
     std::cout << "eval: " << r.folds.size() << " folds, " << r.samples.size() << " scored clips in " << r.seconds / 60.0
               << " min; wrote " << o.report << "/report.md, results.csv, summary.csv, summary.svg\n";
@@ -74,11 +72,10 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--synth-fps", o->opt.synth_fps, "Frame rate the synthetic set was made at (`handemo synth --fps`)")
         ->capture_default_str()
         ->needs(seed_opt);
-    sub->add_option("--inference-weights", o->weights,
-                    "native | f16: score the transfers of G's convolution weights as trained, or rounded to IEEE binary16 "
-                    "(with --reuse-models: the same trained models, the accuracy cost of binary16 weights)")
-        ->check(CLI::IsMember({"native", "f16"}))
-        ->capture_default_str();
+    handemo::cli::add_inference_weights_option(sub, o->opt.inference_weights,
+                                               "score the transfers of G's convolution weights as trained, or rounded to IEEE "
+                                               "binary16 (with --reuse-models: the same trained models, the accuracy cost of "
+                                               "binary16 weights)");
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
     // methods from other translation units (cmd_rcm.cpp: --rcm, the circumplex method of Aristidou et al. 2017)
     for (const auto& e : handemo::cli::eval_extensions()) e.add_options(sub);

@@ -24,6 +24,18 @@ struct train_overrides {
     std::optional<std::string> range;
 };
 
+/// @brief Adds `--inference-weights native|f16` (kernels::weight_storage) to `sub`, read into `w` (which must
+/// outlive the parse); `what` is the rest of the help text (what the command does with the weights).
+inline void add_inference_weights_option(CLI::App* sub, kernels::weight_storage& w, const std::string& what)
+{
+    sub->add_option_function<std::string>(
+           "--inference-weights",
+           [&w](const std::string& name) { w = name == "f16" ? kernels::weight_storage::f16 : kernels::weight_storage::native; },
+           "native | f16: " + what)
+        ->check(CLI::IsMember({"native", "f16"}))
+        ->default_str(kernels::weight_storage_name(w));
+}
+
 /// @brief Adds the preset and every hyper-parameter to `sub`; `t` receives the run options (threads).
 inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_overrides& o)
 {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "../registry.hpp"
+#include "options.hpp"
 
 #include <handemo/image.hpp>
 #include <handemo/image/keyframe_image.hpp>
@@ -20,7 +21,7 @@ struct transfer_cli {
     std::string model, in, emotion, out, from, like;
     std::size_t frames = 0;
     bool detail = false;
-    std::string weights = "native";
+    kernels::weight_storage weights = kernels::weight_storage::native;
 };
 
 inline bool has_ext(const std::string& p, const char* a, const char* b = nullptr)
@@ -34,7 +35,7 @@ inline void run_transfer(const transfer_cli& o)
     using namespace handemo;
     using namespace handemo::stargan;
     namespace fs = std::filesystem;
-    const auto model = load_model(o.model, o.weights == "f16" ? kernels::weight_storage::f16 : kernels::weight_storage::native);
+    const auto model = load_model(o.model, o.weights);
     const auto& info = model->info();
     const bool in_image = has_ext(o.in, ".bmp", ".png"), out_image = has_ext(o.out, ".bmp", ".png");
     if (!in_image && !has_ext(o.in, ".bvh"))
@@ -90,10 +91,8 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
                   "Add the detail layer: the input's own full-rate detail (what 9 keyframes miss), at the target emotion's "
                   "amplitude and frequency learned from the training clips; the keyframes stay as they are");
     sub->add_option("--frames", o->frames, "Output frame count for an image input (default: the reference's times the tempo)");
-    sub->add_option("--inference-weights", o->weights,
-                    "native | f16: G's convolution weights as trained, or rounded to IEEE binary16 (half the bytes per "
-                    "inference; README, Performance)")
-        ->check(CLI::IsMember({"native", "f16"}))
-        ->capture_default_str();
+    handemo::cli::add_inference_weights_option(sub, o->weights,
+                                               "G's convolution weights as trained, or rounded to IEEE binary16 (half the "
+                                               "bytes per inference; README, Performance)");
     sub->callback([o] { handemo::cli::transfer_cmd::run_transfer(*o); });
 }};

@@ -127,11 +127,11 @@ private:
         if (storage == weight_storage::f16) {
             rounded.resize(g.w_size());
             for (std::size_t i = 0; i < rounded.size(); ++i) {
-                const float v = static_cast<float>(w[i]);
-                if (!std::isfinite(w[i]) || !std::isfinite(half_to_float(float_to_half(v))))
+                const float r = half_to_float(float_to_half(static_cast<float>(w[i])));
+                if (!std::isfinite(w[i]) || !std::isfinite(r))
                     throw value_error("packed_conv: weight " + std::to_string(i) + " is " + std::to_string(double(w[i])) +
                                       ", which binary16 storage (weight_storage::f16) cannot hold (largest 65504)");
-                rounded[i] = static_cast<T>(half_to_float(float_to_half(v)));
+                rounded[i] = static_cast<T>(r);
             }
             w = rounded.data();
         }

@@ -473,7 +473,7 @@ public:
     /// the kernels widen binary16 natively), the norm parameters and activations staying in T.
     /// @throws value_error with weight_storage::f16 when a weight does not fit binary16 (naming it).
     explicit frozen_generator(const generator_type& g, kernels::weight_storage storage = kernels::weight_storage::native)
-        : residual_(g.residual_), storage_(storage)
+        : residual_(g.residual_)
     {
         const auto geo = generator_type::geometries();
         std::size_t k = 0;
@@ -528,8 +528,8 @@ public:
 
     /// @brief The packed convolutions in network order (conv7, down1, down2, 2R residual convs, up1, up2, conv7).
     const std::vector<kernels::packed_conv<T>>& convolutions() const noexcept { return convs_; }
-    /// @brief The weight storage asked for at construction.
-    kernels::weight_storage storage() const noexcept { return storage_; }
+    /// @brief The weight storage asked for at construction (every convolution's).
+    kernels::weight_storage storage() const noexcept { return convs_.front().storage(); }
     /// @brief Bytes of the convolution weights one inference streams (kernels::packed_conv::weight_bytes).
     std::size_t weight_bytes() const noexcept
     {
@@ -540,7 +540,6 @@ public:
 
 private:
     bool residual_;
-    kernels::weight_storage storage_;
     std::vector<kernels::packed_conv<T>> convs_;
     std::vector<std::pair<std::vector<T>, std::vector<T>>> norms_;
 };
