@@ -59,6 +59,60 @@ TEST_CASE("micro::generator equals stargan::generator::infer within 1e-5")
     CHECK(max_diff_to_host<stargan::hand_tiny, false>(13) <= 1e-5f);
 }
 
+namespace {
+
+/// Largest |micro - reference| of micro::detail::conv_forward<G> and conv_transpose<G> (when `transposed`)
+/// on seeded data, relative to the largest output.
+template <kernels::conv_geometry G, bool transposed>
+float micro_conv_error()
+{
+    rng r(uint64_t(G.in_channels * 131 + G.kernel_h * 7 + G.stride));
+    std::vector<float> x(transposed ? G.y_size() : G.x_size()), w(G.w_size());
+    for (auto& v : x) v = float(r.uniform(-1, 1));
+    for (auto& v : w) v = float(r.uniform(-1, 1));
+    const std::size_t ny = transposed ? G.x_size() : G.y_size();
+    std::vector<float> ref(ny), got(ny, 1e9f),
+        pad(std::max(micro::detail::conv_pad_elements(G), micro::detail::convt_pad_elements(G)), 7.f);
+    if constexpr (transposed) {
+        kernels::reference::conv_transpose2d_forward(G, x.data(), w.data(), ref.data(), static_cast<float*>(nullptr));
+        micro::detail::conv_transpose<G>(x.data(), w.data(), got.data(), pad.data());
+    } else {
+        kernels::reference::conv2d_forward(G, x.data(), w.data(), static_cast<const float*>(nullptr), ref.data(),
+                                           static_cast<float*>(nullptr));
+        micro::detail::conv_forward<G>(x.data(), w.data(), got.data(), pad.data());
+    }
+    float worst = 0.f, scale = 0.f;
+    for (std::size_t i = 0; i < ny; ++i) {
+        worst = std::max(worst, std::abs(ref[i] - got[i]));
+        scale = std::max(scale, std::abs(ref[i]));
+    }
+    CHECK(scale > 0.1f);
+    return worst / scale;
+}
+
+}  // namespace
+
+TEST_CASE("micro convolutions (output-stationary, padded copy) equal the reference kernels")
+{
+    // the generator's seven layers at hand-micro's size, and geometries it does not use: other widths
+    // (row tiles of 1, 5 and 7 pixels), stride 2 with kernel 3, pad 0, non-square kernels
+    using kernels::conv_geometry;
+    CHECK(micro_conv_error<conv_geometry{1, 8, 12, 24, 8, 7, 7, 1, 3}, false>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 8, 12, 24, 16, 4, 4, 2, 1}, false>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 32, 3, 6, 32, 3, 3, 1, 1}, false>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 8, 12, 24, 3, 7, 7, 1, 3}, false>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 3, 5, 11, 4, 3, 3, 1, 1}, false>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 2, 9, 15, 3, 3, 3, 2, 1}, false>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 3, 6, 9, 2, 2, 3, 1, 0}, false>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 2, 7, 14, 5, 5, 1, 1, 2}, false>() <= 1e-6f);
+    // transposed: up1 and up2 of hand-micro, and stride 2 / kernel 3, stride 3, pad 0
+    CHECK(micro_conv_error<conv_geometry{1, 16, 6, 12, 32, 4, 4, 2, 1}, true>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 8, 12, 24, 16, 4, 4, 2, 1}, true>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 3, 10, 8, 4, 3, 3, 2, 1}, true>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 2, 9, 12, 3, 3, 3, 3, 0}, true>() <= 1e-6f);
+    CHECK(micro_conv_error<conv_geometry{1, 4, 8, 16, 2, 4, 2, 2, 0}, true>() <= 1e-6f);
+}
+
 TEST_CASE("hand-micro fits a Cortex-M7: <= 512 KB of float weights, <= 128 KB of activations")
 {
     using layout = micro::generator_layout<9, 23, 5, 8, 3>;
