@@ -109,20 +109,28 @@ template <class T, int NR>
     constexpr int L = simd_lanes<T>, NV = micro_nv, MR = micro_mr<T>;
     B acc[NR][NV];
     if (accumulate) {
+        #pragma GCC unroll 32
         for (int j = 0; j < NR; ++j)
+            #pragma GCC unroll 32
             for (int q = 0; q < NV; ++q) acc[j][q] = B::load_unaligned(tile + j * MR + q * L);
     } else {
+        #pragma GCC unroll 32
         for (int j = 0; j < NR; ++j)
+            #pragma GCC unroll 32
             for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
     }
     const T* sp[NR];
+    #pragma GCC unroll 32
     for (int j = 0; j < NR; ++j) sp[j] = s + j * sj;
     if (sk == 1) {
         for (int k = 0; k < kc; ++k) {
             B a[NV];
+            #pragma GCC unroll 32
             for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_unaligned(v + q * L));
+            #pragma GCC unroll 32
             for (int j = 0; j < NR; ++j) {
                 const B b(sp[j][k]);
+                #pragma GCC unroll 32
                 for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
             }
             v += vk;
@@ -131,16 +139,21 @@ template <class T, int NR>
         std::ptrdiff_t off = 0;
         for (int k = 0; k < kc; ++k) {
             B a[NV];
+            #pragma GCC unroll 32
             for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_unaligned(v + q * L));
+            #pragma GCC unroll 32
             for (int j = 0; j < NR; ++j) {
                 const B b(sp[j][off]);
+                #pragma GCC unroll 32
                 for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
             }
             v += vk;
             off += sk;
         }
     }
+    #pragma GCC unroll 32
     for (int j = 0; j < NR; ++j)
+        #pragma GCC unroll 32
         for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
 }
 
@@ -163,20 +176,28 @@ template <class T, int NR>
     using B = simd_t<T>;
     constexpr int L = simd_lanes<T>, NV = micro_nv, MR = micro_mr<T>;
     B acc[NR][NV];
+    #pragma GCC unroll 32
     for (int j = 0; j < NR; ++j)
+        #pragma GCC unroll 32
         for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
     const T* sp[NR];
+    #pragma GCC unroll 32
     for (int j = 0; j < NR; ++j) sp[j] = s + j * sj;
     for (int k = 0; k < kc; ++k) {
         const T* vk = v + koff[k];
         B a[NV];
+        #pragma GCC unroll 32
         for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_unaligned(vk + q * L));
+        #pragma GCC unroll 32
         for (int j = 0; j < NR; ++j) {
             const B b(sp[j][k]);
+            #pragma GCC unroll 32
             for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
         }
     }
+    #pragma GCC unroll 32
     for (int j = 0; j < NR; ++j)
+        #pragma GCC unroll 32
         for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
 }
 
@@ -328,17 +349,24 @@ template <class T, int NO, int NP>
     using B = simd_t<T>;
     constexpr int L = simd_lanes<T>;
     B acc[NO][NP];
+    #pragma GCC unroll 32
     for (int o = 0; o < NO; ++o)
+        #pragma GCC unroll 32
         for (int p = 0; p < NP; ++p) acc[o][p] = B(T(0));
     for (int s = 0; s < steps; ++s) {
         B cv[NP];
+        #pragma GCC unroll 32
         for (int p = 0; p < NP; ++p) cv[p] = keep_in_register(B::load_unaligned(c + p * ldc + s * L));
+        #pragma GCC unroll 32
         for (int o = 0; o < NO; ++o) {
             const B wv = keep_in_register(B::load_unaligned(w + o * ldw + s * L));
+            #pragma GCC unroll 32
             for (int p = 0; p < NP; ++p) acc[o][p] = xsimd::fma(wv, cv[p], acc[o][p]);
         }
     }
+    #pragma GCC unroll 32
     for (int o = 0; o < NO; ++o)
+        #pragma GCC unroll 32
         for (int p = 0; p < NP; ++p) out[o * NP + p] = xsimd::hadd(acc[o][p]);
 }
 
