@@ -5,7 +5,13 @@
 # avx512bw, avx2, ...), the FP32 FMA peak of that instruction set (../shared/bench/peak_fma.cpp's AVX512 or
 # AVX2 line; bench/peak_fma_avx2 on a CPU without AVX-512; and the same loop inside bench_conv, which the
 # table uses), reference_stargan.py with 1 and 2 threads, the handemo benchmarks, and a table of ratios.
+# The machine this runs on may be a shared VM whose speed moves by 15-30% within minutes, so the PyTorch
+# reference, the in-process peaks and the handemo inference and training benchmarks run in ROUNDS rounds,
+# one after the other within each round; the table gives each number's median over the rounds with its
+# range, and the 2-thread / 1-thread ratio as the median of the rounds' ratios (each round's pair is
+# measured back to back).
 # Usage: bench/compare.sh [build-dir]   (default: <repo>/build-bench)
+#        HANDEMO_COMPARE_ROUNDS=N (default 3; 1 gives the single-pass numbers of earlier versions)
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
@@ -55,27 +61,41 @@ if [ -z "$peak" ] && [ "$peak_line" = "AVX2 FMA" ]; then
 fi
 [ -n "$peak" ] && echo "standalone $isa peak: $peak GFLOP/s"
 
-echo "== PyTorch reference (CPU)"
+rounds=${HANDEMO_COMPARE_ROUNDS:-3}
+case "$rounds" in ''|*[!0-9]*|0) echo "compare.sh: HANDEMO_COMPARE_ROUNDS '$rounds' is not a positive integer"; exit 1 ;; esac
 py=/usr/bin/python3
 ref="$shared_bench/reference_stargan.py"
-if [ -x "$py" ] && [ -f "$ref" ]; then
-  echo "-- 1 thread";  "$py" "$ref" 1 | tee "$out/torch1.txt"
-  echo "-- 2 threads"; "$py" "$ref" 2 | tee "$out/torch2.txt"
-else
-  echo "(no $py or $ref)"; : >"$out/torch1.txt"; : >"$out/torch2.txt"
-fi
-
-echo "== handemo"
-"$build/bench/bench_conv" --benchmark_filter='peak_fma|generator_convs' --benchmark_min_time=0.5 \
-  --benchmark_format=console --benchmark_out="$out/conv.json" --benchmark_out_format=json
+have_torch=0
+if [ -x "$py" ] && [ -f "$ref" ]; then have_torch=1; else echo "(no $py or $ref: PyTorch columns n/a)"; fi
+start=$(date +%s)
+for r in $(seq 1 "$rounds"); do
+  if [ "$r" -gt 1 ]; then
+    el=$(( $(date +%s) - start ))
+    echo "== round $r of $rounds (elapsed ${el} s, about $(( el * (rounds - r + 1) / (r - 1) )) s to go)"
+  else
+    echo "== round 1 of $rounds"
+  fi
+  echo "-- PyTorch reference (CPU)"
+  if [ "$have_torch" = 1 ]; then
+    echo "-- 1 thread";  "$py" "$ref" 1 | tee "$out/torch1_$r.txt"
+    echo "-- 2 threads"; "$py" "$ref" 2 | tee "$out/torch2_$r.txt"
+  else
+    : >"$out/torch1_$r.txt"; : >"$out/torch2_$r.txt"
+  fi
+  echo "-- handemo"
+  "$build/bench/bench_conv" --benchmark_filter='peak_fma|generator_convs' --benchmark_min_time=0.5 \
+    --benchmark_format=console --benchmark_out="$out/conv_$r.json" --benchmark_out_format=json
+  if [ -x "$build/bench/bench_stargan" ]; then
+    "$build/bench/bench_stargan" --benchmark_out="$out/stargan_$r.json" --benchmark_out_format=json
+  else
+    echo "(bench_stargan not built yet: n/a)"
+  fi
+done
 "$build/bench/bench_conv" --benchmark_filter='^(cd|packed/)' --benchmark_min_time=0.1 \
   --benchmark_out="$out/conv_layers.json" --benchmark_out_format=json >/dev/null
-if [ -x "$build/bench/bench_stargan" ]; then
-  "$build/bench/bench_stargan" --benchmark_out="$out/stargan.json" --benchmark_out_format=json
-else
-  echo "(bench_stargan not built yet: n/a)"
-fi
+echo "== $rounds rounds in $(( $(date +%s) - start )) s"
 
 echo "== comparison"
-"$py" "$here/compare_table.py" --isa "${isa:-unknown}" --peak "${peak:-0}" --torch1 "$out/torch1.txt" --torch2 "$out/torch2.txt" \
-  --conv "$out/conv.json" --layers "$out/conv_layers.json" --stargan "$out/stargan.json"
+list() { local f=$1 acc="" r; for r in $(seq 1 "$rounds"); do acc="$acc${acc:+,}$out/${f}_$r.$2"; done; echo "$acc"; }
+"$py" "$here/compare_table.py" --isa "${isa:-unknown}" --peak "${peak:-0}" --torch1 "$(list torch1 txt)" \
+  --torch2 "$(list torch2 txt)" --conv "$(list conv json)" --layers "$out/conv_layers.json" --stargan "$(list stargan json)"

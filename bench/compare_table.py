@@ -2,8 +2,12 @@
 """Prints the handemo vs PyTorch vs FMA-peak table of compare.sh from the outputs it collected.
 bench_stargan results are matched by name: a benchmark whose name contains `paper` or `64` (resp.
 `embedded` or `32`) and `infer` is the batch-1 generator inference, one containing `train` the training
-step (D+G, batch 16). Anything missing prints n/a."""
-import argparse, json, os, re
+step (D+G, batch 16). Anything missing prints n/a.
+--torch1, --torch2, --conv and --stargan take a comma-separated list of files, one per round (compare.sh's
+HANDEMO_COMPARE_ROUNDS): every time is the median over the rounds, printed with its range; the FMA peaks are
+the median of the rounds' best repetitions; the 2-thread / 1-thread ratio of the training step is the median
+of the rounds' ratios (each round measures the pair back to back)."""
+import argparse, json, os, re, statistics
 
 def load_json(path):
     try:
@@ -12,20 +16,49 @@ def load_json(path):
     except (OSError, ValueError):
         return []
 
+def files(arg):
+    return [f for f in arg.split(",") if f]
+
+def aggregate(rounds):
+    """One entry per benchmark name (iterations only, in the first round's order): the median over the
+    rounds of real_time, cpu_time and the rate counters, with each round's wall seconds in `_times`."""
+    by_name, order = {}, []
+    for r, benches in enumerate(rounds):
+        for b in benches:
+            if b.get("run_type", "iteration") != "iteration":
+                continue
+            if b["name"] not in by_name:
+                by_name[b["name"]] = {}
+                order.append(b["name"])
+            by_name[b["name"]].setdefault(r, b)  # the first repetition of a round
+    out = []
+    for name in order:
+        per = by_name[name]
+        m = dict(next(iter(per.values())))
+        for key in ("real_time", "cpu_time", "GFLOP/s", "GFLOPS"):
+            if key in m:
+                m[key] = statistics.median(b[key] for b in per.values())
+        m["_times"] = {r: seconds(b) for r, b in per.items()}
+        out.append(m)
+    return out
+
 def seconds(b):
     unit = {"ns": 1e-9, "us": 1e-6, "ms": 1e-3, "s": 1.0}[b.get("time_unit", "ns")]
     return b["real_time"] * unit  # wall time: what a user waits for
 
-def torch_results(path):
-    r = {}
-    try:
-        for line in open(path):
-            m = re.match(r"(\w+)\(.*?\): .*inference b1 ([0-9.]+) us, train step .* ([0-9.]+) ms", line)
-            if m:
-                r[m.group(1)] = (float(m.group(2)) * 1e-6, float(m.group(3)) * 1e-3)
-    except OSError:
-        pass
-    return r
+def torch_results(paths):
+    """{config: (inference s, train step s, [round step s...], [round inference s...])}: medians over the rounds."""
+    per = {}
+    for path in files(paths):
+        try:
+            for line in open(path):
+                m = re.match(r"(\w+)\(.*?\): .*inference b1 ([0-9.]+) us, train step .* ([0-9.]+) ms", line)
+                if m:
+                    per.setdefault(m.group(1), []).append((float(m.group(2)) * 1e-6, float(m.group(3)) * 1e-3))
+        except OSError:
+            pass
+    return {k: (statistics.median(v[0] for v in vs), statistics.median(v[1] for v in vs), [v[1] for v in vs],
+                [v[0] for v in vs]) for k, vs in per.items()}
 
 def gflops(b):
     """A benchmark's GFLOPS (bench_conv) or GFLOP/s (bench_stargan) counter in GFLOP/s (JSON may hold FLOP/s)."""
@@ -34,6 +67,20 @@ def gflops(b):
 
 def fmt_t(s):
     return "n/a" if s is None else (f"{s*1e6:.0f} us" if s < 1e-2 else f"{s*1e3:.1f} ms")
+
+def fmt_range(times):
+    """ (lo-hi) of a list of seconds when there are several rounds, else "". """
+    times = [t for t in times if t is not None]
+    if len(times) < 2:
+        return ""
+    lo, hi = fmt_t(min(times)), fmt_t(max(times))
+    if lo.split()[1] == hi.split()[1]:  # same unit: (1866-2182 us)
+        return f" ({lo.split()[0]}-{hi})"
+    return f" ({lo}-{hi})"
+
+def fmt_b(b):
+    """A benchmark's median wall time with its range over the rounds."""
+    return "n/a" if b is None else fmt_t(seconds(b)) + fmt_range(b.get("_times", {}).values())
 
 def best(a, b):
     xs = [v for v in (a, b) if v is not None]
@@ -48,21 +95,34 @@ for a in ("--isa", "--peak", "--torch1", "--torch2", "--conv", "--layers", "--st
 o = ap.parse_args()
 peak = float(o.peak or 0)
 t1, t2 = torch_results(o.torch1), torch_results(o.torch2)
-conv_all = load_json(o.conv)
+conv_rounds = [load_json(f) for f in files(o.conv)]
+rounds = max(1, len(conv_rounds))
+conv_all = aggregate(conv_rounds)
 conv = {b["name"]: b for b in conv_all}
 try:
-    ctx = json.load(open(o.conv)).get("context", {})
-except (OSError, ValueError):
+    ctx = json.load(open(files(o.conv)[0])).get("context", {})
+except (OSError, ValueError, IndexError):
     ctx = {}
 isa = ctx.get("simd_arch") or o.isa or "unknown"
 print(f"Kernels compiled for: {isa} ({ctx.get('simd_float_lanes', '?')} float lanes); peak below is {isa}'s")
+if rounds > 1:
+    print(f"Every number is the median of {rounds} rounds, with its range in parentheses")
+
+def round_peak(prefix):
+    """Median over the rounds of each round's best repetition of a peak benchmark (0 when absent)."""
+    best_r = [max([gflops(b) for b in bs if b["name"].startswith(prefix) and b.get("run_type") == "iteration"], default=0)
+              for bs in conv_rounds]
+    best_r = [v for v in best_r if v]
+    return (statistics.median(best_r), best_r) if best_r else (0, [])
+
 # the FMA peak of the kernels' ISA measured inside bench_conv (same load as the kernels) wins over the
 # standalone one
-inproc = [gflops(b) for b in conv_all if b["name"].startswith("peak_fma/") and b.get("run_type") == "iteration"]
+inproc, inproc_r = round_peak("peak_fma/")
 if inproc:
-    print(f"FMA peak ({isa}): standalone {peak:.1f} GFLOP/s, inside bench_conv {max(inproc):.1f} GFLOP/s (used below)")
-    peak = max(inproc)
-star = load_json(o.stargan) if os.path.exists(o.stargan) else []
+    spread = f" (rounds: {', '.join(f'{v:.1f}' for v in inproc_r)})" if rounds > 1 else ""
+    print(f"FMA peak ({isa}): standalone {peak:.1f} GFLOP/s, inside bench_conv {inproc:.1f} GFLOP/s{spread} (used below)")
+    peak = inproc
+star = aggregate([load_json(f) for f in files(o.stargan) if os.path.exists(f)])
 
 def star_bench(cfg_keys, kind, extra="", exclude=None):
     for b in star:
@@ -73,15 +133,10 @@ def star_bench(cfg_keys, kind, extra="", exclude=None):
             return b
     return None
 
-def star_find(cfg_keys, kind, extra="", exclude=None):
-    b = star_bench(cfg_keys, kind, extra, exclude)
-    return seconds(b) if b else None
-
 print(f"FP32 FMA peak (1 core, {isa}): {peak:.1f} GFLOP/s" if peak else "FP32 FMA peak: n/a")
 # the peak two threads get together (peak_fma_threads): on SMT siblings about the 1-thread peak, so a compute-bound
 # 2-thread step cannot be below (1-thread peak / 2-thread peak) x the 1-thread step
-peak2 = max([gflops(b) for b in conv_all if b["name"].startswith("peak_fma_threads/") and b.get("run_type") == "iteration"],
-            default=0)
+peak2, _ = round_peak("peak_fma_threads/")
 bound = peak / peak2 if peak and peak2 else None
 if peak2:
     print(f"FMA peak of 2 threads together: {peak2:.1f} GFLOP/s = {peak2 / peak:.2f}x the 1-thread peak"
@@ -89,38 +144,55 @@ if peak2:
 print()
 print("| config | measure | handemo | PyTorch 1 thr | PyTorch 2 thr | best PyTorch / handemo | fraction of peak |")
 print("|---|---|---|---|---|---|---|")
+def peak_range(b):
+    """ (lo-hi) of a benchmark's fraction of the peak over the rounds (each round's time against the median peak)."""
+    ts = list(b.get("_times", {}).values()) if b else []
+    if not peak or len(ts) < 2 or not gflops(b):
+        return ""
+    flop = gflops(b) * seconds(b)  # GFLOP per iteration (the median's rate x the median's time)
+    return f" ({flop / max(ts) / peak:.0%}-{flop / min(ts) / peak:.0%})"
+
 def frac_of_peak(b):
     gfl = gflops(b)
     return f"{gfl/peak:.0%} ({gfl:.1f} GFLOP/s)" if peak and gfl else "n/a"
 
 for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedded", ("embedded", "32"), "embedded(32,3)/b1")):
-    tp1 = t1.get(cfg, (None, None)); tp2 = t2.get(cfg, (None, None))
+    tp1 = t1.get(cfg, (None, None, [], [])); tp2 = t2.get(cfg, (None, None, [], []))
     for label, gname in (("G conv stack, weights packed once (bench_conv)", "packed_generator_convs/" + suffix),
                          ("G conv stack, unpacked kernels (bench_conv)", "generator_convs/" + suffix)):
         g = conv.get(gname)
         if g:
-            print(f"| {cfg} | {label} | {fmt_t(seconds(g))} | | | | {frac_of_peak(g)} |")
+            print(f"| {cfg} | {label} | {fmt_b(g)} | | | | {frac_of_peak(g)} |")
     # the G inference of the target: frozen_generator (weights packed once), what transfer and the CLI run
     inf_b = star_bench(keys, "stargan_infer/")  # not stargan_infer_f16/ nor stargan_infer_unpacked/
     inf = seconds(inf_b) if inf_b else None
-    print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_t(inf)} | {fmt_t(tp1[0])} | {fmt_t(tp2[0])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}** |")
+    print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_b(inf_b)} | {fmt_t(tp1[0])}{fmt_range(tp1[3])} | {fmt_t(tp2[0])}{fmt_range(tp2[3])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}**{peak_range(inf_b)} |")
     h_b = star_bench(keys, "infer_f16")
     if h_b:
         h = seconds(h_b)
         mb = h_b.get("weight_MB")
-        print(f"| {cfg} | G inference, batch 1, 1 thread, binary16 weights (`weight_storage::f16`{f', {mb:.1f} MB' if mb else ''}) | {fmt_t(h)} | | | {ratio(best(tp1[0], tp2[0]), h)} | {frac_of_peak(h_b)} |")
+        print(f"| {cfg} | G inference, batch 1, 1 thread, binary16 weights (`weight_storage::f16`{f', {mb:.1f} MB' if mb else ''}) | {fmt_b(h_b)} | | | {ratio(best(tp1[0], tp2[0]), h)} | {frac_of_peak(h_b)}{peak_range(h_b)} |")
     un_b = star_bench(keys, "infer_unpacked")
     if un_b:
         un = seconds(un_b)
-        print(f"| {cfg} | G inference, batch 1, generator::infer (unpacked) | {fmt_t(un)} | | | {ratio(best(tp1[0], tp2[0]), un)} | {frac_of_peak(un_b)} |")
-    tr = star_find(keys, "train", "threads:2") or star_find(keys, "train")
-    tr1 = star_find(keys, "train", "threads:1")
-    print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_t(tr)} | {fmt_t(tp1[1])} | {fmt_t(tp2[1])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
+        print(f"| {cfg} | G inference, batch 1, generator::infer (unpacked) | {fmt_b(un_b)} | | | {ratio(best(tp1[0], tp2[0]), un)} | {frac_of_peak(un_b)} |")
+    tr_b = star_bench(keys, "train", "threads:2") or star_bench(keys, "train")
+    tr1_b = star_bench(keys, "train", "threads:1")
+    tr = seconds(tr_b) if tr_b else None
+    tr1 = seconds(tr1_b) if tr1_b else None
+    print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_b(tr_b)} | {fmt_t(tp1[1])}{fmt_range(tp1[2])} | {fmt_t(tp2[1])}{fmt_range(tp2[2])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
     if tr1:
-        eff = f"2-thread step = {tr/tr1:.2f}x the 1-thread step, parallel efficiency {tr1/(2*tr):.0%}" if tr else ""
-        if tr and bound:
-            eff += f"; machine bound {max(0.5, bound):.2f}x"
-        print(f"| {cfg} | train step D+G, batch 16, 1 thread | {fmt_t(tr1)} | {fmt_t(tp1[1])} | | {ratio(tp1[1], tr1)} | {eff} |")
+        eff = ""
+        if tr:
+            # each round's 2-thread and 1-thread steps ran back to back: the median of the rounds' ratios
+            t2r, t1r = tr_b.get("_times", {}), tr1_b.get("_times", {})
+            rr = sorted(t2r[k] / t1r[k] for k in t2r if k in t1r and t1r[k]) or [tr / tr1]
+            med = statistics.median(rr)
+            each = f" (rounds {', '.join(f'{x:.2f}' for x in rr)})" if len(rr) > 1 else ""
+            eff = f"2-thread step = {med:.2f}x the 1-thread step{each}, parallel efficiency {1 / (2 * med):.0%}"
+            if bound:
+                eff += f"; machine bound {max(0.5, bound):.2f}x"
+        print(f"| {cfg} | train step D+G, batch 16, 1 thread | {fmt_b(tr1_b)} | {fmt_t(tp1[1])} | | {ratio(tp1[1], tr1)} | {eff} |")
 print()
 layers = load_json(o.layers)
 if layers:
