@@ -1,7 +1,8 @@
 // Whole-StarGAN benchmarks (hand paper Sec. 3.3) side by side with reference_stargan.py: batch-1 generator
 // inference, single thread, tape-free (frozen_generator and generator::infer); one training step of the
 // library's trainer (D step with WGAN-GP + G step, batch 16, Adam on both), data-parallel on 2 threads and on 1
-// (threads:N). GFLOP/s counters are
+// (threads:N), and two independent half-batch steps at once on two threads (stargan_train_pair: the bound of the
+// 2-thread step with the memory system's contention). GFLOP/s counters are
 // multiply-adds x 2 / time (for training, an estimate: 7 G-forward + 14 D-forward equivalents per step).
 #include <handemo/nn/adam.hpp>
 #include <handemo/nn/init.hpp>
@@ -12,6 +13,7 @@
 
 #include "../tests/micro/helpers.hpp"  // runtime_model, seed_generator, flat_parameters
 
+#include <memory>
 #include <random>
 #include <thread>
 
@@ -72,13 +74,14 @@ void bm_infer_micro(benchmark::State& st)
                                                 benchmark::Counter::kIs1000);
 }
 
-/// One trainer::train_step() (the library's own, data-parallel over `threads`): a D step with WGAN-GP and a
-/// G step (n_critic 1), batch 16, the paper's losses (lambda_cls 1, lambda_rec 10, lambda_gp 10) and Adam
-/// (0.5, 0.999) on both, as reference_stargan.py's step; on 64 random images with random labels.
-template <class Base>
-void bm_train(benchmark::State& st)
+/// A trainer of batch N (the library's own, data-parallel over `threads`) on 64 random images with random
+/// labels, with the paper's options (lambda_cls 1, lambda_rec 10, lambda_gp 10, Adam 0.5, 0.999, n_critic 1),
+/// as reference_stargan.py's step, after two warm-up steps (the first ones touch the tapes' arenas and the
+/// pool's threads for the first time: page faults that no later step repeats).
+template <class Base, std::size_t N>
+std::unique_ptr<trainer<Base, N>> warm_trainer(unsigned threads)
 {
-    using tr_t = trainer<Base, 16>;
+    using tr_t = trainer<Base, N>;
     constexpr std::size_t C = Base::domains, H = tr_t::H, W = tr_t::W, count = 64;
     prepared_data data;
     data.H = H, data.W = W, data.K = Base::keyframes, data.J = Base::joints, data.domains = C;
@@ -97,22 +100,47 @@ void bm_train(benchmark::State& st)
     opt.n_critic = 1;
     opt.iters = 1 << 30;  // the learning rate stays constant
     opt.progress_out = nullptr;
-    // threads = the benchmark's argument (1 and 2: the parallel efficiency of issue 13), 0 = all cores
-    opt.threads = st.range(0) > 0 ? unsigned(st.range(0)) : std::max(1u, std::thread::hardware_concurrency());
+    opt.threads = threads;
     std::vector<std::string> names;
     for (std::size_t c = 0; c < C; ++c) names.push_back("e" + std::to_string(c));
-    tr_t tr(make_info<Base>("bench", names, "e0"), std::move(data), opt);
-    // two steps before timing, as reference_stargan.py does: the first ones touch the tapes' arenas and the
-    // pool's threads for the first time (page faults), which no later step repeats
-    tr.train_step();
-    tr.train_step();
-    for (auto _ : st) tr.train_step();
-    benchmark::DoNotOptimize(tr.log());
-    const double macs = 7 * generator<float, with_batch<Base, 16>>::forward_macs() +
-                        14 * discriminator<float, with_batch<Base, 16>>::forward_macs();
-    st.counters["GFLOP/s"] = benchmark::Counter(2.0 * macs, benchmark::Counter::kIsIterationInvariantRate,
+    auto tr = std::make_unique<tr_t>(make_info<Base>("bench", names, "e0"), std::move(data), opt);
+    tr->train_step();
+    tr->train_step();
+    return tr;
+}
+
+/// Multiply-adds of one training step of batch N: 7 G-forward + 14 D-forward equivalents.
+template <class Base, std::size_t N>
+double train_macs()
+{
+    return 7 * generator<float, with_batch<Base, N>>::forward_macs() +
+           14 * discriminator<float, with_batch<Base, N>>::forward_macs();
+}
+
+/// One trainer::train_step() (D step with WGAN-GP and a G step, batch 16, Adam on both), data-parallel over
+/// the benchmark's argument of threads (1 and 2: the parallel efficiency of issue 13; 0 = all cores).
+template <class Base>
+void bm_train(benchmark::State& st)
+{
+    const unsigned threads = st.range(0) > 0 ? unsigned(st.range(0)) : std::max(1u, std::thread::hardware_concurrency());
+    auto tr = warm_trainer<Base, 16>(threads);
+    for (auto _ : st) tr->train_step();
+    benchmark::DoNotOptimize(tr->log());
+    st.counters["GFLOP/s"] = benchmark::Counter(2.0 * train_macs<Base, 16>(), benchmark::Counter::kIsIterationInvariantRate,
                                                 benchmark::Counter::kIs1000);
-    st.counters["threads"] = double(opt.threads);
+    st.counters["threads"] = double(threads);
+}
+
+/// The machine's bound for the 2-thread step, memory system included: two independent trainers of batch 8,
+/// one thread each, stepping at the same time on the benchmark's two threads (no gradient reduction, no
+/// shared Adam, no synchronisation but the benchmark's own per-iteration start). A data-parallel 2-thread
+/// step of batch 16 does the same work plus its reduction, so it cannot be faster than this on the machine.
+template <class Base>
+void bm_train_pair(benchmark::State& st)
+{
+    auto tr = warm_trainer<Base, 8>(1);
+    for (auto _ : st) tr->train_step();
+    benchmark::DoNotOptimize(tr->log());
 }
 
 }  // namespace
@@ -128,6 +156,10 @@ BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmar
 BENCHMARK(bm_train<hand_paper>)->Name("stargan_train/paper(64,6)/b16")->ArgName("threads")->Arg(2)->Arg(1)
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 BENCHMARK(bm_train<hand_embedded>)->Name("stargan_train/embedded(32,3)/b16")->ArgName("threads")->Arg(2)->Arg(1)
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+BENCHMARK(bm_train_pair<hand_paper>)->Name("stargan_train_pair/paper(64,6)/2xb8")->Threads(2)
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK(bm_train_pair<hand_embedded>)->Name("stargan_train_pair/embedded(32,3)/2xb8")->Threads(2)
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
 
 BENCHMARK_MAIN();
