@@ -11,7 +11,6 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
-#include <initializer_list>
 
 #include <handemo/kernels/reference.hpp>
 
@@ -32,12 +31,51 @@ concept generator_model = requires {
 };
 
 namespace detail {
-constexpr std::size_t max_of(std::initializer_list<std::size_t> v) noexcept
+
+/// Convolution i of G on an h x w image with in_ch input channels and conv_dim c: conv7, down1, down2, the
+/// residual conv3, up1 and up2 (as the convolution they are the adjoint of), conv7.
+constexpr kernels::conv_geometry generator_geometry(int h, int w, int in_ch, int c, int i) noexcept
+{
+    switch (i) {
+    case 0: return {1, in_ch, h, w, c, 7, 7, 1, 3};
+    case 1: return {1, c, h, w, 2 * c, 4, 4, 2, 1};
+    case 2: return {1, 2 * c, h / 2, w / 2, 4 * c, 4, 4, 2, 1};
+    case 3: return {1, 4 * c, h / 4, w / 4, 4 * c, 3, 3, 1, 1};
+    case 4: return {1, 2 * c, h / 2, w / 2, 4 * c, 4, 4, 2, 1};
+    case 5: return {1, c, h, w, 2 * c, 4, 4, 2, 1};
+    default: return {1, c, h, w, 3, 7, 7, 1, 3};
+    }
+}
+/// Whether layer i of generator_geometry runs as a transposed convolution (up1, up2).
+constexpr bool transposed_layer(int i) noexcept { return i == 4 || i == 5; }
+
+/// Zero rows/columns a transposed convolution's input needs on each side so that every tap reads inside the
+/// padded copy: tap u of output h reads input i = (h + pad - u) / stride, -kernel/stride <= i < out + kernel/stride.
+constexpr int convt_margin(int kernel, int stride) noexcept { return (kernel + stride - 1) / stride + 1; }
+
+/// Elements of the zero-padded input copy conv_forward<G> needs.
+constexpr std::size_t conv_pad_elements(const kernels::conv_geometry& g) noexcept
+{
+    return std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad);
+}
+/// Elements of the zero-padded input copy conv_transpose<G> needs.
+constexpr std::size_t convt_pad_elements(const kernels::conv_geometry& g) noexcept
+{
+    const int mh = convt_margin(g.kernel_h, g.stride), mw = convt_margin(g.kernel_w, g.stride);
+    return std::size_t(g.out_channels) * (g.out_h() + 2 * mh) * (g.out_w() + 2 * mw);
+}
+/// The largest zero-padded input copy over G's seven layers.
+constexpr std::size_t generator_pad_elements(int h, int w, int in_ch, int c) noexcept
 {
     std::size_t m = 0;
-    for (std::size_t x : v) m = x > m ? x : m;
+    for (int i = 0; i < 7; ++i) {
+        const kernels::conv_geometry g = generator_geometry(h, w, in_ch, c, i);
+        const std::size_t n = transposed_layer(i) ? convt_pad_elements(g) : conv_pad_elements(g);
+        m = n > m ? n : m;
+    }
     return m;
 }
+
 }  // namespace detail
 
 /// @brief Sizes of G for a configuration (K keyframes, J joints, C domains, conv_dim cd, R residual blocks).
@@ -55,12 +93,8 @@ struct generator_layout {
     static constexpr std::size_t big_elements = (cd > in_ch ? cd : in_ch) * HW;
     static constexpr std::size_t small_elements = 4 * cd * HW / 16;
     /// Elements of the zero-padded copy of a convolution's input that conv_forward and conv_transpose make:
-    /// the largest over the seven layers (conv7 in and out: 3 on each side; down and residual: 1; up: the
-    /// transposed layer's margin of 3). generator checks it against every geometry at compile time.
-    static constexpr std::size_t pad_elements =
-        detail::max_of({in_ch * (H + 6) * (W + 6), cd * (H + 2) * (W + 2), 2 * cd * (H / 2 + 2) * (W / 2 + 2),
-                        4 * cd * (H / 4 + 2) * (W / 4 + 2), 4 * cd * (H / 4 + 6) * (W / 4 + 6),
-                        2 * cd * (H / 2 + 6) * (W / 2 + 6), cd * (H + 6) * (W + 6)});
+    /// the largest over the seven layers.
+    static constexpr std::size_t pad_elements = detail::generator_pad_elements(int(H), int(W), int(in_ch), int(cd));
     /// Bytes of generator::workspace (padded input and output, three big buffers, one small one, the
     /// convolutions' zero-padded input).
     static constexpr std::size_t workspace_bytes =
@@ -68,16 +102,7 @@ struct generator_layout {
     /// Convolution geometries: conv7, down1, down2, residual conv3, up1 and up2 (as the adjoint conv), conv7.
     static constexpr kernels::conv_geometry geometry(int i) noexcept
     {
-        const int h = int(H), w = int(W), c = int(cd);
-        switch (i) {
-        case 0: return {1, int(in_ch), h, w, c, 7, 7, 1, 3};
-        case 1: return {1, c, h, w, 2 * c, 4, 4, 2, 1};
-        case 2: return {1, 2 * c, h / 2, w / 2, 4 * c, 4, 4, 2, 1};
-        case 3: return {1, 4 * c, h / 4, w / 4, 4 * c, 3, 3, 1, 1};
-        case 4: return {1, 2 * c, h / 2, w / 2, 4 * c, 4, 4, 2, 1};
-        case 5: return {1, c, h, w, 2 * c, 4, 4, 2, 1};
-        default: return {1, c, h, w, 3, 7, 7, 1, 3};
-        }
+        return detail::generator_geometry(int(H), int(W), int(in_ch), int(cd), i);
     }
     /// Multiply-adds of one inference.
     static constexpr double macs() noexcept
@@ -98,31 +123,15 @@ constexpr int row_tile(int n) noexcept
     return 1;
 }
 
-/// Zero rows/columns a transposed convolution's input needs on each side so that every tap reads inside the
-/// padded copy: tap u of output h reads input i = (h + pad - u) / stride, -kernel/stride <= i < out + kernel/stride.
-constexpr int convt_margin(int kernel, int stride) noexcept { return (kernel + stride - 1) / stride + 1; }
-
-/// xp [ch][h + top + bottom][w + 2 * side] = x [ch][h][w] framed by zeros.
-template <int ch, int h, int w, int top, int bottom, int side>
+/// xp [ch][h + 2 * ph][w + 2 * pw] = x [ch][h][w] framed by ph zero rows and pw zero columns on each side.
+template <int ch, int h, int w, int ph, int pw>
 inline void pad_copy(const float* x, float* xp) noexcept
 {
-    constexpr int Wp = w + 2 * side, Hp = h + top + bottom;
+    constexpr int Wp = w + 2 * pw, Hp = h + 2 * ph;
     for (int i = 0; i < ch * Hp * Wp; ++i) xp[i] = 0.f;
     for (int c = 0; c < ch; ++c)
         for (int i = 0; i < h; ++i)
-            for (int j = 0; j < w; ++j) xp[(c * Hp + i + top) * Wp + side + j] = x[(c * h + i) * w + j];
-}
-
-/// Elements of the zero-padded input copy conv_forward<G> needs.
-constexpr std::size_t conv_pad_elements(const kernels::conv_geometry& g) noexcept
-{
-    return std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad);
-}
-/// Elements of the zero-padded input copy conv_transpose<G> needs.
-constexpr std::size_t convt_pad_elements(const kernels::conv_geometry& g) noexcept
-{
-    const int mh = convt_margin(g.kernel_h, g.stride), mw = convt_margin(g.kernel_w, g.stride);
-    return std::size_t(g.out_channels) * (g.out_h() + 2 * mh) * (g.out_w() + 2 * mw);
+            for (int j = 0; j < w; ++j) xp[(c * Hp + i + ph) * Wp + pw + j] = x[(c * h + i) * w + j];
 }
 
 /// y = conv(x, w) at batch 1, no bias (PyTorch Conv2d), geometry G fixed at compile time. Output-stationary:
@@ -138,7 +147,7 @@ inline void conv_forward(const float* x, const float* w, float* y, float* xp) no
     constexpr int Cin = G.in_channels, KH = G.kernel_h, KW = G.kernel_w, S = G.stride, P = G.pad;
     constexpr int Hp = G.in_h + 2 * P, Wp = G.in_w + 2 * P, oh = G.out_h(), ow = G.out_w(), NB = row_tile(ow);
     static_assert(G.batch == 1 && G.valid(), "micro::conv_forward: batch-1 geometry");
-    pad_copy<Cin, G.in_h, G.in_w, P, P, P>(x, xp);
+    pad_copy<Cin, G.in_h, G.in_w, P, P>(x, xp);
     for (int o = 0; o < G.out_channels; ++o) {
         const float* wo = w + o * Cin * KH * KW;
         for (int i = 0; i < oh; ++i)
@@ -177,7 +186,7 @@ inline void conv_transpose(const float* x, const float* w, float* y, float* xp) 
     constexpr int oh = G.out_h(), ow = G.out_w(), MH = convt_margin(KH, S), MW = convt_margin(KW, S);
     constexpr int Hp = oh + 2 * MH, Wp = ow + 2 * MW, cnt = G.in_w / S, NB = row_tile(cnt);
     static_assert(G.batch == 1 && G.valid() && G.in_w % S == 0, "micro::conv_transpose: batch-1 geometry, width a multiple of the stride");
-    pad_copy<Co, oh, ow, MH, MH, MW>(x, xp);
+    pad_copy<Co, oh, ow, MH, MW>(x, xp);
     for (int c = 0; c < Cy; ++c)
         for (int h = 0; h < G.in_h; ++h) {
             const int rh = (h + P) % S;
@@ -279,9 +288,9 @@ public:
             norm(d, 4 * cd, HW / 16, false);
             for (std::size_t i = 0; i < layout::small_elements; ++i) b[i] += d[i];
         }
-        convt<4>(b, p, a, ws.pad);
+        conv<4>(b, p, a, ws.pad);
         norm(a, 2 * cd, HW / 4, true);
-        convt<5>(a, p, c, ws.pad);
+        conv<5>(a, p, c, ws.pad);
         norm(c, cd, HW, true);
         conv<6>(c, p, a, ws.pad);
         for (std::size_t i = 0; i < 3 * HW; ++i) out[i] = (Model::residual ? x[i] : 0.f) + std::tanh(a[i]);
@@ -304,22 +313,14 @@ public:
     }
 
 private:
-    /// Convolution gi of layout::geometry on `in` with the weights at p (advanced past them) into o.
+    /// Layer gi of layout::geometry (a transposed convolution for up1 and up2) on `in` with the weights at p
+    /// (advanced past them) into o; `pad` holds the padded input copy (layout::pad_elements).
     template <int gi>
     static void conv(const float* in, const float*& p, float* o, float* pad) noexcept
     {
         constexpr kernels::conv_geometry g = layout::geometry(gi);
-        static_assert(detail::conv_pad_elements(g) <= layout::pad_elements, "micro: pad_elements too small");
-        detail::conv_forward<g>(in, p, o, pad);
-        p += g.w_size();
-    }
-    /// Transposed convolution, the adjoint of layout::geometry(gi).
-    template <int gi>
-    static void convt(const float* in, const float*& p, float* o, float* pad) noexcept
-    {
-        constexpr kernels::conv_geometry g = layout::geometry(gi);
-        static_assert(detail::convt_pad_elements(g) <= layout::pad_elements, "micro: pad_elements too small");
-        detail::conv_transpose<g>(in, p, o, pad);
+        if constexpr (detail::transposed_layer(gi)) detail::conv_transpose<g>(in, p, o, pad);
+        else detail::conv_forward<g>(in, p, o, pad);
         p += g.w_size();
     }
 };
