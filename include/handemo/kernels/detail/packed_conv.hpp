@@ -118,14 +118,14 @@ template <class T, class W, int NV, int NR, int SJ, bool PF = false>
     constexpr int L = simd_lanes<T>, MR = NV * L;
     B acc[NR][NV];
     if (accumulate) {
-        #pragma GCC unroll 32
+        HANDEMO_UNROLL_TILE
         for (int j = 0; j < NR; ++j)
-            #pragma GCC unroll 32
+            HANDEMO_UNROLL_TILE
             for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
     } else {
-        #pragma GCC unroll 32
+        HANDEMO_UNROLL_TILE
         for (int j = 0; j < NR; ++j)
-            #pragma GCC unroll 32
+            HANDEMO_UNROLL_TILE
             for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
     }
     const int step = SJ > 0 ? SJ : sj;
@@ -137,20 +137,20 @@ template <class T, class W, int NV, int NR, int SJ, bool PF = false>
                     __builtin_prefetch(reinterpret_cast<const char*>(pf + std::ptrdiff_t(k) * MR) + q, 0, 2);
         }
         B a[NV];
-        #pragma GCC unroll 32
+        HANDEMO_UNROLL_TILE
         for (int q = 0; q < NV; ++q) a[q] = keep_in_register(ws_load<T>(wp + q * L));
         const T* s = src + koff[k];
-        #pragma GCC unroll 32
+        HANDEMO_UNROLL_TILE
         for (int j = 0; j < NR; ++j) {
             const B b(s[j * step]);
-            #pragma GCC unroll 32
+            HANDEMO_UNROLL_TILE
             for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
         }
         wp += MR;
     }
-    #pragma GCC unroll 32
+    HANDEMO_UNROLL_TILE
     for (int j = 0; j < NR; ++j)
-        #pragma GCC unroll 32
+        HANDEMO_UNROLL_TILE
         for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
 }
 
