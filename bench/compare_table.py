@@ -47,7 +47,7 @@ def seconds(b):
     return b["real_time"] * unit  # wall time: what a user waits for
 
 def torch_results(paths):
-    """{config: (inference s, train step s, [round step s...], [round inference s...])}: medians over the rounds."""
+    """{config: (inference s, train step s, [each round's inference s], [each round's step s])}: medians first."""
     per = {}
     for path in files(paths):
         try:
@@ -57,8 +57,8 @@ def torch_results(paths):
                     per.setdefault(m.group(1), []).append((float(m.group(2)) * 1e-6, float(m.group(3)) * 1e-3))
         except OSError:
             pass
-    return {k: (statistics.median(v[0] for v in vs), statistics.median(v[1] for v in vs), [v[1] for v in vs],
-                [v[0] for v in vs]) for k, vs in per.items()}
+    return {k: (statistics.median(v[0] for v in vs), statistics.median(v[1] for v in vs), [v[0] for v in vs],
+                [v[1] for v in vs]) for k, vs in per.items()}
 
 def gflops(b):
     """A benchmark's GFLOPS (bench_conv) or GFLOP/s (bench_stargan) counter in GFLOP/s (JSON may hold FLOP/s)."""
@@ -81,6 +81,10 @@ def fmt_range(times):
 def fmt_b(b):
     """A benchmark's median wall time with its range over the rounds."""
     return "n/a" if b is None else fmt_t(seconds(b)) + fmt_range(b.get("_times", {}).values())
+
+def round_ratios(num, den, scale=1.0):
+    """Each round's num x scale / den, sorted: num and den are benchmarks' `_times` ({round: s})."""
+    return sorted(num[k] * scale / den[k] for k in num if k in den and den[k])
 
 def best(a, b):
     xs = [v for v in (a, b) if v is not None]
@@ -166,7 +170,7 @@ for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedd
     # the G inference of the target: frozen_generator (weights packed once), what transfer and the CLI run
     inf_b = star_bench(keys, "stargan_infer/")  # not stargan_infer_f16/ nor stargan_infer_unpacked/
     inf = seconds(inf_b) if inf_b else None
-    print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_b(inf_b)} | {fmt_t(tp1[0])}{fmt_range(tp1[3])} | {fmt_t(tp2[0])}{fmt_range(tp2[3])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}**{peak_range(inf_b)} |")
+    print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_b(inf_b)} | {fmt_t(tp1[0])}{fmt_range(tp1[2])} | {fmt_t(tp2[0])}{fmt_range(tp2[2])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}**{peak_range(inf_b)} |")
     h_b = star_bench(keys, "infer_f16")
     if h_b:
         h = seconds(h_b)
@@ -180,13 +184,13 @@ for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedd
     tr1_b = star_bench(keys, "stargan_train/", "threads:1")
     tr = seconds(tr_b) if tr_b else None
     tr1 = seconds(tr1_b) if tr1_b else None
-    print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_b(tr_b)} | {fmt_t(tp1[1])}{fmt_range(tp1[2])} | {fmt_t(tp2[1])}{fmt_range(tp2[2])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
+    print(f"| {cfg} | train step D+G, batch 16, 2 threads | {fmt_b(tr_b)} | {fmt_t(tp1[1])}{fmt_range(tp1[3])} | {fmt_t(tp2[1])}{fmt_range(tp2[3])} | {ratio(best(tp1[1], tp2[1]), tr)} | |")
     if tr1:
         eff = ""
         if tr:
             # each round's 2-thread and 1-thread steps ran back to back: the median of the rounds' ratios
-            t2r, t1r = tr_b.get("_times", {}), tr1_b.get("_times", {})
-            rr = sorted(t2r[k] / t1r[k] for k in t2r if k in t1r and t1r[k]) or [tr / tr1]
+            t1r = tr1_b.get("_times", {})
+            rr = round_ratios(tr_b.get("_times", {}), t1r) or [tr / tr1]
             med = statistics.median(rr)
             each = f" (rounds {', '.join(f'{x:.2f}' for x in rr)})" if len(rr) > 1 else ""
             eff = f"2-thread step = {med:.2f}x the 1-thread step{each}, parallel efficiency {1 / (2 * med):.0%}"
@@ -197,8 +201,7 @@ for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedd
             pair_b = star_bench(keys, "stargan_train_pair/")
             if pair_b:
                 nt = pair_b.get("threads", 2)
-                pr = pair_b.get("_times", {})
-                prr = sorted(pr[k] * nt / t1r[k] for k in pr if k in t1r and t1r[k])
+                prr = round_ratios(pair_b.get("_times", {}), t1r, nt)
                 if prr:
                     eff += (f"; two independent half-batch steps at once (the bound with the memory system): "
                             f"{fmt_t(seconds(pair_b) * nt)} = {statistics.median(prr):.2f}x")
