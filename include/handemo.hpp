@@ -7,6 +7,7 @@
 #include <handemo/core/io.hpp>
 #include <handemo/core/progress.hpp>
 #include <handemo/motion.hpp>
+#include <handemo/retarget.hpp>
 #include <handemo/tensor.hpp>
 #include <handemo/kernels.hpp>
 #include <handemo/micro.hpp>
