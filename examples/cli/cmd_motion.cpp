@@ -6,3 +6,4 @@
 #include "motion/encode.hpp"
 #include "motion/decode.hpp"
 #include "motion/info.hpp"
+#include "motion/retarget.hpp"

@@ -7,6 +7,7 @@
 #include <handemo/motion/bvh.hpp>
 #include <handemo/motion/csv.hpp>
 #include <handemo/motion/hand.hpp>
+#include <handemo/motion/body.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/synth.hpp>

@@ -9,3 +9,4 @@
 #include <handemo/stargan/model.hpp>
 #include <handemo/stargan/train.hpp>
 #include <handemo/stargan/transfer.hpp>
+#include <handemo/stargan/capture.hpp>

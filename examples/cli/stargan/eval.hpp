@@ -62,6 +62,9 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--iters", t.iters, "D iterations per fold (G every --n-critic)")->capture_default_str();
     sub->add_option("--seed", t.seed, "Random seed (fold i trains with seed + i)")->capture_default_str();
     sub->add_option("--folds", o->opt.folds, "Held-out contents to run, comma separated (default: all)")->delimiter(',');
+    sub->add_flag("--retargeted,!--no-retargeted", o->opt.retargeted,
+                  "Also score stargan-retargeted on a body set: each input moved onto a foreign rig (CMU names, another rest pose, "
+                  "proportions, units and channel order), transferred through the retargeting and scored back (default on)");
     sub->add_flag("--reuse-models", o->opt.reuse_models,
                   "Reuse each fold's model already in the report folder when it was trained with the same options and steps "
                   "(when only the change gate's options differ, the gate is fitted again from the stored inner models)");

@@ -8,8 +8,11 @@
 
 #include <handemo/image.hpp>
 #include <handemo/image/keyframe_image.hpp>
+#include <handemo/retarget.hpp>
 #include <handemo/stargan.hpp>
+#include "../retarget_common.hpp"
 
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -17,8 +20,18 @@
 
 namespace handemo::cli::transfer_cmd {
 
+/// The shipped hand model: $HANDEMO_MODEL, else this source tree's data/models/hand-embedded, else the installed copy.
+inline std::filesystem::path default_model()
+{
+    if (const char* e = std::getenv("HANDEMO_MODEL"); e && *e) return e;
+    for (const char* p : {HANDEMO_SHIPPED_MODEL, HANDEMO_INSTALLED_MODEL})
+        if (std::filesystem::exists(std::filesystem::path(p) / "checkpoint.safetensors")) return p;
+    throw io_error(std::string("transfer: no --model given and no shipped model at ") + HANDEMO_SHIPPED_MODEL + " or " + HANDEMO_INSTALLED_MODEL +
+                   " (set HANDEMO_MODEL or pass --model)");
+}
+
 struct transfer_cli {
-    std::string model, in, emotion, out, from, like;
+    std::string model, in, emotion, out, from, like, hand, map;
     std::size_t frames = 0;
     bool detail = false;
     kernels::weight_storage weights = kernels::weight_storage::native;
@@ -35,7 +48,11 @@ inline void run_transfer(const transfer_cli& o)
     using namespace handemo;
     using namespace handemo::stargan;
     namespace fs = std::filesystem;
-    const auto model = load_model(o.model, o.weights);
+    const std::string model_path = o.model.empty() ? default_model().string() : o.model;
+    if (o.model.empty())
+        std::cout << "transfer: no --model given: using the shipped hand model " << model_path
+                  << " (trained on handemo's synthetic hand emotions, not on real captures)\n";
+    const auto model = load_model(model_path, o.weights);
     const auto& info = model->info();
     const bool in_image = has_ext(o.in, ".bmp", ".png"), out_image = has_ext(o.out, ".bmp", ".png");
     if (!in_image && !has_ext(o.in, ".bvh"))
@@ -62,18 +79,23 @@ inline void run_transfer(const transfer_cli& o)
     const clip in = read_bvh(o.in);
     if (o.detail && out_image) throw value_error("transfer: --detail adds full-rate motion; a motion image output (" + o.out + ") has none");
     if (o.detail && !model->has_detail())
-        throw value_error("transfer: --detail: model " + o.model + " has no detail layer (trained before it existed): train it again");
-    auto r = o.from.empty() ? model->transfer(in, o.emotion) : model->transfer(in, o.emotion, o.from);
-    if (o.detail) r.motion = o.from.empty() ? model->add_detail(r.motion, in, o.emotion) : model->add_detail(r.motion, in, o.emotion, o.from);
+        throw value_error("transfer: --detail: model " + model_path + " has no detail layer (trained before it existed): train it again");
+    capture_options co;
+    co.hand = hand_side(o.hand);
+    co.detail = o.detail;
+    if (!o.map.empty()) co.slots = retarget::read_map(o.map, in.skel);
+    const auto cr = o.from.empty() ? transfer_capture(*model, in, o.emotion, {}, co) : transfer_capture(*model, in, o.emotion, o.from, co);
+    if (cr.map) print_map_summary("transfer", o.in, *cr.map);
+    const auto& r = cr.on_model;
     if (out_image)
         (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(r.image));
     else
-        write_bvh(o.out, r.motion);
+        write_bvh(o.out, cr.motion, cr.retargeted ? -1 : 6);
     if (r.clamped_values)
         std::cerr << "transfer: warning: " << r.clamped_values << " keyframe angles of " << o.in << " lie outside the model's range ["
                   << info.range.p_min << ", " << info.range.p_max << "] and were clamped by Eq. 3\n";
     std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << o.emotion << " (tempo x" << r.tempo << ", "
-              << r.motion.frames << " frames" << (o.detail ? ", with detail" : "") << ") -> " << o.out << "\n";
+              << cr.motion.frames << " frames" << (o.detail ? ", with detail" : "") << ") -> " << o.out << "\n";
 }
 
 }  // namespace handemo::cli::transfer_cmd
@@ -81,10 +103,15 @@ inline void run_transfer(const transfer_cli& o)
 static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     auto* sub = app.add_subcommand("transfer", "Turn a motion (BVH, or a motion image BMP/PNG) into another emotion with a trained model");
     auto o = std::make_shared<handemo::cli::transfer_cmd::transfer_cli>();
-    sub->add_option("--model", o->model, "Model folder or checkpoint.safetensors written by 'handemo train'")->required();
+    sub->add_option("--model", o->model,
+                    "Model folder or checkpoint.safetensors written by 'handemo train' (default: the shipped hand model, trained on "
+                    "handemo's synthetic hand emotions)");
     sub->add_option("--in", o->in, "Input motion: .bvh, or a K x J motion image .bmp/.png")->required();
     sub->add_option("--emotion", o->emotion, "Target emotion (a domain of the model, e.g. angry)")->required();
     sub->add_option("--out", o->out, "Output: .bvh (full-rate motion) or .bmp/.png (motion image)")->required();
+    sub->add_option("--hand", o->hand, "Which hand of the capture to transfer with a hand model: left or right (needed when it has two)")
+        ->check(CLI::IsMember({"left", "right"}));
+    sub->add_option("--map", o->map, "JSON map file naming the capture's joints by slot, for a rig no built-in convention knows (docs/retargeting.md)");
     sub->add_option("--from", o->from, "Emotion of the input (default: the model's neutral domain); sets the tempo ratio");
     sub->add_option("--like", o->like, "Reference BVH for an image input and BVH output (skeleton, fps, frames)");
     sub->add_flag("--detail", o->detail,

@@ -16,6 +16,7 @@
 #include <handemo/eval/extension.hpp>
 #include <handemo/eval/metrics.hpp>
 #include <handemo/eval/report.hpp>
+#include <handemo/eval/retargeted.hpp>
 #include <handemo/motion/detail_layer.hpp>
 #include <handemo/motion/synth.hpp>
 #include <handemo/render/svg.hpp>
@@ -24,6 +25,7 @@
 #include <handemo/stargan/gate.hpp>
 #include <handemo/stargan/train.hpp>
 #include <handemo/stargan/transfer.hpp>
+#include <handemo/stargan/capture.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -64,6 +66,10 @@ struct eval_options {
     /// Methods and scores added from outside the core, in the same folds and tables (eval/extension.hpp; the
     /// circumplex method of eval/rcm.hpp).
     std::vector<std::shared_ptr<method_extension>> extensions;
+    /// Also score "stargan-retargeted" on a body set: each input moved onto a foreign rig of the skeleton (other
+    /// names, rest pose, proportions, units, channel order; eval/retargeted.hpp), transferred through the
+    /// retargeting and scored back on the model's skeleton.
+    bool retargeted = true;
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
@@ -621,6 +627,9 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
     eval_result res = detail::new_result(info, opt, folds.size());
     const auto all = detail::prepare_clips<K>(clips);
     const detail::content_recogniser<K> content_of(all, info.neutral);  // content references: every neutral clip
+    // the retargeted variant (eval/retargeted.hpp): bodies only, the rest pose of the first clip's first frame
+    const std::optional<foreign_rig> rig = opt.retargeted && !clips.empty() ? make_foreign_rig(clips.front().motion.skel, clips.front().motion)
+                                                                            : std::nullopt;
 
     progress overall("eval " + info.name, static_cast<long>(folds.size()), opt.progress_out, 0.0);
     std::vector<track_series> detail_curves;  // the detail layer's example: the first fold's first input
@@ -696,6 +705,10 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                     const stem_labels& l = synth[static_cast<std::size_t>(in->src - clips.data())];
                     o.oracle = synthesize_as(l.motion, l.emo, emotion_from_string(target), l.take, *opt.synth_seed, opt.synth_fps);
                     o.has_oracle = true;
+                }
+                if (rig) {  // the same transfer from a foreign rig of the skeleton, scored back on the model's skeleton
+                    const auto cr = stargan::transfer_capture(models.model, retarget::retarget_clip(input, rig->to_foreign), target);
+                    o.extra.emplace_back("stargan-retargeted", retarget::retarget_clip(cr.motion, rig->to_model, stargan::typical_pose(models.model)));
                 }
                 for (const auto& x : opt.extensions)
                     for (auto& e : x->transfer(*in->src, target)) o.extra.push_back(std::move(e));

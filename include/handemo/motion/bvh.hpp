@@ -49,6 +49,13 @@ inline number_status parse_number(std::string_view tok, double& out) noexcept
 /// "-0" written as "0".
 inline void append_fixed(std::string& out, double v, int decimals)
 {
+    if (decimals < 0) {  // the shortest text that reads back to exactly v (std::to_chars), "-0" as "0"
+        char sb[64];
+        const auto [q, e] = std::to_chars(sb, sb + sizeof sb, v == 0 ? 0.0 : v);
+        if (e != std::errc()) throw value_error("bvh: cannot format value " + std::to_string(v));
+        out.append(sb, q);
+        return;
+    }
     char buf[400];
     const auto [p, ec] = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
     if (ec != std::errc()) throw value_error("bvh: cannot format value " + std::to_string(v));
@@ -554,14 +561,16 @@ inline clip read_bvh(const std::filesystem::path& path) { return parse_bvh(read_
 /// @brief Formats a clip as BVH text: HIERARCHY with ROOT/JOINT/End Site blocks indented by tabs,
 /// channels in each joint's stored order, then MOTION, Frames:, Frame Time: and one row per frame.
 /// Joints are written depth-first from the parent indices (the clip's order when it came from a file).
-/// @param precision digits after the decimal point for OFFSET and motion values (0..17).
+/// @param precision digits after the decimal point for OFFSET and motion values (0..17), or -1 for the shortest
+/// text that reads back to exactly the same double (a clip read from a file is then written with its values
+/// unchanged to the bit).
 /// @throws value_error / shape_error when the clip is inconsistent (see clip::validate), a joint's
 /// channels are not 3 rotations (+ 3 positions) or a name cannot be written.
 inline std::string to_bvh_string(const clip& c, int precision = 6)
 {
     c.validate("to_bvh_string");
-    if (precision < 0 || precision > 17)
-        throw value_error("to_bvh_string: precision " + std::to_string(precision) + " is not in 0..17");
+    if (precision < -1 || precision > 17)
+        throw value_error("to_bvh_string: precision " + std::to_string(precision) + " is not in -1..17");
     const skeleton& sk = c.skel;
     const std::size_t J = sk.size();
     std::vector<std::vector<std::size_t>> children(J);
@@ -653,6 +662,9 @@ inline std::string to_bvh_string(const clip& c, int precision = 6)
 
 /// @brief Writes a clip as a BVH file atomically (temporary file + rename).
 /// @throws value_error / shape_error for an inconsistent clip, io_error when the file cannot be written.
-inline void write_bvh(const std::filesystem::path& path, const clip& c) { write_file_atomic(path, to_bvh_string(c)); }
+inline void write_bvh(const std::filesystem::path& path, const clip& c, int precision = 6)
+{
+    write_file_atomic(path, to_bvh_string(c, precision));
+}
 
 }  // namespace handemo

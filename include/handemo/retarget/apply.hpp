@@ -65,9 +65,17 @@ inline mat3 carry(const mat3& f_to, const mat3& f_from, const mat3& g_from, cons
 /// counterparts' bone frames; the target's other joints stay at rest (angles 0, positions their offsets),
 /// except a body's hips, placed at the source hips' position times m.scale (through the position channels of
 /// the hips or of their nearest ancestor that has some).
-/// @throws shape_error when the clip's skeleton is not m.source; value_error for a non-finite clip.
-inline clip retarget_clip(const clip& in, const retarget_map& m)
+/// Of the two Euler solutions of a rotation (and their 360-degree turns) the first frame takes the one nearest
+/// `reference` ([J*3] target angles; default all 0), every later frame the one nearest the frame before: a model
+/// sees the branch its training data used when `reference` is its typical pose (transfer_capture() passes the
+/// centre of the model's angle range).
+/// @throws shape_error when the clip's skeleton is not m.source or the reference has the wrong size;
+/// value_error for a non-finite clip.
+inline clip retarget_clip(const clip& in, const retarget_map& m, const std::vector<double>& reference = {})
 {
+    if (!reference.empty() && reference.size() != m.target.size() * 3)
+        throw shape_error("retarget: reference pose has " + std::to_string(reference.size()) + " angles, the target '" + m.target.name + "' needs " +
+                          std::to_string(m.target.size() * 3));
     if (!in.skel.same_topology(m.source))
         throw shape_error("retarget: clip '" + in.skel.name + "' is not on the map's source skeleton '" + m.source.name + "'");
     in.validate("retarget: " + in.skel.name);
@@ -87,7 +95,9 @@ inline clip retarget_clip(const clip& in, const retarget_map& m)
             if (const int k = m.pair_of_target[j]; k >= 0) {
                 const auto& pr = m.pairs[static_cast<std::size_t>(k)];
                 g[j] = detail::carry(ft, fs, src.rotations[pr.source], pr.ls, pr.lt, m.mirror);
-                const vec3 ref = f > 0 ? vec3{out.angle(f - 1, j, 0), out.angle(f - 1, j, 1), out.angle(f - 1, j, 2)} : vec3{};
+                const vec3 ref = f > 0             ? vec3{out.angle(f - 1, j, 0), out.angle(f - 1, j, 1), out.angle(f - 1, j, 2)}
+                                 : reference.empty() ? vec3{}
+                                                     : vec3{reference[j * 3], reference[j * 3 + 1], reference[j * 3 + 2]};
                 const vec3 a = euler_from_matrix(matmul(transpose(gp), g[j]), T.joints[j].rotation_order(), ref);
                 for (std::size_t c = 0; c < 3; ++c) out.angle(f, j, c) = a[c];
             } else {

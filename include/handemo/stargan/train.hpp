@@ -204,6 +204,7 @@ struct prepared_data {
     /// beat identity there, `amplitude` is set to all 1 (the data set carries no usable amplitude style)
     std::pair<double, double> amplitude_check{std::nan(""), std::nan("")};
     std::vector<std::string> joint_names;  ///< skeleton the model is trained for
+    skeleton skel;                         ///< that skeleton (the first training clip's: hierarchy, offsets, channels)
     /// [M, C] for every image and domain, the index of the same content and take performed in that domain
     /// (another take of the content when that take is missing; the image itself for its own domain); -1: none
     std::vector<int> partner;
@@ -383,6 +384,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
         kfs.push_back(extract_keyframes<K>(c.motion));
     }
     for (const auto& j : clips.front().motion.skel.joints) p.joint_names.push_back(j.name);
+    p.skel = clips.front().motion.skel;
     if (range_mode != "global" && range_mode != "channel")
         throw value_error("train: range '" + std::string(range_mode) + "' is not 'global' or 'channel'");
     p.range = range ? *range : range_mode == "channel" ? compute_channel_range(kfs) : compute_range(kfs);
@@ -495,6 +497,9 @@ struct checkpoint_info {
     /// the detail layer learned from the training clips (absent in checkpoints written before it existed)
     std::optional<detail_layer> detail;
     std::vector<std::string> joint_names;
+    /// the training skeleton (metadata 'skeleton', a one-frame BVH at rest), which retargeting moves a user's
+    /// capture onto; absent in checkpoints written before it was stored
+    std::optional<skeleton> skel;
     long step = 0;
     nlohmann::json options;
 };
@@ -564,6 +569,16 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
         info.options = j.at("options");
     } catch (const nlohmann::json::exception& e) {
         throw fail(std::string("metadata 'handemo' is malformed: ") + e.what());
+    }
+    if (const auto it = f.metadata.find("skeleton"); it != f.metadata.end()) {
+        const clip rest = parse_bvh(it->second, path.string() + " (metadata 'skeleton')");
+        if (rest.skel.size() != info.joint_names.size())
+            throw fail("metadata 'skeleton' has " + std::to_string(rest.skel.size()) + " joints, joint_names " + std::to_string(info.joint_names.size()));
+        for (std::size_t k = 0; k < rest.skel.size(); ++k)
+            if (rest.skel.joints[k].name != info.joint_names[k])
+                throw fail("metadata 'skeleton' joint " + std::to_string(k) + " is '" + rest.skel.joints[k].name + "', joint_names says '" +
+                           info.joint_names[k] + "'");
+        info.skel = rest.skel;
     }
     info.range.validate(("checkpoint: " + path.string() + ": range").c_str());
     if (info.tempo.size() != info.domains.size()) throw fail("tempo has " + std::to_string(info.tempo.size()) + " entries for " + std::to_string(info.domains.size()) + " domains");
@@ -904,6 +919,7 @@ public:
         if (data_.detail) j["detail"] = data_.detail->to_json();
         f.metadata["format"] = "handemo-checkpoint/1";
         f.metadata["handemo"] = j.dump();
+        if (!data_.skel.joints.empty()) f.metadata["skeleton"] = to_bvh_string(clip::make(data_.skel, 1, 30), -1);
         f.metadata["checksum"] = detail::checkpoint_checksum(f);
         write_safetensors(out_dir / "checkpoint.safetensors", f);
         save_parameters(out_dir / "generator.safetensors", inference_gen(),

@@ -12,6 +12,8 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/motion/codec.hpp>
+#include <handemo/motion/hand.hpp>
+#include <handemo/retarget/rotation.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/stargan/train.hpp>
 
@@ -175,7 +177,14 @@ public:
     {
         check_skeleton(in.skel);
         in.validate("transfer: input " + in.skel.name);
-        auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
+        // one Euler branch per joint, the one nearer the training data's typical pose (a joint near gimbal lock
+        // may be written on either by the capture; untouched when already on it, as small angles always are)
+        std::optional<clip> canonical;
+        if (info_.range.per_channel() && info_.range.center.size() == in.skel.size() * 3) {
+            clip c = in;
+            if (retarget::canonicalise_branches(c, info_.range.center) > 0) canonical = std::move(c);
+        }
+        auto kf = extract_keyframes<dynamic_keyframes>(canonical ? *canonical : in, keyframes());
         const bool amp = amplitude_stage();
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
         const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
@@ -274,6 +283,20 @@ public:
         if (!info_.detail)
             throw value_error("transfer: model " + info_.source + " has no detail layer (trained before it existed): train it again");
         return info_.detail->apply(out, in, std::string(source ? *source : std::string_view(info_.neutral)), std::string(target));
+    }
+
+    /// @brief The skeleton the model was trained on: stored in the checkpoint, or handemo's hand when the model's
+    /// joints are the hand's (a checkpoint written before the skeleton was stored).
+    /// @throws value_error for an older checkpoint of another skeleton.
+    skeleton model_skeleton() const
+    {
+        if (info_.skel) return *info_.skel;
+        skeleton h = hand_skeleton();
+        bool same = h.size() == info_.joint_names.size();
+        for (std::size_t j = 0; same && j < h.size(); ++j) same = h.joints[j].name == info_.joint_names[j];
+        if (same) return h;
+        throw value_error("transfer: model " + info_.source + " stores no skeleton (written before skeletons were stored): train it again "
+                          "to transfer captures of other skeletons");
     }
 
     /// @brief Checks a skeleton against the one the model was trained on.
