@@ -4,6 +4,9 @@
 #include <handemo/retarget.hpp>
 
 #include <doctest/doctest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
 
 #include <cmath>
 #include <cstring>
@@ -276,6 +279,12 @@ TEST_CASE("errors name the conventions tried, the hands found, the joint and the
         s.joints[b.at("r.index_tip")].offset = {0, 0, 0};
         CHECK_THROWS_WITH_AS(make_map(s, model), doctest::Contains("joint 'index_distal' (slot r.index3): zero-length bone"), value_error);
     }
+    // a non-finite offset (a skeleton built in code; the BVH reader refuses them)
+    {
+        auto s = make_rig(openxr_names('r', false), rig_style{.name = "nan.bvh"});
+        s.joints[3].offset[1] = std::nan("");
+        CHECK_THROWS_WITH_AS(make_map(s, model), doctest::Contains("has a non-finite offset"), value_error);
+    }
     // degenerate rest pose: the knuckles in one point
     {
         auto s = make_rig(openxr_names('r', false), rig_style{.name = "flat.bvh"});
@@ -369,4 +378,19 @@ TEST_CASE("canonicalise_branches: one Euler branch per joint, nearest the refere
     CHECK(canonicalise_branches(d, {100, 85, 276}) == 2);
     CHECK(std::abs(d.angle(0, 0, 1) - 85) < 1e-9);
     CHECK_THROWS_AS(canonicalise_branches(d, {1, 2}), shape_error);
+}
+
+TEST_CASE("the example map file (examples/maps/custom_rig.json) describes a rig that moves onto the hand model and the body")
+{
+    using namespace handemo::test;
+    const std::string text = read_file(std::filesystem::path(HANDEMO_SOURCE_DIR) / "examples" / "maps" / "custom_rig.json");
+    const auto j = nlohmann::json::parse(text);
+    rig_names names;
+    for (const auto& [slot, name] : j.at("joints").items()) names[slot] = name.get<std::string>();
+    const auto s = make_rig(names, rig_style{.a_pose_deg = 20, .name = "custom_rig.bvh"});
+    CHECK(detect(s).slots.size() < 5);  // no built-in convention knows it
+    const auto b = parse_map(text, s, "custom_rig.json");
+    CHECK(b.slots.size() == names.size());
+    check_round_trip(s, hand_skeleton(), {.source_slots = b}, 77);
+    check_round_trip(s, body_skeleton(), {.source_slots = b}, 78);
 }

@@ -2,8 +2,8 @@
 // of the hand paper's Figures 4-12 are still. handemo does the forward kinematics (motion/skeleton.hpp) and
 // embeds every frame's joint and end-site positions, the parent indices and the same per-finger / per-limb
 // colours as the PNG renderer (figure.hpp analyse_figure) as JSON; the page only draws them with Canvas 2D
-// (no library, no network, nothing fetched). Clips play side by side in sync at their own frame rates, or in
-// normalised time (a transferred clip and its input, which may differ in tempo, stay aligned); play/pause,
+// (no library, no network, nothing fetched). Clips play in a grid of cells (at most 5 per row unless asked
+// otherwise), in sync at their own frame rates, or in normalised time (a transferred clip and its input, which may differ in tempo, stay aligned); play/pause,
 // scrub, speed, orbit (drag), zoom (wheel) and joint names on hover. For headless checks the page writes,
 // into a hidden <pre id="check">, the frame it drew for every clip and the pixel centres of the joints it
 // drew (recorded from the drawing calls themselves) at the initial camera, at time 0 or at the time given
@@ -31,19 +31,42 @@ namespace handemo {
 struct viewer_options {
     std::vector<std::string> titles;     ///< one per clip, or empty for "clip 1", "clip 2", ...
     bool normalised_time = false;        ///< start with every clip stretched to the longest one's duration
-    std::size_t width = 960;             ///< canvas size in CSS pixels (all clips share it side by side)
-    std::size_t height = 540;
+    std::size_t width = 960;             ///< canvas width in CSS pixels, shared by the clips of one row
+    std::size_t height = 540;            ///< height in CSS pixels of one row's cells (below its title band)
+    std::size_t columns = 0;             ///< clips per row; 0: ceil(n / rows) with rows = ceil(n / 5)
     std::string page_title = "handemo view";
     figure_options figure;               ///< kind (hand / body) and camera angles, as for filmstrips
 };
 
-/// @brief Layout constants of the page: a band of `viewer_title_height` CSS pixels above the cells for the
-/// titles; clip i's cell is [i W / n, (i + 1) W / n) x [title, H). A point p of clip i with view vectors
-/// (right, up), centre c and the shared radius R lands at
-///   x = i W / n + (W / n) / 2 + dot(p - c, right) s,  y = title + (H - title) / 2 - dot(p - c, up) s,
-///   s = zoom viewer_fill min(W / n, H - title) / (2 R)   (zoom 1 at the start).
+/// @brief Layout constants of the page. The n clips fill a grid of C columns (viewer_columns) and
+/// rows = ceil(n / C) rows, row by row: clip i sits in row r = i / C, column k = i % C. Each row is a band of
+/// `viewer_title_height` (T) CSS pixels for its cells' titles above cells of width w = W / C and height h
+/// (viewer_options::height), so the canvas is W x rows (T + h) and clip i's cell is
+///   [k w, (k + 1) w) x [y0, y0 + h),  y0 = (r + 1) T + r h.
+/// A point p of clip i with view vectors (right, up), centre c and the shared radius R lands at
+///   x = k w + w / 2 + dot(p - c, right) s,  y = y0 + h / 2 - dot(p - c, up) s,
+///   s = zoom viewer_fill min(w, h) / (2 R)   (zoom 1 at the start).
 inline constexpr double viewer_title_height = 24.0;
 inline constexpr double viewer_fill = 0.9;
+inline constexpr std::size_t viewer_auto_row = 5;          ///< clips per row at most with automatic columns
+inline constexpr std::size_t viewer_max_columns = 10000;  ///< a larger viewer_options::columns is refused
+
+/// @brief The number of columns of the page's grid for n clips: `columns` clamped to n, or for 0 (automatic)
+/// ceil(n / rows) with rows = ceil(n / viewer_auto_row), so at most 5 clips share a row and the rows are
+/// filled evenly (7 clips: 4 + 3). 0 for n = 0.
+/// @throws value_error for columns > viewer_max_columns.
+inline std::size_t viewer_columns(std::size_t n, std::size_t columns)
+{
+    if (columns > viewer_max_columns)
+        throw value_error("render_viewer_html: columns " + std::to_string(columns) + " is not in 0.." + std::to_string(viewer_max_columns) +
+                          " (0: automatic)");
+    if (n == 0) return 0;
+    if (columns == 0) {
+        const std::size_t rows = (n + viewer_auto_row - 1) / viewer_auto_row;
+        return (n + rows - 1) / rows;
+    }
+    return std::min(columns, n);
+}
 
 namespace detail {
 
@@ -105,12 +128,15 @@ inline std::vector<vec3> viewer_points(const pose_positions& P, std::span<const 
 }  // namespace detail
 
 /// @brief The data the page draws, as JSON:
-/// `{"format":"handemo-view/1","width","height","normalised","view":{"right","up","toward"},"radius",
+/// `{"format":"handemo-view/2","width","height","columns","normalised","view":{"right","up","toward"},"radius",
 ///   "clips":[{"title","fps","frames","joints","points","names","parents","colors","hidden","stub","center",
 ///   "positions"}]}`. `points` = joints + end sites; `positions` is [frames, points, 3] flattened (world units,
-/// 7 significant digits) from forward_kinematics; `hidden` points get no ball and no bone to them from
+/// 7 significant digits) from forward_kinematics; `width` is the canvas width, `height` the height of one row's
+/// cells and `columns` the resolved column count (viewer_columns), laid out as viewer_title_height documents;
+/// `hidden` points get no ball and no bone to them from
 /// their children unless `stub`; a `stub` bone (a hand's forearm) is drawn over 30% of its length from the child.
-/// @throws value_error for no clips, a clip with zero frames or a title count other than 0 or the clip count;
+/// @throws value_error for no clips, a clip with zero frames, a title count other than 0 or the clip count, a
+///         width or height outside 64..16384, columns > 10000 or a canvas taller than 16384 (rows (title + height));
 ///         errors of clip::validate.
 inline std::string viewer_json(std::span<const clip> clips, const viewer_options& opt = {})
 {
@@ -121,6 +147,12 @@ inline std::string viewer_json(std::span<const clip> clips, const viewer_options
                           " clips (expected one title per clip, or none)");
     if (opt.width < 64 || opt.height < 64 || opt.width > 16384 || opt.height > 16384)
         throw value_error(fn + ": canvas " + std::to_string(opt.width) + "x" + std::to_string(opt.height) + " is not in 64..16384 per side");
+    const std::size_t columns = viewer_columns(clips.size(), opt.columns);
+    const std::size_t rows = (clips.size() + columns - 1) / columns;
+    if (static_cast<double>(rows) * (viewer_title_height + static_cast<double>(opt.height)) > 16384.0)
+        throw value_error(fn + ": " + std::to_string(rows) + " rows of height " + std::to_string(opt.height) + " plus the title band make a canvas " +
+                          std::to_string(static_cast<std::size_t>(static_cast<double>(rows) * (viewer_title_height + static_cast<double>(opt.height)))) +
+                          " pixels tall (expected at most 16384: more columns or a smaller height)");
     std::vector<figure_layout> layouts;
     for (std::size_t i = 0; i < clips.size(); ++i) {
         const std::string what = fn + ": clip " + std::to_string(i + 1);
@@ -219,8 +251,8 @@ inline std::string viewer_json(std::span<const clip> clips, const viewer_options
     }
     if (!(radius > 1e-12)) radius = 1;
 
-    std::string j = "{\"format\":\"handemo-view/1\",\"width\":" + std::to_string(opt.width) + ",\"height\":" + std::to_string(opt.height) +
-                    ",\"normalised\":" + (opt.normalised_time ? "true" : "false") + ",\"view\":{\"right\":";
+    std::string j = "{\"format\":\"handemo-view/2\",\"width\":" + std::to_string(opt.width) + ",\"height\":" + std::to_string(opt.height) +
+                    ",\"columns\":" + std::to_string(columns) + ",\"normalised\":" + (opt.normalised_time ? "true" : "false") + ",\"view\":{\"right\":";
     detail::json_vec(j, view.right);
     j += ",\"up\":";
     detail::json_vec(j, view.up);
@@ -232,7 +264,8 @@ inline std::string viewer_json(std::span<const clip> clips, const viewer_options
     return j;
 }
 
-/// @brief One self-contained HTML page (no network access, nothing fetched) that plays `clips` side by side.
+/// @brief One self-contained HTML page (no network access, nothing fetched) that plays `clips` in a grid
+/// (viewer_options::columns; layout as viewer_title_height documents).
 /// @param clips any skeletons; the camera comes from the first clip, as for filmstrips.
 /// @return the HTML text (write it with write_file_atomic).
 /// @throws as viewer_json.
@@ -285,12 +318,17 @@ for (const level of ["error", "warn"]) {
   console[level] = function () { fail("console." + level + ": " + Array.prototype.join.call(arguments, " ")); return orig.apply(console, arguments); };
 }
 const D = JSON.parse(document.getElementById("data").textContent);
-const W = D.width, H = D.height, TITLE = )js" + std::to_string(viewer_title_height) + R"js(, FILL = )js" + std::to_string(viewer_fill) + R"js(;
+const W = D.width, TITLE = )js" + std::to_string(viewer_title_height) + R"js(, FILL = )js" + std::to_string(viewer_fill) + R"js(;
+const n = D.clips.length, cols = D.columns, rows = Math.ceil(n / cols);
+const cw = W / cols, ch = D.height, H = rows * (TITLE + ch);  // cell size; canvas height
+function cell(i) {  // clip i's cell: row i / cols, column i % cols, below its row's title band
+  const r = Math.floor(i / cols), k = i % cols;
+  return {x: k * cw, y: (r + 1) * TITLE + r * ch, r: r, k: k};
+}
 const cv = document.getElementById("view"), ctx = cv.getContext("2d");
 const dpr = window.devicePixelRatio || 1;
 cv.width = Math.round(W * dpr); cv.height = Math.round(H * dpr);
 cv.style.width = W + "px"; cv.style.height = H + "px";
-const n = D.clips.length, cw = W / n, ch = H - TITLE;
 const dur = D.clips.map(c => c.frames / c.fps), T = Math.max.apply(null, dur);
 let t = 0, playing = true, speed = 1, yaw = 0, pitch = 0, zoom = 1, mouse = null, drag = null, last = null;
 const norm = document.getElementById("norm"); norm.checked = D.normalised;
@@ -313,11 +351,11 @@ function frameOf(i) {
 }
 function project(i, f, cam) {  // pixel positions of every point of clip i at frame f
   const c = D.clips[i], P = c.positions, o = f * c.points * 3, s = zoom * FILL * Math.min(cw, ch) / (2 * D.radius);
-  const out = [];
+  const b = cell(i), out = [];
   for (let p = 0; p < c.points; ++p) {
     const q = [P[o + 3*p] - c.center[0], P[o + 3*p + 1] - c.center[1], P[o + 3*p + 2] - c.center[2]];
     const dot = v => q[0]*v[0] + q[1]*v[1] + q[2]*v[2];
-    out.push({x: i*cw + cw/2 + dot(cam.right)*s, y: TITLE + ch/2 - dot(cam.up)*s, z: dot(cam.toward)});
+    out.push({x: b.x + cw/2 + dot(cam.right)*s, y: b.y + ch/2 - dot(cam.up)*s, z: dot(cam.toward)});
   }
   return out;
 }
@@ -330,10 +368,13 @@ function draw() {
   const base = Math.max(1.5, 0.02 * Math.min(cw, ch) * zoom);
   let best = null;
   for (let i = 0; i < n; ++i) {
-    const c = D.clips[i], f = frameOf(i), px = project(i, f, cam);
-    ctx.fillStyle = "#222"; ctx.fillText(c.title, i*cw + cw/2, 17);
-    if (i) { ctx.strokeStyle = "#ddd"; ctx.lineWidth = 1; ctx.beginPath(); ctx.moveTo(i*cw, 0); ctx.lineTo(i*cw, H); ctx.stroke(); }
-    ctx.save(); ctx.beginPath(); ctx.rect(i*cw, TITLE, cw, ch); ctx.clip();
+    const c = D.clips[i], f = frameOf(i), px = project(i, f, cam), b = cell(i);
+    ctx.fillStyle = "#222"; ctx.fillText(c.title, b.x + cw/2, b.y - TITLE + 17, cw - 4);
+    ctx.strokeStyle = "#ddd"; ctx.lineWidth = 1; ctx.beginPath();
+    if (b.k) { ctx.moveTo(b.x, b.y - TITLE); ctx.lineTo(b.x, b.y + ch); }  // between the columns of a row
+    if (b.r) { ctx.moveTo(b.x, b.y - TITLE); ctx.lineTo(b.x + cw, b.y - TITLE); }  // between rows
+    ctx.stroke();
+    ctx.save(); ctx.beginPath(); ctx.rect(b.x, b.y, cw, ch); ctx.clip();
     const items = [];
     for (let p = 0; p < c.points; ++p) {
       const q = c.parents[p];
@@ -353,9 +394,10 @@ function draw() {
     }
     ctx.restore();
     ctx.fillStyle = "#888"; ctx.font = "11px sans-serif"; ctx.textAlign = "left";
-    ctx.fillText("frame " + f + " / " + (c.frames - 1), i*cw + 6, H - 6);
+    ctx.fillText("frame " + f + " / " + (c.frames - 1), b.x + 6, b.y + ch - 6);
     ctx.font = "14px sans-serif"; ctx.textAlign = "center";
-    if (mouse) for (let p = 0; p < c.points; ++p) {
+    const inside = mouse && mouse.x >= b.x && mouse.x < b.x + cw && mouse.y >= b.y && mouse.y < b.y + ch;
+    if (inside) for (let p = 0; p < c.points; ++p) {  // hover: the joints of the cell under the mouse (drawing is clipped to it)
       if (c.hidden[p]) continue;
       const d = Math.hypot(px[p].x - mouse.x, px[p].y - mouse.y);
       if (d < 10 && (!best || d < best.d)) best = {d: d, x: px[p].x, y: px[p].y, text: c.title + ": " + c.names[p]};

@@ -16,6 +16,7 @@
 #include <handemo/retarget/rotation.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -130,12 +131,15 @@ struct rest_view {
 
     rest_view(const skeleton& s, const binding& b, std::string role) : sk(s), slots(b)
     {
+        for (const auto& j : s.joints)
+            for (std::size_t k = 0; k < 3; ++k)
+                if (!std::isfinite(j.offset[k]) || (j.end_site && !std::isfinite((*j.end_site)[k])))
+                    throw value_error("retarget: " + role + " skeleton '" + s.name + "': joint '" + j.name + "' has a non-finite offset");
         const std::vector<double> zero(s.size() * 3, 0.0);
         rest = forward_kinematics(s, zero.data());
-        double ext = 0;
-        for (const auto& p : rest.joints)
-            for (const auto& q : {rest.joints.front()}) ext = std::max(ext, norm(sub(p, q)));
-        for (const auto& p : rest.end_sites) ext = std::max(ext, norm(sub(p, rest.joints.front())));
+        double ext = 0;  // the skeleton's extent: the farthest joint or End Site from the root
+        for (std::size_t j = 0; j < s.size(); ++j)
+            ext = std::max({ext, norm(sub(rest.joints[j], rest.joints.front())), norm(sub(rest.end_sites[j], rest.joints.front()))});
         eps = std::max(ext, 1e-300) * 1e-9;
         what = role + " skeleton '" + s.name + "'";
     }
