@@ -68,7 +68,15 @@ if(NOT html MATCHES "\"normalised\":true" OR NOT html MATCHES "\"title\":\"angry
   message(FATAL_ERROR "view.html does not embed the clips as asked, or refers to the network")
 endif()
 
+run_ok(view_grid view ${DATA_DIR}/arm.bvh ${DATA_DIR}/arm.bvh ${DATA_DIR}/arm.bvh --columns 2 --height 200 --out ${WORK_DIR}/grid.html)
+file(READ ${WORK_DIR}/grid.html html)
+if(NOT html MATCHES "\"height\":200,\"columns\":2,")
+  message(FATAL_ERROR "grid.html does not embed the asked columns and cell height")
+endif()
+
 run_fail(view_titles view ${DATA_DIR}/arm.bvh --titles a,b --out ${WORK_DIR}/x.html)
+run_fail(view_columns view ${DATA_DIR}/arm.bvh --columns 10001 --out ${WORK_DIR}/x.html)
+expect_error_matches("columns 10001 is not in 0..10000")
 run_fail(view_ext view ${DATA_DIR}/arm.bvh --out ${WORK_DIR}/x.png)
 run_fail(view_not_bvh view ${DATA_DIR}/losses.csv --out ${WORK_DIR}/x.html)
 run_fail(render_titles render ${DATA_DIR}/arm.bvh --titles a,b --out ${WORK_DIR}/x.png)

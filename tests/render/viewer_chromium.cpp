@@ -1,12 +1,15 @@
-// Browser check of the viewer page (render/viewer.hpp) in headless Chromium: a generated page is opened at
+// Browser check of the viewer page (render/viewer.hpp) in headless Chromium: generated pages are opened at
 // `view.html?t=0.4` with `chromium --headless --dump-dom` (flags for a closed network and a fresh profile),
-// and the test requires
+// and the test requires of each
 //   - nothing on the console: the page's data-status is "ok" (its script hooks window.onerror,
 //     unhandledrejection and console.error/console.warn), and Chromium's log (--enable-logging=stderr)
 //     has no CONSOLE line from the page, which catches a syntax error no hook can;
 //   - the frame drawn for each clip at t = 0.4 s is handemo's (floor(t fps)), and the centre of every joint
 //     the page drew (recorded from its drawing calls) equals handemo's forward kinematics projected in C++
-//     within 1 px, and the canvas pixel read back at each centre is opaque (ink where a joint was drawn).
+//     within 1 px and lies inside the clip's grid cell, and the canvas pixel read back at each centre is
+//     opaque (ink where a joint was drawn).
+// The pages: two clips in one row, and ten clips in 5 columns, where clip 7 must be drawn in row 1, column 2
+// (its cell's corners written out here, not taken from the helper that projects the joints).
 // Returns 77 (CTest SKIP_RETURN_CODE) when no Chromium is installed: set HANDEMO_CHROMIUM to a browser binary
 // or install Debian's chromium (./setup.sh does). With the arguments `node SCRIPT` it runs the page's script
 // under Node with the fake DOM in SCRIPT (viewer_fake_dom.js) instead (77 when there is no node), which
@@ -31,6 +34,9 @@
 
 namespace {
 
+namespace fs = std::filesystem;
+using namespace handemo;
+
 std::string run(const std::string& cmd)
 {
     std::string out;
@@ -43,11 +49,110 @@ std::string run(const std::string& cmd)
     return out;
 }
 
+struct page {
+    std::string name;
+    std::vector<clip> clips;
+    viewer_options options;
+};
+
+/// Opens one page in the browser (or under node) at time t and checks what it drew; "ok: ..." or what failed.
+std::string check_page(const page& pg, const std::string& browser, bool node, const std::string& script, double t)
+{
+    const std::vector<clip>& clips = pg.clips;
+    std::string html = render_viewer_html(clips, pg.options);
+    // HANDEMO_VIEWER_INJECT=<js>: a script appended to the page, for the test that shows a console error fails
+    if (const char* inj = std::getenv("HANDEMO_VIEWER_INJECT"); inj && *inj)
+        html.insert(html.rfind("</body>"), std::string("<script>") + inj + "</script>\n");
+    const fs::path dir = fs::temp_directory_path() / ("handemo_viewer_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path file = dir / "view.html", log = dir / "chromium.log";
+    write_file_atomic(file, html);
+    const std::string cmd =
+        node ? "'" + browser + "' '" + script + "' '" + file.string() + "' 2>&1"
+             : "timeout 25 '" + browser + "' --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+               "--disable-background-networking --disable-component-update --disable-sync --user-data-dir='" +
+                   (dir / "profile").string() + "' --enable-logging=stderr --v=0 --virtual-time-budget=2000 --dump-dom 'file://" +
+                   file.string() + "?t=" + std::to_string(t) + "' 2>'" + log.string() + "'";
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::string dom = run(cmd);
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::string console;
+    if (!node && fs::exists(log)) {
+        std::istringstream ls(read_file(log));
+        for (std::string l; std::getline(ls, l);)
+            if (l.find(":CONSOLE") != std::string::npos) console += "  " + l + "\n";
+    }
+    fs::remove_all(dir);
+    if (!console.empty()) return "the page wrote to the console:\n" + console;
+    const auto at = dom.find("id=\"check\"");
+    if (at == std::string::npos)
+        return "no <pre id=\"check\"> in the dumped DOM (" + std::to_string(dom.size()) + " bytes, " + std::to_string(secs) + " s)\n" +
+               dom.substr(0, 500);
+    const auto tag_end = dom.find('>', at);
+    const std::string tag = dom.substr(at, tag_end - at);
+    if (tag.find("data-status=\"ok\"") == std::string::npos)
+        return "the page did not finish drawing cleanly: " + tag + " " + dom.substr(tag_end + 1, 300);
+    const std::string text = dom.substr(tag_end + 1, dom.find("</pre>", tag_end) - tag_end - 1);
+    const auto d = test::viewer_data(html);
+    std::istringstream lines(text);
+    std::string line;
+    std::size_t ci = 0, checked = 0;
+    double worst = 0;
+    bool ink_line = false;
+    while (std::getline(lines, line)) {
+        if (line.empty()) continue;
+        if (line.rfind("ink ", 0) == 0) {
+            ink_line = true;
+            continue;
+        }
+        // "clip i frame f: p:x,y ..."
+        std::size_t ci_read = 0, f = 0;
+        if (std::sscanf(line.c_str(), "clip %zu frame %zu:", &ci_read, &f) != 2 || ci_read != ci || ci >= clips.size())
+            return "unexpected check line '" + line.substr(0, 80) + "'";
+        const std::size_t want_f = std::min(clips[ci].frames - 1, static_cast<std::size_t>(std::floor(t * clips[ci].fps + 1e-9)));
+        if (f != want_f)
+            return "clip " + std::to_string(ci) + ": the page drew frame " + std::to_string(f) + " at t = " + std::to_string(t) +
+                   " s, expected " + std::to_string(want_f);
+        const auto expect = test::viewer_expected_pixels(clips[ci], ci, d, f);
+        const test::viewer_cell cell = test::viewer_cell_of(d, ci);
+        std::size_t visible = 0;
+        for (const auto& h : d["clips"][ci]["hidden"]) visible += h.get<int>() ? 0 : 1;
+        std::istringstream pts(line.substr(line.find(": ") + 2));
+        std::string item;
+        std::size_t drawn = 0;
+        while (pts >> item) {
+            std::size_t p = 0;
+            double x = 0, y = 0;
+            if (std::sscanf(item.c_str(), "%zu:%lf,%lf", &p, &x, &y) != 3 || p >= expect.size())
+                return "clip " + std::to_string(ci) + ": bad point '" + item + "' (" + std::to_string(expect.size()) + " points)";
+            if (x < cell.x || x > cell.x + cell.w || y < cell.y || y > cell.y + cell.h)
+                return "clip " + std::to_string(ci) + ": point " + std::to_string(p) + " drawn at (" + std::to_string(x) + ", " +
+                       std::to_string(y) + "), outside its cell (row " + std::to_string(cell.row) + ", column " + std::to_string(cell.column) + ")";
+            // the grid page's clip 7: row 1, column 2 of 200 x 300 cells under 24-pixel title bands
+            if (pg.options.columns == 5 && ci == 7 && !(x >= 400 && x <= 600 && y >= 2 * 24 + 300 && y <= 2 * (24 + 300)))
+                return "clip 7: point " + std::to_string(p) + " drawn at (" + std::to_string(x) + ", " + std::to_string(y) +
+                       "), not in row 1, column 2 ([400, 600] x [348, 648])";
+            worst = std::max({worst, std::abs(x - expect[p][0]), std::abs(y - expect[p][1])});
+            ++drawn, ++checked;
+        }
+        if (drawn != visible)
+            return "clip " + std::to_string(ci) + ": " + std::to_string(drawn) + " joints drawn, expected " + std::to_string(visible);
+        ++ci;
+    }
+    if (ci != clips.size() || !ink_line || worst > 1.0)
+        return std::to_string(ci) + " clips checked of " + std::to_string(clips.size()) + (ink_line ? "" : ", no ink line") +
+               ", largest pixel difference " + std::to_string(worst);
+    std::ostringstream ok;
+    ok << "ok: " << checked << " drawn joints of " << clips.size() << " clips at t = " << t << " s within " << worst
+       << " px of handemo's forward kinematics, each in its cell, ink under every one, no console output (" << secs << " s)";
+    return ok.str();
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
 {
-    namespace fs = std::filesystem;
     const bool node = argc == 3 && std::string(argv[1]) == "node";
     std::string browser;
     if (node) {
@@ -67,101 +172,24 @@ int main(int argc, char** argv)
             return 77;
         }
     }
-    using namespace handemo;
-    const std::vector<clip> clips{test::flexing_hand(30), test::stick_body(20)};
-    const double t = node ? 0.0 : 0.4;  // 0.4 s: frame 12 of both 30 fps clips
-    std::string html = render_viewer_html(clips);
-    // HANDEMO_VIEWER_INJECT=<js>: a script appended to the page, for the test that shows a console error fails
-    if (const char* inj = std::getenv("HANDEMO_VIEWER_INJECT"); inj && *inj)
-        html.insert(html.rfind("</body>"), std::string("<script>") + inj + "</script>\n");
-    const fs::path dir = fs::temp_directory_path() / ("handemo_viewer_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    const fs::path page = dir / "view.html", log = dir / "chromium.log";
-    write_file_atomic(page, html);
-    const std::string cmd =
-        node ? "'" + browser + "' '" + std::string(argv[2]) + "' '" + page.string() + "' 2>&1"
-             : "timeout 25 '" + browser + "' --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
-               "--disable-background-networking --disable-component-update --disable-sync --user-data-dir='" +
-                   (dir / "profile").string() + "' --enable-logging=stderr --v=0 --virtual-time-budget=2000 --dump-dom 'file://" +
-                   page.string() + "?t=0.4' 2>'" + log.string() + "'";
-    const auto t0 = std::chrono::steady_clock::now();
-    const std::string dom = run(cmd);
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::string console;
-    if (!node && fs::exists(log)) {
-        std::istringstream ls(read_file(log));
-        for (std::string l; std::getline(ls, l);)
-            if (l.find(":CONSOLE") != std::string::npos) console += "  " + l + "\n";
-    }
-    fs::remove_all(dir);
-    if (!console.empty()) {
-        std::cerr << "FAIL: the page wrote to the console:\n" << console;
-        return 1;
-    }
-    const auto at = dom.find("id=\"check\"");
-    if (at == std::string::npos) {
-        std::cerr << "FAIL: no <pre id=\"check\"> in the dumped DOM (" << dom.size() << " bytes, " << secs << " s)\n" << dom.substr(0, 500) << "\n";
-        return 1;
-    }
-    const auto tag_end = dom.find('>', at);
-    const std::string tag = dom.substr(at, tag_end - at);
-    if (tag.find("data-status=\"ok\"") == std::string::npos) {
-        std::cerr << "FAIL: the page did not finish drawing cleanly: " << tag << " " << dom.substr(tag_end + 1, 300) << "\n";
-        return 1;
-    }
-    const std::string text = dom.substr(tag_end + 1, dom.find("</pre>", tag_end) - tag_end - 1);
-    const auto d = test::viewer_data(html);
-    std::istringstream lines(text);
-    std::string line;
-    std::size_t ci = 0, checked = 0;
-    double worst = 0;
-    bool ink_line = false;
-    while (std::getline(lines, line)) {
-        if (line.empty()) continue;
-        if (line.rfind("ink ", 0) == 0) {
-            ink_line = true;
-            continue;
-        }
-        // "clip i frame f: p:x,y ..."
-        std::size_t ci_read = 0, f = 0;
-        if (std::sscanf(line.c_str(), "clip %zu frame %zu:", &ci_read, &f) != 2 || ci_read != ci || ci >= clips.size()) {
-            std::cerr << "FAIL: unexpected check line '" << line.substr(0, 80) << "'\n";
+    // a single row (two clips, automatic columns), and a grid: ten clips in 5 columns of 200 x 300 pixel cells
+    std::vector<clip> grid;
+    for (std::size_t i = 0; i < 10; ++i) grid.push_back(i % 2 ? test::stick_body(20) : test::flexing_hand(30));
+    viewer_options go;
+    go.columns = 5;
+    go.width = 1000;
+    go.height = 300;
+    const page pages[] = {{"one row", {test::flexing_hand(30), test::stick_body(20)}, {}}, {"grid", grid, go}};
+    const double t = node ? 0.0 : 0.4;  // 0.4 s: frame 12 of the 30 fps clips
+    std::string report;
+    for (const page& pg : pages) {
+        const std::string r = check_page(pg, browser, node, node ? argv[2] : "", t);
+        if (r.rfind("ok", 0) != 0) {
+            std::cerr << "FAIL: " << pg.name << " page: " << r << "\n";
             return 1;
         }
-        const std::size_t want_f = std::min(clips[ci].frames - 1, static_cast<std::size_t>(std::floor(t * clips[ci].fps + 1e-9)));
-        if (f != want_f) {
-            std::cerr << "FAIL: clip " << ci << ": the page drew frame " << f << " at t = " << t << " s, expected " << want_f << "\n";
-            return 1;
-        }
-        const auto expect = test::viewer_expected_pixels(clips[ci], ci, d, f);
-        std::size_t visible = 0;
-        for (const auto& h : d["clips"][ci]["hidden"]) visible += h.get<int>() ? 0 : 1;
-        std::istringstream pts(line.substr(line.find(": ") + 2));
-        std::string item;
-        std::size_t drawn = 0;
-        while (pts >> item) {
-            std::size_t p = 0;
-            double x = 0, y = 0;
-            if (std::sscanf(item.c_str(), "%zu:%lf,%lf", &p, &x, &y) != 3 || p >= expect.size()) {
-                std::cerr << "FAIL: clip " << ci << ": bad point '" << item << "' (" << expect.size() << " points)\n";
-                return 1;
-            }
-            worst = std::max({worst, std::abs(x - expect[p][0]), std::abs(y - expect[p][1])});
-            ++drawn, ++checked;
-        }
-        if (drawn != visible) {
-            std::cerr << "FAIL: clip " << ci << ": " << drawn << " joints drawn, expected " << visible << "\n";
-            return 1;
-        }
-        ++ci;
+        report += "  " + pg.name + " page: " + r + "\n";
     }
-    if (ci != clips.size() || !ink_line || worst > 1.0) {
-        std::cerr << "FAIL: " << ci << " clips checked of " << clips.size() << (ink_line ? "" : ", no ink line")
-                  << ", largest pixel difference " << worst << "\n";
-        return 1;
-    }
-    std::cout << "ok: " << checked << " drawn joints at t = " << t << " s within " << worst << " px of handemo's forward kinematics, "
-              << "ink under every one, no console output (" << browser << ", " << secs << " s)\n";
+    std::cout << "ok (" << browser << ")\n" << report;
     return 0;
 }

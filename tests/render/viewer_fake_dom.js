@@ -1,6 +1,6 @@
 // Runs the viewer page's script under Node with a minimal fake DOM (no drawing: the canvas context accepts
 // every call) and prints <pre id="check" data-status="...">...</pre> as a browser's --dump-dom would, so
-// test_viewer_browser can check the page's projection where no Chromium is installed.
+// test_viewer_chromium can check the page's projection and grid layout where no Chromium is installed.
 // Usage: node viewer_fake_dom.js view.html
 "use strict";
 const fs = require("fs");

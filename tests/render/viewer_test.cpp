@@ -1,5 +1,6 @@
 // Tests of the HTML motion viewer (render/viewer.hpp): the page is self-contained (nothing fetched), embeds
-// every clip's frame and joint count, and the embedded positions are handemo's forward kinematics.
+// every clip's frame and joint count, the embedded positions are handemo's forward kinematics, and the clips
+// are laid out in a grid of the documented cells.
 #include "helpers.hpp"
 #include "viewer_helpers.hpp"
 
@@ -8,6 +9,8 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -25,7 +28,8 @@ TEST_CASE("viewer: the page is self-contained and embeds every clip")
     CHECK(html.find("</script><b>") == std::string::npos);  // a title cannot close the data block
     const auto d = test::viewer_data(html);
     REQUIRE(d.is_object());
-    CHECK(d["format"] == "handemo-view/1");
+    CHECK(d["format"] == "handemo-view/2");
+    CHECK(d["columns"] == 3);
     REQUIRE(d["clips"].size() == clips.size());
     for (std::size_t i = 0; i < clips.size(); ++i) {
         const auto& c = d["clips"][i];
@@ -84,13 +88,96 @@ TEST_CASE("viewer: the C++ projection of frame 0 stays inside each clip's cell")
 {
     const std::vector<clip> clips{test::flexing_hand(10), test::stick_body(10)};
     const auto d = test::viewer_data(render_viewer_html(clips));
+    CHECK(d["columns"] == 2);
     for (std::size_t i = 0; i < clips.size(); ++i)
         for (const auto& p : test::viewer_expected_pixels(clips[i], i, d)) {
             CHECK(p[0] >= 480.0 * static_cast<double>(i));
             CHECK(p[0] <= 480.0 * static_cast<double>(i + 1));
             CHECK(p[1] >= viewer_title_height);
-            CHECK(p[1] <= 540.0);
+            CHECK(p[1] <= viewer_title_height + 540.0);
         }
+}
+
+namespace {
+
+/// Ten clips, hands and bodies alternating.
+std::vector<clip> ten_clips()
+{
+    std::vector<clip> c;
+    for (std::size_t i = 0; i < 10; ++i) c.push_back(i % 2 ? test::stick_body(12) : test::flexing_hand(12));
+    return c;
+}
+
+}  // namespace
+
+TEST_CASE("viewer: 10 clips in 5 columns put clip 7 in row 1, column 2, its figure inside that cell")
+{
+    const auto clips = ten_clips();
+    viewer_options o;
+    o.columns = 5;
+    o.width = 1000;
+    o.height = 300;
+    const auto d = test::viewer_data(render_viewer_html(clips, o));
+    REQUIRE(d["columns"] == 5);
+    CHECK(d["width"] == 1000);
+    CHECK(d["height"] == 300);
+    const test::viewer_cell c7 = test::viewer_cell_of(d, 7);
+    CHECK(c7.row == 1);
+    CHECK(c7.column == 2);
+    // 200 x 300 cells; row 1 starts below row 0's title band and cells and its own title band
+    CHECK(c7.x == doctest::Approx(400));
+    CHECK(c7.w == doctest::Approx(200));
+    CHECK(c7.y == doctest::Approx(2 * viewer_title_height + 300));
+    CHECK(c7.h == doctest::Approx(300));
+    for (std::size_t f : {std::size_t{0}, std::size_t{6}, std::size_t{11}}) {
+        double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+        for (const auto& p : test::viewer_expected_pixels(clips[7], 7, d, f)) {
+            CHECK(p[0] >= 400.0);
+            CHECK(p[0] <= 600.0);
+            CHECK(p[1] >= 2 * viewer_title_height + 300.0);
+            CHECK(p[1] <= 2 * (viewer_title_height + 300.0));
+            lo_x = std::min(lo_x, p[0]), hi_x = std::max(hi_x, p[0]), lo_y = std::min(lo_y, p[1]), hi_y = std::max(hi_y, p[1]);
+        }
+        // the figure fills its panel: the shared scale is set by the cell's narrower side (200 px), and the body
+        // reaches well over half of it
+        CHECK(std::max(hi_x - lo_x, hi_y - lo_y) > 100.0);
+    }
+    // every clip inside its own cell, row by row
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        const double x0 = 200.0 * static_cast<double>(i % 5), y0 = static_cast<double>(i / 5 + 1) * viewer_title_height + 300.0 * static_cast<double>(i / 5);
+        for (const auto& p : test::viewer_expected_pixels(clips[i], i, d)) {
+            CHECK(p[0] >= x0);
+            CHECK(p[0] <= x0 + 200.0);
+            CHECK(p[1] >= y0);
+            CHECK(p[1] <= y0 + 300.0);
+        }
+    }
+}
+
+TEST_CASE("viewer: automatic columns put at most 5 clips in a row, the rows filled evenly")
+{
+    // n clips -> columns: ceil(n / rows), rows = ceil(n / 5)
+    const std::size_t want[] = {0, 1, 2, 3, 4, 5, 3, 4, 4, 5, 5, 4, 4, 5, 5, 5, 4};
+    for (std::size_t n = 1; n < std::size(want); ++n) CHECK_MESSAGE(viewer_columns(n, 0) == want[n], n, " clips");
+    CHECK(viewer_columns(10, 3) == 3);
+    CHECK(viewer_columns(3, 7) == 3);  // more columns than clips: one row
+    CHECK(viewer_columns(3, 10000) == 3);
+
+    // 10 clips: 2 rows of 5, the same page as asking for 5 columns
+    const auto clips = ten_clips();
+    const std::string automatic = render_viewer_html(clips);
+    const auto d = test::viewer_data(automatic);
+    REQUIRE(d["columns"] == 5);
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        const test::viewer_cell c = test::viewer_cell_of(d, i);
+        CHECK(c.row == i / 5);
+        CHECK(c.column == i % 5);
+    }
+    viewer_options o;
+    o.columns = 5;
+    CHECK(render_viewer_html(clips, o) == automatic);
+    o.columns = 40;  // clamped to the clip count: one row of 10
+    CHECK(test::viewer_data(render_viewer_html(clips, o))["columns"] == 10);
 }
 
 TEST_CASE("viewer: bad input is refused")
@@ -105,4 +192,17 @@ TEST_CASE("viewer: bad input is refused")
     empty.angles.clear();
     empty.positions.clear();
     CHECK_THROWS_WITH_AS(render_viewer_html(std::vector<clip>{empty}), doctest::Contains("0 frames"), value_error);
+
+    const std::vector<clip> one{test::flexing_hand(5)};
+    viewer_options g;
+    g.columns = 10001;
+    CHECK_THROWS_WITH_AS(render_viewer_html(one, g), doctest::Contains("columns 10001 is not in 0..10000"), value_error);
+    g.columns = 0;
+    g.height = 20000;
+    CHECK_THROWS_WITH_AS(render_viewer_html(one, g), doctest::Contains("cell height 20000 is not in 64..16384"), value_error);
+    // 40 rows of 400 + 24 pixels would make a canvas no browser draws
+    g.columns = 1;
+    g.height = 400;
+    CHECK_THROWS_WITH_AS(render_viewer_html(std::vector<clip>(40, test::flexing_hand(2)), g), doctest::Contains("16960 pixels tall"), value_error);
+    CHECK_NOTHROW(render_viewer_html(std::vector<clip>(38, test::flexing_hand(2)), g));  // 38 (24 + 400) = 16112
 }

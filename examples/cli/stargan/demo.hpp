@@ -141,7 +141,9 @@ inline void run_demo(demo_cli& o)
         vo.titles = titles;
         for (const auto& t : titles) vo.titles.push_back(t == "input (neutral)" ? t : "real " + t);
         vo.normalised_time = true;
-        vo.width = 1400;
+        vo.columns = strip.size();  // each transfer above its real clip
+        vo.width = 1200;
+        vo.height = 300;
         vo.page_title = "handemo demo: unseen '" + mname + "' transferred (top) and real (bottom)";
         write_file_atomic(outdir / "view.html", render_viewer_html(both, vo));
     }

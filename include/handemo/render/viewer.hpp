@@ -2,9 +2,10 @@
 // of the hand paper's Figures 4-12 are still. handemo does the forward kinematics (motion/skeleton.hpp) and
 // embeds every frame's joint and end-site positions, the parent indices and the same per-finger / per-limb
 // colours as the PNG renderer (figure.hpp analyse_figure) as JSON; the page only draws them with Canvas 2D
-// (no library, no network, nothing fetched). Clips play in a grid of cells (at most 5 per row unless asked
-// otherwise), in sync at their own frame rates, or in normalised time (a transferred clip and its input, which may differ in tempo, stay aligned); play/pause,
-// scrub, speed, orbit (drag), zoom (wheel) and joint names on hover. For headless checks the page writes,
+// (no library, no network, nothing fetched). Clips play in a grid of cells, row by row (at most 5 per row
+// unless asked otherwise), in sync at their own frame rates or in normalised time (a transferred clip and its
+// input, which may differ in tempo, stay aligned); play/pause, scrub, speed, orbit (drag), zoom (wheel) and
+// joint names on hover. For headless checks the page writes,
 // into a hidden <pre id="check">, the frame it drew for every clip and the pixel centres of the joints it
 // drew (recorded from the drawing calls themselves) at the initial camera, at time 0 or at the time given
 // as `view.html?t=SECONDS` (which also starts paused there), and the canvas pixel read back at each centre;
@@ -146,12 +147,14 @@ inline std::string viewer_json(std::span<const clip> clips, const viewer_options
         throw value_error(fn + ": " + std::to_string(opt.titles.size()) + " titles for " + std::to_string(clips.size()) +
                           " clips (expected one title per clip, or none)");
     if (opt.width < 64 || opt.height < 64 || opt.width > 16384 || opt.height > 16384)
-        throw value_error(fn + ": canvas " + std::to_string(opt.width) + "x" + std::to_string(opt.height) + " is not in 64..16384 per side");
+        throw value_error(fn + ": width " + std::to_string(opt.width) + " x cell height " + std::to_string(opt.height) +
+                          " is not in 64..16384 per side");
     const std::size_t columns = viewer_columns(clips.size(), opt.columns);
     const std::size_t rows = (clips.size() + columns - 1) / columns;
-    if (static_cast<double>(rows) * (viewer_title_height + static_cast<double>(opt.height)) > 16384.0)
-        throw value_error(fn + ": " + std::to_string(rows) + " rows of height " + std::to_string(opt.height) + " plus the title band make a canvas " +
-                          std::to_string(static_cast<std::size_t>(static_cast<double>(rows) * (viewer_title_height + static_cast<double>(opt.height)))) +
+    const double canvas_height = static_cast<double>(rows) * (viewer_title_height + static_cast<double>(opt.height));
+    if (canvas_height > 16384.0)
+        throw value_error(fn + ": " + std::to_string(rows) + " rows of height " + std::to_string(opt.height) + " under their titles make a canvas " +
+                          std::to_string(static_cast<std::size_t>(canvas_height)) +
                           " pixels tall (expected at most 16384: more columns or a smaller height)");
     std::vector<figure_layout> layouts;
     for (std::size_t i = 0; i < clips.size(); ++i) {
