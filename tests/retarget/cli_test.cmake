@@ -11,7 +11,7 @@ endif()
 
 # the right hand transferred with the shipped model (no --model), written back on the capture's skeleton
 run_ok(transfer_right transfer --in ${cap} --hand right --emotion sad --out ${WORK_DIR}/sad.bvh)
-if(NOT last_output MATCHES "using the shipped hand model" OR NOT last_output MATCHES "convention smpl -> hand .handemo-hand.: right hand, relative to 'right_elbow'")
+if(NOT last_output MATCHES "using the shipped hand model" OR NOT last_output MATCHES "convention smpl -> model hand-embedded .handemo-hand.: right hand, relative to 'right_elbow'")
   message(FATAL_ERROR "transfer_right: output does not say which model and mapping it used:\n${last_output}")
 endif()
 execute_process(COMMAND ${CHECK} ${cap} ${WORK_DIR}/sad.bvh right RESULT_VARIABLE rc)

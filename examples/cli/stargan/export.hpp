@@ -6,6 +6,7 @@
 
 #include <handemo/core/io.hpp>
 #include <handemo/stargan/export.hpp>
+#include <handemo/stargan/train.hpp>
 
 #include <fstream>
 #include <iostream>
@@ -15,13 +16,24 @@
 namespace handemo::cli::export_cmd {
 
 struct export_cli {
-    std::string model, out;
+    std::string model, inference, out;
     stargan::header_export_options opt;
     bool no_self_test = false;
 };
 
 inline void run_export(export_cli& o)
 {
+    if (o.model.empty() == o.inference.empty()) throw value_error("export: give one of --header MODEL or --inference MODEL");
+    if (!o.inference.empty()) {
+        namespace fs = std::filesystem;
+        const fs::path in = fs::is_directory(o.inference) ? fs::path(o.inference) / "checkpoint.safetensors" : fs::path(o.inference);
+        const auto slim = stargan::inference_checkpoint(stargan::read_checkpoint(in).first);
+        (void)stargan::parse_checkpoint(slim);  // what load_model() will check
+        write_safetensors(o.out, slim);
+        std::cout << "export: " << in.string() << " -> " << o.out << " (inference only: metadata and the generator's weights, "
+                  << fs::file_size(o.out) << " bytes)\n";
+        return;
+    }
     o.opt.self_test = !o.no_self_test;
     const std::string text = stargan::export_generator_header(o.model, o.opt);
     std::ofstream f(o.out, std::ios::binary);
@@ -37,8 +49,11 @@ inline void run_export(export_cli& o)
 static handemo::cli::add_command reg_export{55, [](CLI::App& app) {
     auto* sub = app.add_subcommand("export", "Write a trained generator as a C++ header (constexpr weights + config) for handemo::micro");
     auto o = std::make_shared<handemo::cli::export_cmd::export_cli>();
-    sub->add_option("--header", o->model, "Model folder or checkpoint.safetensors written by 'handemo train'")->required();
-    sub->add_option("--out", o->out, "Header to write, e.g. model.hpp")->required();
+    sub->add_option("--header", o->model, "Model folder or checkpoint.safetensors written by 'handemo train': write a C++ header");
+    sub->add_option("--inference", o->inference,
+                    "Model folder or checkpoint.safetensors: write its inference part (metadata and generator weights, what "
+                    "'transfer --model' reads) as a smaller checkpoint");
+    sub->add_option("--out", o->out, "File to write: the header (e.g. model.hpp) or, with --inference, the checkpoint")->required();
     sub->add_option("--namespace", o->opt.name_space, "Namespace of the generated struct")->capture_default_str();
     sub->add_option("--name", o->opt.struct_name, "Name of the generated struct")->capture_default_str();
     sub->add_option("--self-test-emotion", o->opt.self_test_emotion, "Target domain of the embedded self-test (default: the first non-neutral)");

@@ -15,7 +15,6 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/motion/clip.hpp>
-#include <handemo/motion/keyframes.hpp>
 #include <handemo/retarget/map.hpp>
 #include <handemo/retarget/rotation.hpp>
 
@@ -27,7 +26,8 @@
 namespace handemo::retarget {
 
 /// @brief `c` resampled to `frames` frames, every angle and position channel linear in time (the first and
-/// last frames kept; the frame rate kept, so the duration scales). `frames == c.frames` returns `c` exactly.
+/// last frames kept; the frame rate kept, so the duration scales). `frames == c.frames` returns `c` exactly, and a
+/// channel that holds still keeps its value to the bit.
 /// @throws value_error when `frames` is 0.
 inline clip resample(const clip& c, std::size_t frames)
 {
@@ -35,15 +35,21 @@ inline clip resample(const clip& c, std::size_t frames)
     if (frames == c.frames) return c;
     clip out = c;
     out.frames = frames;
-    out.positions = stretch_positions(c, frames);
     const std::size_t J3 = c.skel.size() * 3;
     out.angles.assign(frames * J3, 0.0);
+    out.positions.assign(frames * J3, 0.0);
     for (std::size_t f = 0; f < frames; ++f) {
         const double t = frames > 1 ? static_cast<double>(f) * static_cast<double>(c.frames - 1) / static_cast<double>(frames - 1) : 0.0;
         const auto f0 = static_cast<std::size_t>(std::floor(t));
         const std::size_t f1 = std::min(f0 + 1, c.frames - 1);
         const double a = t - static_cast<double>(f0);
-        for (std::size_t i = 0; i < J3; ++i) out.angles[f * J3 + i] = (1 - a) * c.angles[f0 * J3 + i] + a * c.angles[f1 * J3 + i];
+        // x0 + a (x1 - x0) with one rounding (std::fma): the same bits whatever the compiler contracts, and a
+        // channel that holds still (x1 == x0) keeps its value exactly
+        for (std::size_t i = 0; i < J3; ++i) {
+            const double p0 = c.angles[f0 * J3 + i], q0 = c.positions[f0 * J3 + i];
+            out.angles[f * J3 + i] = std::fma(a, c.angles[f1 * J3 + i] - p0, p0);
+            out.positions[f * J3 + i] = std::fma(a, c.positions[f1 * J3 + i] - q0, q0);
+        }
     }
     return out;
 }

@@ -628,6 +628,22 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
     return {std::move(f), std::move(info)};
 }
 
+/// @brief The inference part of a verified checkpoint: its metadata and the generator's weights (the EMA weights
+/// when it has them), without D, the optimiser state, the random state and the log, with its checksum made anew
+/// and metadata 'inference_only' set. load_model() reads it like the whole checkpoint; `train --resume` cannot.
+inline safetensors_file inference_checkpoint(const safetensors_file& f)
+{
+    const std::string prefix = f.find("G_ema.main.0.weight") ? "G_ema." : "G.";
+    safetensors_file out;
+    out.source = f.source;
+    out.metadata = f.metadata;
+    for (const auto& t : f.tensors)
+        if (t.name.compare(0, prefix.size(), prefix) == 0) out.tensors.push_back(t);
+    out.metadata["inference_only"] = "true";
+    out.metadata["checksum"] = detail::checkpoint_checksum(out);
+    return out;
+}
+
 /// @brief Reads and verifies a checkpoint file (format, checksum, metadata fields).
 /// @throws io_error for a missing file; format_error naming the file and the field for a truncated,
 ///         corrupted or foreign file.

@@ -290,8 +290,13 @@ public:
     /// @throws value_error for an older checkpoint of another skeleton.
     skeleton model_skeleton() const
     {
-        if (info_.skel) return *info_.skel;
+        if (info_.skel) {
+            skeleton s = *info_.skel;
+            s.name = "model " + info_.config;
+            return s;
+        }
         skeleton h = hand_skeleton();
+        h.name = "model " + info_.config;
         bool same = h.size() == info_.joint_names.size();
         for (std::size_t j = 0; same && j < h.size(); ++j) same = h.joints[j].name == info_.joint_names[j];
         if (same) return h;
