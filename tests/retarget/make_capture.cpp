@@ -1,6 +1,6 @@
 // handemo_make_capture OUT.bvh [MOTION]: writes a capture that is not handemo's own skeleton, for the tests, the
 // README and the docs: a 58-joint SMPL-X-named body with fingers (tests/retarget/rigs.hpp), standing with its right
-// forearm raised in front, whose right hand performs a neutral take of one of handemo's synthetic hand motions
+// hand raised beside its shoulder, whose right hand performs a neutral take of one of handemo's synthetic hand motions
 // (default gripping), moved onto that hand by the retargeting module, and whose body sways a little.
 #include "rigs.hpp"
 
@@ -27,12 +27,11 @@ try {
     clip c = clip::make(body, hand.frames, hand.fps);
     for (std::size_t f = 0; f < c.frames; ++f) {
         const double t = static_cast<double>(f) / c.fps;
-        // arms down (about the forward axis), the right forearm raised in front, a slow sway of the spine
+        // arms down (about the forward axis), the right forearm folded up beside the shoulder (the hand raised,
+        // fingers up), a slow sway of the spine
         c.angle(f, b.at("l.upperarm"), 2) = -70;
         c.angle(f, b.at("r.upperarm"), 2) = 70;
-        c.angle(f, b.at("r.upperarm"), 1) = -25;
-        c.angle(f, b.at("r.forearm"), 1) = -80 + 5 * std::sin(1.3 * t);
-        c.angle(f, b.at("r.forearm"), 0) = -10;
+        c.angle(f, b.at("r.forearm"), 2) = -130 + 5 * std::sin(1.3 * t);
         c.angle(f, b.at("spine"), 2) = 3 * std::sin(0.9 * t);
         c.angle(f, b.at("chest"), 0) = 2 * std::sin(0.7 * t + 1);
         c.angle(f, b.at("head"), 1) = 8 * std::sin(0.5 * t);
