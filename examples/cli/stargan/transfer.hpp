@@ -18,6 +18,14 @@
 #include <memory>
 #include <string>
 
+// Where the shipped model is looked for (the build sets both: this source tree's copy and the installed one).
+#ifndef HANDEMO_SHIPPED_MODEL
+#define HANDEMO_SHIPPED_MODEL ""
+#endif
+#ifndef HANDEMO_INSTALLED_MODEL
+#define HANDEMO_INSTALLED_MODEL ""
+#endif
+
 namespace handemo::cli::transfer_cmd {
 
 /// The shipped hand model: $HANDEMO_MODEL, else this source tree's data/models/hand-embedded, else the installed copy.
