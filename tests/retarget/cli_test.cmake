@@ -9,24 +9,21 @@ if(NOT rc EQUAL 0)
   message(FATAL_ERROR "make_capture failed")
 endif()
 
-# the right hand transferred with the shipped model (no --model), written back on the capture's skeleton
-run_ok(transfer_right transfer --in ${cap} --hand right --emotion sad --out ${WORK_DIR}/sad.bvh)
-if(NOT last_output MATCHES "using the shipped hand model" OR NOT last_output MATCHES "convention smpl -> model hand-embedded .handemo-hand.: right hand, relative to 'right_elbow'")
-  message(FATAL_ERROR "transfer_right: output does not say which model and mapping it used:\n${last_output}")
-endif()
-execute_process(COMMAND ${CHECK} ${cap} ${WORK_DIR}/sad.bvh right RESULT_VARIABLE rc)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the sad right hand changed channels outside the hand or the skeleton")
-endif()
+# `transfer` of one hand: the output must say which model and mapping it used, and only that hand may change
+function(transfer_hand name side emotion expect)
+  run_ok(${name} transfer --in ${cap} --hand ${side} --emotion ${emotion} --out ${WORK_DIR}/${name}.bvh)
+  if(NOT last_output MATCHES "using the shipped hand model" OR NOT last_output MATCHES "${expect}")
+    message(FATAL_ERROR "${name}: output does not say which model and mapping it used (expected '${expect}'):\n${last_output}")
+  endif()
+  execute_process(COMMAND ${CHECK} ${cap} ${WORK_DIR}/${name}.bvh ${side} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "${name}: channels outside the ${side} hand or the skeleton changed")
+  endif()
+endfunction()
+# the right hand with the shipped model (no --model), written back on the capture's skeleton
+transfer_hand(sad right sad "convention smpl -> model hand-embedded .handemo-hand.: right hand, relative to 'right_elbow'")
 # the left hand, mirrored into the right-hand model and back
-run_ok(transfer_left transfer --in ${cap} --hand left --emotion angry --out ${WORK_DIR}/angry_left.bvh)
-if(NOT last_output MATCHES "left hand .mirrored.")
-  message(FATAL_ERROR "transfer_left: not mirrored:\n${last_output}")
-endif()
-execute_process(COMMAND ${CHECK} ${cap} ${WORK_DIR}/angry_left.bvh left RESULT_VARIABLE rc)
-if(NOT rc EQUAL 0)
-  message(FATAL_ERROR "the angry left hand changed channels outside the hand or the skeleton")
-endif()
+transfer_hand(angry_left left angry "left hand .mirrored.")
 
 # two hands and no --hand
 run_fail_file(two_hands ${cap} transfer --in ${cap} --emotion sad --out ${WORK_DIR}/x.bvh)
