@@ -1,5 +1,5 @@
 // Measures this machine's single-core FP32 FMA peak with 256-bit AVX2 FMA, the same way as
-// /work/shared/bench/peak_fma.cpp (12 independent accumulator chains, 200 M FMAs) but without the
+// ../shared/bench/peak_fma.cpp (12 independent accumulator chains, 200 M FMAs) but without the
 // AVX-512 half, so it builds on machines without AVX-512. It is the roofline for handemo's kernels.
 // Build: g++ -O2 -march=native peak_fma_avx2.cpp -o peak_fma_avx2
 #include <immintrin.h>

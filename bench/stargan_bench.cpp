@@ -118,7 +118,7 @@ double train_macs()
 }
 
 /// One trainer::train_step() (D step with WGAN-GP and a G step, batch 16, Adam on both), data-parallel over
-/// the benchmark's argument of threads (1 and 2: the parallel efficiency of issue 13; 0 = all cores).
+/// the benchmark's argument of threads (1 and 2: the 2-thread / 1-thread ratio; 0 = all cores).
 template <class Base>
 void bm_train(benchmark::State& st)
 {

@@ -1,4 +1,4 @@
-# The library with Debian's clang (issue 12: it must build with GCC 12 and clang; CI builds with both).
+# The library with Debian's clang, the second compiler it must build with (GCC 12 is the first; CI runs both).
 # Compiles, with clang's full front end but no code generation (-fsyntax-only, which still instantiates every
 # template the sources use), every public header, the README's example, the CLI's StarGAN unit (training,
 # evaluation and transfer for every configuration) and the fuzz harnesses, with -Wall -Wextra -Werror.

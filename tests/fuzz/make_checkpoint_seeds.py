@@ -46,5 +46,5 @@ def checkpoint(domains):
 
 hand = ["angry", "happy", "neutral", "sad", "fearful"]
 open("corpus/checkpoint/hand_tiny_g.safetensors", "wb").write(checkpoint(hand))
-# issue 12: a sixth domain name made label[target] = 1.f write past the 5-float label buffer
+# a sixth domain name must be refused: it would make label[target] = 1.f write past the 5-float label buffer
 open("regressions/checkpoint/extra_domain.safetensors", "wb").write(checkpoint(hand + ["bored"]))

@@ -1,4 +1,4 @@
-// The baselines a sceptical reviewer asks StarGAN emotion transfer (Section 3.4 of the hand paper) to beat,
+// The baselines StarGAN emotion transfer (Section 3.4 of the hand paper) is measured against,
 // computed on the same keyframes (Eq. 2) and training folds:
 //   identity          output = input;
 //   mean offset       output keyframes = input keyframes + delta_e, delta_e the training-set mean over

@@ -1,4 +1,4 @@
-// The circumplex method of Aristidou et al. 2017 inside `handemo eval` (issue 10's evaluation), as an
+// The circumplex method of Aristidou et al. 2017 inside `handemo eval`'s folds and tables, as an
 // extension of the leave-one-content-out protocol (eval/extension.hpp): in each fold a circumplex model
 // (rcm/model.hpp: LMA features, selection, PCA, the RBF maps of Eq. 1-4) is fitted on the fold's training
 // clips only, and
