@@ -658,6 +658,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         t0 = clock::now();
         auto [ckf, ckinfo] = stargan::read_checkpoint(fold_dir / "checkpoint.safetensors");
         const detail::fold_models<Config> models(ckf, ckinfo, opt.inference_weights);
+        auto ws = models.model.make_workspace(), ws_g_only = models.g_only.make_workspace(), ws_ungated = models.ungated.make_workspace();
 
         // ---- baselines and the independent emotion classifier, from the training clips only
         const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
@@ -688,15 +689,15 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                     continue;
                 }
                 detail::method_outputs o;
-                o.stargan = models.model.transfer(input, target);
+                o.stargan = models.model.transfer(input, target, {}, ws);
                 o.has_amp = models.has_amp, o.gated = models.gated;
                 o.detailed = fold_detail.apply(o.stargan.motion, input, info.neutral, target);
                 if (fi == 0 && (detail_take.empty() || detail_take == in->src->take)) {
                     detail_take = in->src->take;
                     detail::add_detail_curves<K>(detail_curves, target, real->src->motion, o.stargan.motion, o.detailed);
                 }
-                if (o.has_amp) o.g_only = models.g_only.transfer(input, target).motion;
-                if (o.gated) o.ungated = models.ungated.transfer(input, target).motion;
+                if (o.has_amp) o.g_only = models.g_only.transfer(input, target, {}, ws_g_only).motion;
+                if (o.gated) o.ungated = models.ungated.transfer(input, target, {}, ws_ungated).motion;
                 if (o.has_amp) o.amp_only = detail::amplitude_only<K>(input, o.stargan);
                 o.nearest = &train[nearest_neighbour<K>(input, train, target)].motion;
                 o.mean_offset = offset.transfer(input, target, o.stargan.tempo);

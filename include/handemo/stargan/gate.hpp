@@ -241,6 +241,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         }
         detail::emotion_model_impl<Config> model(ck->first, ck->second);
         if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
+        auto ws = model.make_workspace();  // the generator's scratch, reused by every transfer below
         // the independent emotion classifier of the evaluation, fitted on this inner training set only
         eval::nearest_centroid_classifier clf;
         // adds to `hits` whether the classifier recognises `target` (class index) from x, and to `score` what
@@ -270,7 +271,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                 tally& ty = tallies[f][t];
                 const std::size_t label = use_emotion ? clf.index_of(target) : 0;
                 if (use_emotion) recognise(eval::motion_features(real_kf, real->motion.duration()), label, ty.real_hits, ty.real_score);
-                const auto parts = model.parts(in->motion, target);
+                const auto parts = model.parts(in->motion, target, {}, ws);
                 for (std::size_t a = 0; a < G; ++a)
                     for (std::size_t b = 0; b < G; ++b)
                         for (std::size_t c = 0; c < P; ++c) {

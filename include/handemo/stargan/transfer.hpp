@@ -17,6 +17,7 @@
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/stargan/train.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -39,9 +40,31 @@ struct transfer_result {
 using handemo::stretch_positions;
 
 /// @brief A trained emotion-transfer model loaded from a checkpoint, whatever its configuration.
+/// Thread safety: the const members (transfer(), parts(), generate(), ...) may run on any number of threads at
+/// once on one model; each call takes its scratch memory from a `workspace`, the caller's (one per thread, reused
+/// across calls) or a fresh one. The mutating members (set_gate(), set_prior_posture()) must not overlap any other
+/// call; they give the strong guarantee (a refused argument leaves the model as it was).
 class emotion_model {
 public:
     virtual ~emotion_model() = default;
+
+    /// @brief Per-thread scratch of the generator (padded images and the packed generator's buffers): make one
+    /// per thread with make_workspace() and pass it to the calls that take one; never share one between threads.
+    class workspace {
+    public:
+        struct scratch {
+            virtual ~scratch() = default;
+        };
+        workspace() = default;
+        explicit workspace(std::unique_ptr<scratch> s) : s_(std::move(s)) {}
+        scratch* get() const noexcept { return s_.get(); }
+
+    private:
+        std::unique_ptr<scratch> s_;
+    };
+
+    /// @brief A workspace for this model's generator.
+    workspace make_workspace() const { return workspace(new_scratch()); }
     const checkpoint_info& info() const noexcept { return info_; }
     std::size_t joints() const noexcept { return info_.range.joints; }
     std::size_t keyframes() const noexcept { return info_.range.keyframes; }
@@ -78,6 +101,13 @@ public:
     /// @throws shape_error for a wrong image size; value_error when G produces a non-finite value.
     keyframe_pixels<dynamic_keyframes> translate(const keyframe_pixels<dynamic_keyframes>& px, std::size_t target) const
     {
+        workspace ws = make_workspace();
+        return translate(px, target, ws);
+    }
+
+    /// @brief translate() with the caller's workspace.
+    keyframe_pixels<dynamic_keyframes> translate(const keyframe_pixels<dynamic_keyframes>& px, std::size_t target, workspace& ws) const
+    {
         if (px.count() != keyframes() || px.joints != joints())
             throw shape_error("transfer: model " + info_.source + ": motion image is " + std::to_string(px.count()) + "x" + std::to_string(px.joints) +
                               " (keyframes x joints), the model expects " + std::to_string(keyframes()) + "x" +
@@ -85,7 +115,7 @@ public:
         if (target >= info_.domains.size())
             throw value_error("transfer: model " + info_.source + ": target domain " + std::to_string(target) + " out of range (" +
                               std::to_string(info_.domains.size()) + " domains)");
-        return from_network(generate(to_network(px), target));
+        return from_network(generate(to_network(px), target, ws));
     }
 
     /// @brief Whether the model was trained with the amplitude stage (train_options::amplitude).
@@ -111,7 +141,6 @@ public:
             if (prior[d] != 0 && info_.prior_posture.empty())
                 throw value_error("transfer: model " + info_.source + " has no posture prior (trained without --gate-prior)");
         }
-        info_.gate_prior = std::move(prior);
         if (!residual()) throw value_error("transfer: the change gate needs a residual model (" + info_.config + " is not)");
         if (posture.size() != info_.domains.size() || motion.size() != info_.domains.size())
             throw value_error("transfer: a change gate needs one posture and one motion weight per domain (" +
@@ -119,6 +148,7 @@ public:
         for (std::size_t d = 0; d < posture.size(); ++d)
             if (!(posture[d] >= 0 && posture[d] <= 1) || !(motion[d] >= 0 && motion[d] <= 1))
                 throw value_error("transfer: change gate of domain '" + info_.domains[d] + "' is not in [0, 1]");
+        info_.gate_prior = std::move(prior);  // every check passed: the model changes only now
         info_.gate_posture = std::move(posture);
         info_.gate_motion = std::move(motion);
     }
@@ -143,6 +173,14 @@ public:
     /// @throws value_error when G produces a non-finite value.
     network_image<dynamic_keyframes> generate(const network_image<dynamic_keyframes>& net, std::size_t target) const
     {
+        workspace ws = make_workspace();
+        return generate(net, target, ws);
+    }
+
+    /// @brief generate() with the caller's workspace.
+    /// @throws value_error also for a workspace made by another model.
+    network_image<dynamic_keyframes> generate(const network_image<dynamic_keyframes>& net, std::size_t target, workspace& ws) const
+    {
         if (net.count() != keyframes() || net.joints != joints() || net.data.size() != 3 * keyframes() * joints())
             throw shape_error("transfer: model " + info_.source + ": network image is " + std::to_string(net.count()) + "x" + std::to_string(net.joints) +
                               ", the model expects " + std::to_string(keyframes()) + "x" + std::to_string(joints()));
@@ -150,7 +188,8 @@ public:
             throw value_error("transfer: model " + info_.source + ": target domain " + std::to_string(target) + " out of range (" +
                               std::to_string(info_.domains.size()) + " domains)");
         network_image<dynamic_keyframes> out = net;
-        run_generator(net.data.data(), target, out.data.data());
+        if (!ws.get()) ws = make_workspace();
+        run_generator(net.data.data(), target, out.data.data(), *ws.get());
         for (float v : out.data)
             if (!std::isfinite(v)) throw value_error("transfer: model " + info_.source + ": the generator produced a non-finite value (corrupted weights?)");
         return out;
@@ -175,6 +214,13 @@ public:
     /// @throws shape_error when the clip's skeleton is not the model's (joint count or names).
     transfer_parts parts(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
     {
+        workspace ws = make_workspace();
+        return parts(in, target, source, ws);
+    }
+
+    /// @brief parts() with the caller's workspace.
+    transfer_parts parts(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws) const
+    {
         check_skeleton(in.skel);
         in.validate("transfer: input " + in.skel.name);
         // one Euler branch per joint, the one nearer the training data's typical pose (a joint near gimbal lock
@@ -194,7 +240,7 @@ public:
         for (std::size_t i = 0; i < kf.angles.size(); ++i) r.clamped_values += info_.range.contains(kf.angles[i], i % C) ? 0 : 1;
         const auto net = to_network(encode(kf, info_.range));
         r.target = domain(target);
-        const auto gen = generate(net, r.target);
+        const auto gen = generate(net, r.target, ws);
         r.image = from_network(gen);
         if (residual()) {
             // angle-space residual: input angles + G's change (network units x degrees per unit of the channel)
@@ -259,7 +305,14 @@ public:
     /// @throws shape_error when the clip's skeleton is not the model's (joint count or names).
     transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
     {
-        auto p = parts(in, target, source);
+        workspace ws = make_workspace();
+        return transfer(in, target, source, ws);
+    }
+
+    /// @brief transfer() with the caller's workspace (one per thread, reused across calls).
+    transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws) const
+    {
+        auto p = parts(in, target, source, ws);
         const std::size_t t = p.target;
         transfer_result r;
         r.motion = finish(in, p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t]);
@@ -318,8 +371,9 @@ public:
 
 protected:
     explicit emotion_model(checkpoint_info info) : info_(std::move(info)) {}
-    /// x, out: [3, K, J] in [-1, 1].
-    virtual void run_generator(const float* x, std::size_t target, float* out) const = 0;
+    /// x, out: [3, K, J] in [-1, 1]; `ws` made by new_scratch() of this model.
+    virtual void run_generator(const float* x, std::size_t target, float* out, workspace::scratch& ws) const = 0;
+    virtual std::unique_ptr<workspace::scratch> new_scratch() const = 0;
     checkpoint_info info_;
 };
 
@@ -356,22 +410,30 @@ public:
         } catch (const value_error& e) {
             throw value_error("checkpoint: " + f.source + ": " + e.what());
         }
-        fws_.emplace(*frozen_);
     }
 
 private:
-    void run_generator(const float* x, std::size_t target, float* out) const override
+    /// One thread's scratch: the padded input and output images, the label and the packed generator's buffers.
+    struct scratch_impl final : workspace::scratch {
+        explicit scratch_impl(const frozen_generator<float, cfg>& g) : fws(g) {}
+        typename frozen_generator<float, cfg>::workspace fws;
+        std::vector<float> in = std::vector<float>(3 * H * W), out = std::vector<float>(3 * H * W), label = std::vector<float>(Base::domains);
+    };
+
+    std::unique_ptr<workspace::scratch> new_scratch() const override { return std::make_unique<scratch_impl>(*frozen_); }
+
+    void run_generator(const float* x, std::size_t target, float* out, workspace::scratch& ws) const override
     {
-        std::vector<float> label(Base::domains, 0.f);
-        if (target >= label.size()) throw value_error("transfer: target domain " + std::to_string(target) + " out of range");
-        label[target] = 1.f;
-        pad_image(x, K, J, in_.data(), H, W);
-        frozen_->infer(in_.data(), label.data(), out_.data(), *fws_);
-        crop_image(out_.data(), H, W, out, K, J);
+        auto* s = dynamic_cast<scratch_impl*>(&ws);
+        if (!s) throw value_error("transfer: model " + info_.source + ": the workspace was made by another model");
+        if (target >= Base::domains) throw value_error("transfer: target domain " + std::to_string(target) + " out of range");
+        std::fill(s->label.begin(), s->label.end(), 0.f);
+        s->label[target] = 1.f;
+        pad_image(x, K, J, s->in.data(), H, W);
+        frozen_->infer(s->in.data(), s->label.data(), s->out.data(), s->fws);
+        crop_image(s->out.data(), H, W, out, K, J);
     }
     std::optional<frozen_generator<float, cfg>> frozen_;
-    mutable std::optional<typename frozen_generator<float, cfg>::workspace> fws_;
-    mutable std::vector<float> in_ = std::vector<float>(3 * H * W), out_ = std::vector<float>(3 * H * W);
 };
 
 }  // namespace detail
