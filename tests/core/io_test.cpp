@@ -89,3 +89,15 @@ TEST_CASE("write_file_atomic whose rename fails keeps what was there and leaves 
     CHECK(entries(dir) == 1);
     fs::remove_all(dir);
 }
+
+TEST_CASE("make_directories creates parents and names the folder it cannot create")
+{
+    const auto base = std::filesystem::temp_directory_path() / "handemo_make_directories_test";
+    std::filesystem::remove_all(base);
+    handemo::make_directories(base / "a" / "b");
+    CHECK(std::filesystem::is_directory(base / "a" / "b"));
+    handemo::make_directories(base / "a" / "b");  // exists: nothing to do
+    handemo::write_file_atomic(base / "file", "x");
+    CHECK_THROWS_WITH_AS(handemo::make_directories(base / "file" / "sub"), doctest::Contains("cannot create folder"), handemo::io_error);
+    std::filesystem::remove_all(base);
+}

@@ -415,4 +415,24 @@ TEST_CASE("the checkpoint carries the detail layer; checkpoints without it load;
     f.metadata["checksum"] = handemo::stargan::detail::checkpoint_checksum(f);
     write_safetensors(old / "checkpoint.safetensors", f);
     CHECK_THROWS_WITH_AS(read_checkpoint(old / "checkpoint.safetensors"), doctest::Contains("metadata 'detail' is for 2 joints"), format_error);
+    // options of the wrong type are refused naming the field, not let through as a JSON type error
+    for (const auto& [key, value] : {std::pair<std::string, nlohmann::json>{"amplitude", "yes"}, {"residual", 1}}) {
+        meta = nlohmann::json::parse(read_safetensors(a / "checkpoint.safetensors").metadata.at("handemo"));
+        meta["options"][key] = value;
+        f.metadata["handemo"] = meta.dump();
+        f.metadata["checksum"] = handemo::stargan::detail::checkpoint_checksum(f);
+        write_safetensors(old / "checkpoint.safetensors", f);
+        CHECK_THROWS_WITH_AS(read_checkpoint(old / "checkpoint.safetensors"), doctest::Contains(("metadata field 'options." + key + "'").c_str()), format_error);
+    }
+    // the training skeleton is stored, and a checkpoint whose stored skeleton disagrees with joint_names is refused
+    CHECK(read_checkpoint(a / "checkpoint.safetensors").second.skel.has_value());
+    f = read_safetensors(a / "checkpoint.safetensors");
+    {
+        skeleton other = hand_skeleton();
+        other.joints[5].name = "renamed";
+        f.metadata["skeleton"] = to_bvh_string(clip::make(other, 1, 30));
+    }
+    f.metadata["checksum"] = handemo::stargan::detail::checkpoint_checksum(f);
+    write_safetensors(old / "checkpoint.safetensors", f);
+    CHECK_THROWS_WITH_AS(read_checkpoint(old / "checkpoint.safetensors"), doctest::Contains("metadata 'skeleton' joint 5 is 'renamed'"), format_error);
 }

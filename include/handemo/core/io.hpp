@@ -27,6 +27,15 @@ inline std::string read_file(const std::filesystem::path& path)
     return std::move(ss).str();
 }
 
+/// @brief Creates a folder and its parents (nothing when it exists).
+/// @throws io_error naming the folder and the reason, never std::filesystem::filesystem_error.
+inline void make_directories(const std::filesystem::path& dir)
+{
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw io_error("cannot create folder " + dir.string() + ": " + ec.message());
+}
+
 /// @brief Writes `data` to `path` atomically: a temporary file beside it, flushed, then renamed over.
 /// Either the old file or the complete new one exists at every moment.
 /// @throws io_error naming the file on any failure (the temporary is removed).

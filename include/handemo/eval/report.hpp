@@ -500,7 +500,7 @@ inline std::string markdown_report(const eval_result& r)
 /// @throws io_error when a file cannot be written.
 inline void write_report(const eval_result& r, const std::filesystem::path& dir)
 {
-    std::filesystem::create_directories(dir);
+    make_directories(dir);
     write_file_atomic(dir / "results.csv", samples_csv(r));
     write_file_atomic(dir / "summary.csv", summary_csv(r));
     if (!r.samples.empty()) write_file_atomic(dir / "summary.svg", summary_svg(r));

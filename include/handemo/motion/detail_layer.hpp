@@ -261,7 +261,11 @@ struct detail_layer {
     /// `strength`; 1 where the source has (almost) no detail (1e-6 deg).
     double gain(const std::string& source, const std::string& target, std::size_t ch) const
     {
-        const double as = amplitude[index(source)].at(ch), at = amplitude[index(target)].at(ch);
+        const auto& a_s = amplitude[index(source)];
+        const auto& a_t = amplitude[index(target)];
+        if (ch >= a_s.size() || ch >= a_t.size())
+            throw value_error("detail layer: channel " + std::to_string(ch) + " out of range (" + std::to_string(a_s.size()) + " channels)");
+        const double as = a_s[ch], at = a_t[ch];
         if (!(as > 1e-6)) return 1.0;
         return std::pow(std::clamp(at / as, 0.0, max_gain), strength);
     }

@@ -200,7 +200,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
     };
     const tally empty{std::vector<double>(S, 0.0), std::vector<double>(S, 0.0), std::vector<double>(S, 0.0)};
     std::vector<std::vector<tally>> tallies(F, std::vector<tally>(C, empty));
-    std::filesystem::create_directories(work_dir);
+    make_directories(work_dir);
     for (std::size_t f = 0; f < F; ++f) {
         std::vector<labelled_clip> train;
         std::vector<const labelled_clip*> held;

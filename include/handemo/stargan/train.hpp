@@ -46,7 +46,7 @@
 
 namespace handemo::stargan {
 
-/// @brief Hyper-parameters and run options of training (defaults: the StarGAN paper's, as the issue asks).
+/// @brief Hyper-parameters and run options of training (defaults: the StarGAN paper's).
 struct train_options {
     long iters = 4000;          ///< D iterations (G every n_critic of them)
     int n_critic = 5;
@@ -567,6 +567,11 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = static_cast<long>(count("step", std::uint64_t{1} << 53));
         info.options = j.at("options");
+        // the fields transfer reads from the options must have their types (a JSON type error would escape otherwise)
+        if (!info.options.is_object()) throw fail("metadata field 'options' is " + info.options.dump() + ", expected an object");
+        for (const char* key : {"amplitude", "residual"})
+            if (info.options.contains(key) && !info.options.at(key).is_boolean())
+                throw fail(std::string("metadata field 'options.") + key + "' is " + info.options.at(key).dump() + ", expected true or false");
     } catch (const nlohmann::json::exception& e) {
         throw fail(std::string("metadata 'handemo' is malformed: ") + e.what());
     }
@@ -874,7 +879,7 @@ public:
     void run(const std::filesystem::path& out_dir, bool resume = false)
     {
         namespace fs = std::filesystem;
-        fs::create_directories(out_dir);
+        make_directories(out_dir);
         const fs::path ck = out_dir / "checkpoint.safetensors";
         if (resume) {
             if (!fs::exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
