@@ -1,5 +1,6 @@
 # `handemo transfer` and `handemo retarget` on a capture that is not handemo's skeleton (SMPL-X names, two hands),
-# with the shipped hand model. Needs HANDEMO_CLI, MAKE_CAPTURE, CHECK (test_retarget_capture), WORK_DIR.
+# with the shipped hand model. Needs HANDEMO_CLI, MAKE_CAPTURE, CHECK (test_retarget_capture), EXAMPLE
+# (handemo_example_transfer), SOURCE_DIR, WORK_DIR.
 include(${CMAKE_CURRENT_LIST_DIR}/../cli_expect.cmake)
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
@@ -24,6 +25,17 @@ endfunction()
 transfer_hand(sad right sad "convention smpl -> model hand-embedded .handemo-hand.: right hand, relative to 'right_elbow'")
 # the left hand, mirrored into the right-hand model and back
 transfer_hand(angry_left left angry "left hand .mirrored.")
+
+# the README's 10-line example (examples/transfer.cpp) on the same capture with the shipped model
+execute_process(COMMAND ${EXAMPLE} ${SOURCE_DIR}/data/models/hand-embedded ${cap} happy ${WORK_DIR}/example right
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "retargeted" OR NOT EXISTS ${WORK_DIR}/example.png)
+  message(FATAL_ERROR "the README example on the capture failed (${rc}): ${out}${err}")
+endif()
+execute_process(COMMAND ${CHECK} ${cap} ${WORK_DIR}/example.bvh right RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "the README example changed channels outside the right hand or the skeleton")
+endif()
 
 # two hands and no --hand
 run_fail_file(two_hands ${cap} transfer --in ${cap} --emotion sad --out ${WORK_DIR}/x.bvh)
