@@ -348,38 +348,6 @@ TEST_CASE("map files: a custom rig, and every bad entry named")
     CHECK_THROWS_WITH_AS(make_map(s, hand_skeleton(), {.source_slots = bc}), doctest::Contains("would turn a chain around (a cycle)"), value_error);
 }
 
-TEST_CASE("canonicalise_branches: one Euler branch per joint, nearest the reference, bits kept where already on it")
-{
-    skeleton s;
-    s.name = "branch";
-    s.joints = {joint{.name = "a", .parent = -1, .offset = {0, 0, 0}, .channels = {channel::zrotation, channel::xrotation, channel::yrotation}}};
-    clip c = clip::make(s, 4, 30);
-    // frames 0 and 2 on one branch, 1 and 3 on the other: the same rotations
-    const double a[3] = {80, -95, 96};  // x, y, z for order z x y
-    for (std::size_t f = 0; f < 4; ++f) {
-        const bool alt = f % 2 == 1;
-        c.angle(f, 0, 0) = alt ? 180 - a[0] : a[0];
-        c.angle(f, 0, 1) = alt ? a[1] + 180 : a[1];
-        c.angle(f, 0, 2) = alt ? a[2] + 180 : a[2];
-        c.angle(f, 0, 0) += 0.5 * static_cast<double>(f);
-    }
-    const clip before = c;
-    const std::size_t moved = canonicalise_branches(c, {80, -95, 96});
-    CHECK(moved == 2);
-    for (std::size_t f = 0; f < 4; ++f) {
-        const mat3 r0 = local_rotation(s.joints[0], before.frame_angles(f)), r1 = local_rotation(s.joints[0], c.frame_angles(f));
-        for (int k = 0; k < 9; ++k) CHECK(std::abs(r0[k] - r1[k]) < 1e-12);
-        CHECK(std::abs(c.angle(f, 0, 1) - a[1]) < 1e-12);
-    }
-    CHECK(std::memcmp(c.frame_angles(0), before.frame_angles(0), 3 * sizeof(double)) == 0);
-    CHECK(std::memcmp(c.frame_angles(2), before.frame_angles(2), 3 * sizeof(double)) == 0);
-    // a reference on the other branch moves the other frames
-    clip d = before;
-    CHECK(canonicalise_branches(d, {100, 85, 276}) == 2);
-    CHECK(std::abs(d.angle(0, 0, 1) - 85) < 1e-9);
-    CHECK_THROWS_AS(canonicalise_branches(d, {1, 2}), shape_error);
-}
-
 TEST_CASE("the example map file (examples/maps/custom_rig.json) describes a rig that moves onto the hand model and the body")
 {
     using namespace handemo::test;

@@ -707,9 +707,14 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                     o.oracle = synthesize_as(l.motion, l.emo, emotion_from_string(target), l.take, *opt.synth_seed, opt.synth_fps);
                     o.has_oracle = true;
                 }
-                if (rig) {  // the same transfer from a foreign rig of the skeleton, scored back on the model's skeleton
-                    const auto cr = stargan::transfer_capture(models.model, retarget::retarget_clip(input, rig->to_foreign), target);
-                    o.extra.emplace_back("stargan-retargeted", retarget::retarget_clip(cr.motion, rig->to_model, stargan::typical_pose(models.model)));
+                if (rig) {
+                    // the same transfer from a foreign rig of the skeleton, scored back on the model's skeleton; both
+                    // ways the Euler branches of the input's first frame (Bandai's files write a spine near gimbal
+                    // lock on either branch: the variant measures the retargeting, not a choice between the two)
+                    stargan::capture_options co;
+                    co.reference.assign(input.frame_angles(0), input.frame_angles(0) + input.skel.size() * 3);
+                    const auto cr = stargan::transfer_capture(models.model, retarget::retarget_clip(input, rig->to_foreign), target, {}, co);
+                    o.extra.emplace_back("stargan-retargeted", retarget::retarget_clip(cr.motion, rig->to_model, co.reference));
                 }
                 for (const auto& x : opt.extensions)
                     for (auto& e : x->transfer(*in->src, target)) o.extra.push_back(std::move(e));

@@ -4,8 +4,6 @@
 // motion stays continuous from frame to frame).
 #pragma once
 
-#include <handemo/core/error.hpp>
-#include <handemo/motion/clip.hpp>
 #include <handemo/motion/skeleton.hpp>
 
 #include <algorithm>
@@ -13,8 +11,6 @@
 #include <cmath>
 #include <cstddef>
 #include <numbers>
-#include <string>
-#include <vector>
 
 namespace handemo::retarget {
 
@@ -94,41 +90,6 @@ inline vec3 euler_from_matrix(const mat3& r, const std::array<axis, 3>& order, c
         if (best_d < 0 || d < best_d) best = ang, best_d = d;
     }
     return best;
-}
-
-/// @brief Puts every joint's Euler angles on one branch: a rotation R_i(a) R_j(b) R_k(c) is also
-/// R_i(a + 180) R_j(180 - b) R_k(c + 180), and a file may switch between the two (near b = +-90 they are close,
-/// and exporters differ). Frame 0 takes the branch nearer `reference` ([J*3] angles, indexed x, y, z; empty:
-/// all 0), every later frame the one nearer the frame before; distances count whole turns as nothing.
-/// Angles already on the chosen branch keep their bits.
-/// @return the number of (frame, joint) triples moved to the other branch.
-/// @throws shape_error for a reference of the wrong size.
-inline std::size_t canonicalise_branches(clip& c, const std::vector<double>& reference = {})
-{
-    const std::size_t J = c.skel.size();
-    if (!reference.empty() && reference.size() != J * 3)
-        throw shape_error("canonicalise_branches: reference has " + std::to_string(reference.size()) + " angles, clip '" + c.skel.name +
-                          "' needs " + std::to_string(J * 3));
-    const auto wrapped = [](double d) { return std::abs(d - 360.0 * std::round(d / 360.0)); };
-    std::size_t moved = 0;
-    for (std::size_t j = 0; j < J; ++j) {
-        const auto order = c.skel.joints[j].rotation_order();
-        const auto i = static_cast<std::size_t>(order[0]), m = static_cast<std::size_t>(order[1]), k = static_cast<std::size_t>(order[2]);
-        vec3 prev = reference.empty() ? vec3{} : vec3{reference[j * 3], reference[j * 3 + 1], reference[j * 3 + 2]};
-        for (std::size_t f = 0; f < c.frames; ++f) {
-            double* a = &c.angles[(f * J + j) * 3];
-            vec3 alt{};
-            alt[i] = a[i] + 180, alt[m] = 180 - a[m], alt[k] = a[k] + 180;
-            double d0 = 0, d1 = 0;
-            for (std::size_t q = 0; q < 3; ++q) d0 += wrapped(a[q] - prev[q]), d1 += wrapped(alt[q] - prev[q]);
-            if (d1 + 1e-9 < d0) {
-                for (std::size_t q = 0; q < 3; ++q) a[q] = detail::unwrap_near(alt[q], prev[q]);
-                ++moved;
-            }
-            prev = {a[0], a[1], a[2]};
-        }
-    }
-    return moved;
 }
 
 }  // namespace handemo::retarget

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace handemo::stargan {
 
@@ -23,6 +24,9 @@ struct capture_options {
     std::optional<retarget::binding> slots;
     /// add the detail layer (emotion_model::add_detail) on the model's skeleton before writing back
     bool detail = false;
+    /// [J*3] angles on the model's skeleton whose Euler branches the capture's first frame takes on the model
+    /// (a joint near gimbal lock has two); default: typical_pose(), the branches most of the training data uses
+    std::vector<double> reference;
 };
 
 /// @brief A transfer of a capture: the result on the capture's skeleton and how it got there.
@@ -65,7 +69,7 @@ inline capture_result transfer_capture(const emotion_model& model, const clip& i
     mo.hand = o.hand;
     mo.source_slots = o.slots;
     r.map = retarget::make_map(in.skel, ms, mo);
-    const clip on_model = retarget::retarget_clip(in, *r.map, typical_pose(model));
+    const clip on_model = retarget::retarget_clip(in, *r.map, o.reference.empty() ? typical_pose(model) : o.reference);
     r.on_model = run(on_model);
     r.motion = retarget::write_back(in, r.on_model.motion, *r.map);
     r.retargeted = true;

@@ -13,7 +13,6 @@
 #include <handemo/core/error.hpp>
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/hand.hpp>
-#include <handemo/retarget/rotation.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/stargan/train.hpp>
 
@@ -223,14 +222,7 @@ public:
     {
         check_skeleton(in.skel);
         in.validate("transfer: input " + in.skel.name);
-        // one Euler branch per joint, the one nearer the training data's typical pose (a joint near gimbal lock
-        // may be written on either by the capture; untouched when already on it, as small angles always are)
-        std::optional<clip> canonical;
-        if (info_.range.per_channel() && info_.range.center.size() == in.skel.size() * 3) {
-            clip c = in;
-            if (retarget::canonicalise_branches(c, info_.range.center) > 0) canonical = std::move(c);
-        }
-        auto kf = extract_keyframes<dynamic_keyframes>(canonical ? *canonical : in, keyframes());
+        auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
         const bool amp = amplitude_stage();
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
         const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
