@@ -1,22 +1,101 @@
 #!/usr/bin/env bash
 # Side-by-side: handemo's benchmarks vs the PyTorch CPU reference StarGAN vs this machine's FMA peak.
-# Builds bench_conv, peak_fma_avx2 (and bench_stargan when bench/stargan_bench.cpp exists) in Release with
+# Everything it measures against is in the repository: the reference is scripts/reference_stargan.py and the
+# peak program bench/peak_fma.cpp (CMake target peak_fma).
+# Builds bench_conv, peak_fma (and bench_stargan when bench/stargan_bench.cpp exists) in Release with
 # -march=native, then in one run: the instruction set the kernels were compiled for (xsimd's default_arch:
-# avx512bw, avx2, ...), the FP32 FMA peak of that instruction set (../shared/bench/peak_fma.cpp's AVX512 or
-# AVX2 line; bench/peak_fma_avx2 on a CPU without AVX-512; and the same loop inside bench_conv, which the
-# table uses), reference_stargan.py with 1 and 2 threads, the handemo benchmarks, and a table of ratios.
+# avx512bw, avx2, ...), the FP32 FMA peak of that instruction set (peak_fma's AVX512 or AVX2 line; and the
+# same loop inside bench_conv, which the table uses), reference_stargan.py with 1 and 2 threads, the handemo
+# benchmarks, and a table of ratios.
 # The machine this runs on may be a shared VM whose speed moves by 15-30% within minutes, so the PyTorch
 # reference, the in-process peaks and the handemo inference and training benchmarks run in ROUNDS rounds,
 # one after the other within each round; the table gives each number's median over the rounds with its
 # range, and the 2-thread / 1-thread ratio as the median of the rounds' ratios (each round's pair is
 # measured back to back).
-# Usage: bench/compare.sh [build-dir]   (default: <repo>/build-bench)
-#        HANDEMO_COMPARE_ROUNDS=N (default 3; 1 gives the single-pass numbers of earlier versions)
+# Usage: bench/compare.sh [--out[=FILE]] [--dry-run] [build-dir]   (default build-dir: <repo>/build-bench)
+#   --out       also writes the table to bench/results/<YYYY-MM-DD>-<cpu-model>.md (FILE: there instead)
+#               under a header giving the commit, the CPU model, the compiler, the load average at the start
+#               and the number of rounds; an existing file of that name is kept (-2, -3, ... is added)
+#   --dry-run   checks that the reference and the peak program are there and whether Python has torch,
+#               prints what a run would build, run and write (with --out, the file's name and header), and
+#               builds and measures nothing
+#   HANDEMO_COMPARE_ROUNDS=N (default 3; 1 gives the single-pass numbers of earlier versions)
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
-build=${1:-$root/build-bench}
-shared_bench="$(dirname "$0")/../../shared/bench"
+usage() { sed -n '/^# Usage: /,/^#   HANDEMO/s/^# \{0,1\}//p' "$0"; }
+write_out=0 results="" dry=0 build=""
+for arg in "$@"; do
+  case "$arg" in
+    --out) write_out=1 ;;
+    --out=*) write_out=1; results=${arg#--out=} ;;
+    --dry-run) dry=1 ;;
+    -h|--help) usage; exit 0 ;;
+    -*) echo "compare.sh: unknown option $arg" >&2; usage >&2; exit 2 ;;
+    *) [ -z "$build" ] || { echo "compare.sh: more than one build directory ($build, $arg)" >&2; exit 2; }
+       build=$arg ;;
+  esac
+done
+build=${build:-$root/build-bench}
+rounds=${HANDEMO_COMPARE_ROUNDS:-3}
+case "$rounds" in ''|*[!0-9]*|0) echo "compare.sh: HANDEMO_COMPARE_ROUNDS '$rounds' is not a positive integer"; exit 1 ;; esac
+py=/usr/bin/python3
+ref="$root/scripts/reference_stargan.py"
+peak_src="$here/peak_fma.cpp"
+load_start=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)
+commit=$(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo unknown) dirty=""
+git -C "$root" diff --quiet HEAD -- 2>/dev/null || dirty=" (with uncommitted changes)"
+
+# What a reader of a results file needs to compare two runs.
+cpu_model() {
+  { sed -n 's/^model name[[:space:]]*: *//p' /proc/cpuinfo 2>/dev/null; lscpu 2>/dev/null | sed -n 's/^Model name: *//p'; } \
+    | grep . | head -1 | grep . || echo unknown-cpu
+}
+compiler_version() {
+  local cxx
+  cxx=$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt" 2>/dev/null)
+  "${cxx:-${CXX:-c++}}" --version 2>/dev/null | head -1 | grep . || echo unknown
+}
+results_header() {  # $1: the load average when the rounds started
+  echo "# bench/compare.sh: $(cpu_model), $(date +%F)"
+  echo
+  echo "- commit: \`$commit\`$dirty"
+  echo "- CPU: $(cpu_model) ($(nproc) logical CPUs); kernels compiled for ${isa:-the native instruction set}"
+  echo "- compiler: $(compiler_version)"
+  echo "- PyTorch: $torch_version"
+  echo "- load average (1, 5, 15 min): $load_start at the start, $1 when the rounds started"
+  echo "- rounds: $rounds (HANDEMO_COMPARE_ROUNDS): every time is the median over the rounds, its range in parentheses"
+  echo
+}
+if [ "$write_out" = 1 ] && [ -z "$results" ]; then
+  slug=$(cpu_model | tr '[:upper:]' '[:lower:]' | sed 's/([^)]*)//g; s/[^a-z0-9]\{1,\}/-/g; s/^-//; s/-$//')
+  results="$root/bench/results/$(date +%F)-${slug:-unknown-cpu}.md"
+  base=${results%.md} n=2
+  while [ -e "$results" ]; do results="$base-$n.md"; n=$((n + 1)); done
+fi
+
+have_torch=0 torch_version="n/a: $py cannot import torch (./setup.sh --golden installs python3-torch)"
+if [ ! -f "$ref" ]; then
+  torch_version="n/a: $ref is missing"
+elif [ -x "$py" ] && v=$("$py" -c 'import torch; print(torch.__version__)' 2>/dev/null); then
+  have_torch=1 torch_version="$v ($py)"
+fi
+
+if [ "$dry" = 1 ]; then
+  echo "== dry run: nothing is built or measured"
+  echo "build directory: $build (Release, -march=native; targets bench_conv peak_fma$([ -f "$here/stargan_bench.cpp" ] && echo ' bench_stargan'))"
+  echo "peak program:    $peak_src$([ -f "$peak_src" ] || echo ': MISSING')"
+  echo "reference:       $ref$([ -f "$ref" ] || echo ': MISSING')"
+  echo "PyTorch:         $torch_version"
+  echo "rounds:          $rounds"
+  if [ "$write_out" = 1 ]; then
+    echo "results file:    $results, starting:"
+    results_header "..." | sed 's/^/    /'
+  fi
+  [ -f "$peak_src" ] && [ -f "$ref" ]
+  exit
+fi
+
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
@@ -24,7 +103,7 @@ echo "== building (Release, -march=native) in $build"
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DHANDEMO_ARCH=native \
       -DHANDEMO_BUILD_TESTS=OFF -DHANDEMO_BUILD_EXAMPLES=OFF -DHANDEMO_BUILD_BENCH=ON >"$out/cmake.log" 2>&1 \
   || { cat "$out/cmake.log"; echo "compare.sh: cmake configure failed"; exit 1; }
-targets="bench_conv peak_fma_avx2"
+targets="bench_conv peak_fma"
 if [ -f "$here/stargan_bench.cpp" ]; then targets="$targets bench_stargan"; fi
 for t in $targets; do
   nice cmake --build "$build" --target "$t" -j1 >"$out/build_$t.log" 2>&1 \
@@ -41,32 +120,21 @@ case "$isa" in
   *) peak_line="" ;;
 esac
 
-echo "== FMA peak (standalone, for $isa)"
+# bench/peak_fma prints one line per instruction set (n/a for one the CPU lacks); the kernels' line counts.
+echo "== FMA peak (standalone, for ${isa:-unknown})"
 peak=""
+"$build/bench/peak_fma" >"$out/peak.txt" 2>&1
+cat "$out/peak.txt"
 if [ -z "$peak_line" ]; then
-  echo "(no standalone peak program for $isa: the in-process peak of bench_conv is used)"
-elif [ "$peak_line" = "AVX512 FMA" ] || grep -q avx512f /proc/cpuinfo; then
-  # ../shared/bench/peak_fma.cpp measures both AVX-512 and AVX2 (needs a CPU with AVX-512)
-  if g++ -O2 -march=native "$shared_bench/peak_fma.cpp" -o "$out/peak_fma" 2>"$out/peak_build.log" \
-     && "$out/peak_fma" >"$out/peak.txt" 2>&1; then
-    cat "$out/peak.txt"
-    peak=$(sed -n "s/^$peak_line: \([0-9.]*\).*/\1/p" "$out/peak.txt")
-  else
-    echo "(shared peak_fma.cpp failed to build or run)"
-  fi
+  echo "(no standalone peak for ${isa:-unknown}: the in-process peak of bench_conv is used)"
+else
+  peak=$(sed -n "s/^$peak_line: \([0-9.]*\).*/\1/p" "$out/peak.txt")
+  [ -n "$peak" ] && echo "standalone $isa peak: $peak GFLOP/s" \
+    || echo "(no $peak_line line from peak_fma: the in-process peak of bench_conv is used)"
 fi
-if [ -z "$peak" ] && [ "$peak_line" = "AVX2 FMA" ]; then
-  "$build/bench/peak_fma_avx2" | tee "$out/peak.txt"
-  peak=$(sed -n 's/^AVX2 FMA: \([0-9.]*\).*/\1/p' "$out/peak.txt")
-fi
-[ -n "$peak" ] && echo "standalone $isa peak: $peak GFLOP/s"
 
-rounds=${HANDEMO_COMPARE_ROUNDS:-3}
-case "$rounds" in ''|*[!0-9]*|0) echo "compare.sh: HANDEMO_COMPARE_ROUNDS '$rounds' is not a positive integer"; exit 1 ;; esac
-py=/usr/bin/python3
-ref="$shared_bench/reference_stargan.py"
-have_torch=0
-if [ -x "$py" ] && [ -f "$ref" ]; then have_torch=1; else echo "(no $py or $ref: PyTorch columns n/a)"; fi
+[ "$have_torch" = 1 ] || echo "(PyTorch $torch_version: PyTorch columns n/a)"
+load_rounds=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)
 start=$(date +%s)
 for r in $(seq 1 "$rounds"); do
   if [ "$r" -gt 1 ]; then
@@ -98,4 +166,28 @@ echo "== $rounds rounds in $(( $(date +%s) - start )) s"
 echo "== comparison"
 list() { local f=$1 acc="" r; for r in $(seq 1 "$rounds"); do acc="$acc${acc:+,}$out/${f}_$r.$2"; done; echo "$acc"; }
 "$py" "$here/compare_table.py" --isa "${isa:-unknown}" --peak "${peak:-0}" --torch1 "$(list torch1 txt)" \
-  --torch2 "$(list torch2 txt)" --conv "$(list conv json)" --layers "$out/conv_layers.json" --stargan "$(list stargan json)"
+  --torch2 "$(list torch2 txt)" --conv "$(list conv json)" --layers "$out/conv_layers.json" --stargan "$(list stargan json)" \
+  | tee "$out/table.txt"
+status=${PIPESTATUS[0]}
+
+if [ "$write_out" = 1 ]; then
+  # the lines before the first table (peaks and bounds) in a code block, as docs/performance.md shows them; a
+  # blank line between a table and the text line above it, so that Markdown renders it as a table
+  if mkdir -p "$(dirname "$results")" && {
+       results_header "$load_rounds"
+       echo "Standalone FMA peaks (bench/peak_fma.cpp):"
+       echo
+       echo '```'; cat "$out/peak.txt"; echo '```'
+       echo
+       awk 'BEGIN { print "```" }
+            !done && /^$/ { print "```"; done = 1 }
+            done && /^\|/ && prev != "" && prev !~ /^\|/ { print "" }
+            { print; prev = $0 }
+            END { if (!done) print "```" }' "$out/table.txt"
+     } >"$results"; then
+    echo "== wrote $results"
+  else
+    echo "compare.sh: cannot write $results"; exit 1
+  fi
+fi
+exit "$status"
