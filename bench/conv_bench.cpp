@@ -204,7 +204,7 @@ float peak_loop(long n)
 
 /// The FP32 FMA peak of the instruction set the kernels were compiled for (xsimd::default_arch: avx512bw
 /// with -march=native on an AVX-512 machine, avx2 on an AVX2 one), measured inside this program with the
-/// loop of ../shared/bench/peak_fma.cpp (12 independent FMA chains kept in registers), so that fraction of
+/// loop of bench/peak_fma.cpp (12 independent FMA chains kept in registers), so that fraction of
 /// peak compares numbers taken under the same machine load and for the same vector width.
 void peak_fma(benchmark::State& state)
 {

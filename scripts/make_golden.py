@@ -15,7 +15,7 @@ with struct + json, as the reference implementation lays it out (header padded w
 
 Fixtures (seeded with torch.manual_seed; float32 except the StarGAN one, computed and stored in float64):
   ops.safetensors      per op: inputs, output, a random upstream gradient `gy`, input gradients
-  stargan_tiny.safetensors  a tiny StarGAN G and D with the layout of ../shared/bench/reference_stargan.py
+  stargan_tiny.safetensors  a tiny StarGAN G and D with the layout of scripts/reference_stargan.py
                        (official StarGAN parameter names), inputs, outputs, losses, parameter gradients of
                        L_D (with WGAN-GP), of the gradient penalty alone (create_graph=True double backward)
                        and of L_G

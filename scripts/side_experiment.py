@@ -2,7 +2,7 @@
 """The PyTorch side experiment of docs/results.md: StarGAN as the reference trains it, then with a residual
 generator and an identity loss, then with per-channel normalisation, on the synthetic hand images with one
 motion type held out. It answers "is it the method or handemo's code?" outside handemo: the same data, the
-reference layout (../shared/bench/reference_stargan.py: G = conv7, 2 down, residual blocks, 2 up, conv7,
+reference layout (scripts/reference_stargan.py: G = conv7, 2 down, residual blocks, 2 up, conv7,
 tanh, instance norm; D = PatchGAN with a source and a classification head), PyTorch's own autograd and Adam.
 
 Input: a folder written by `handemo encode DATA --out ENC` (Eq. 3 BMPs, one per clip, and range.json with the
