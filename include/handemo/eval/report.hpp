@@ -23,10 +23,11 @@ namespace handemo::eval {
 
 /// @brief Method names in report order; "real" is the captured target clip (the reference row), "oracle" the
 /// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed), "rcm"
-/// the circumplex synthesis of Aristidou et al. 2017 (only with the extension of eval/rcm.hpp).
+/// the circumplex synthesis of Aristidou et al. 2017 (only with the extension of eval/rcm.hpp), "stargan-retargeted"
+/// the transfer from a foreign rig of a body skeleton (eval/retargeted.hpp).
 inline const std::vector<std::string>& method_names()
 {
-    static const std::vector<std::string> m{"stargan", "stargan+detail", "stargan-g", "stargan-ungated", "identity", "mean-offset", "amplitude-only",
+    static const std::vector<std::string> m{"stargan", "stargan+detail", "stargan-g", "stargan-ungated", "stargan-retargeted", "identity", "mean-offset", "amplitude-only",
                                             "nearest-neighbour", "rcm", "real", "oracle"};
     return m;
 }
