@@ -1,7 +1,7 @@
 // Kernels module: the convolution kernels of the StarGAN (Chan et al. 2020, Sec. 3.3) in a fast xsimd
 // version and a plain-loop reference version. The thread pool that spreads work over cores is in core/
-// (<handemo/core/thread_pool.hpp>); kernels/thread_pool.hpp forwards to it under its old name.
+// (<handemo/core/thread_pool.hpp>).
 #pragma once
 
+#include <handemo/core/thread_pool.hpp>
 #include <handemo/kernels/conv.hpp>
-#include <handemo/kernels/thread_pool.hpp>

@@ -4,7 +4,6 @@
 #include <doctest/doctest.h>
 
 #include <handemo/core/thread_pool.hpp>
-#include <handemo/kernels/thread_pool.hpp>  // the forwarding header of the old path
 
 #include <atomic>
 #include <type_traits>
@@ -48,14 +47,6 @@ TEST_CASE("thread_pool rethrows the exception of an iteration and stays usable")
     CHECK(n == 100);
 }
 
-TEST_CASE("thread_pool: the old header path and name still work")
-{
-    static_assert(std::is_same_v<handemo::kernels::thread_pool, handemo::thread_pool>);
-    handemo::kernels::thread_pool pool(2);
-    std::atomic<int> n{0};
-    pool.parallel_for(0, 10, [&](int) { ++n; });
-    CHECK(n == 10);
-}
 
 TEST_CASE("thread_pool: back-to-back calls (workers still spinning) and calls after a sleep both complete")
 {

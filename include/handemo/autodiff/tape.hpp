@@ -148,7 +148,6 @@ public:
     }
 
     thread_pool* pool() const noexcept { return pool_; }
-    void set_pool(thread_pool* p) noexcept { pool_ = p; }
 
     /// @brief `n` elements of 64-byte aligned arena memory (uninitialised), valid until reset().
     T* alloc(std::size_t n)

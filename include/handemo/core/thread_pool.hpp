@@ -2,8 +2,7 @@
 // chunking: iteration i always runs on the same worker for the same (begin, end, size()), so a reduction
 // written per chunk is bit-for-bit deterministic. Used to spread a batch (or output channels) of the
 // StarGAN convolutions (Chan et al. 2020, Sec. 3.3) over cores; the kernels themselves stay single-threaded.
-// It lives in core/ because the autodiff tape and the StarGAN trainer hold one, not only the kernels;
-// <handemo/kernels/thread_pool.hpp> still names it handemo::kernels::thread_pool for existing users.
+// It lives in core/ because the autodiff tape and the StarGAN trainer hold one, not only the kernels.
 #pragma once
 
 #include <algorithm>
@@ -79,12 +78,8 @@ public:
         if (error_) std::rethrow_exception(std::exchange(error_, nullptr));
     }
 
-    /// @brief How long a waiting thread spins before it sleeps (-DHANDEMO_POOL_SPIN_US overrides).
-#ifdef HANDEMO_POOL_SPIN_US
-    static constexpr std::chrono::microseconds spin_time{HANDEMO_POOL_SPIN_US};
-#else
+    /// @brief How long a waiting thread spins before it sleeps.
     static constexpr std::chrono::microseconds spin_time{200};
-#endif
 
 private:
     void run_chunk(unsigned t)

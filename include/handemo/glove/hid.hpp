@@ -40,13 +40,6 @@ inline void hid_init_once()
     if (rc != 0) throw device_error("glove: hid_init failed: " + narrow(hid_error(nullptr)));
 }
 
-inline std::string hex4(std::uint16_t v)
-{
-    char b[8];
-    std::snprintf(b, sizeof b, "%04x", v);
-    return b;
-}
-
 /// Parses "VVVV:PPPP" (hex); empty when `spec` is not of that form (then it is a path).
 inline std::optional<std::pair<std::uint16_t, std::uint16_t>> parse_vid_pid(const std::string& spec)
 {

@@ -3,8 +3,7 @@
 // keyframe_pixels [K, J, 3] <-> an image K pixels high and J pixels wide, R, G, B = x, y, z angles. It
 // lives with image I/O because it includes <handemo/image.hpp> (stb, target handemo::image), so the motion
 // module never pulls in stb. It bridges the two modules: <handemo/image.hpp> does not include it (the image
-// module itself stays free of motion/); include it where both are used. The old path
-// <handemo/motion/codec_image.hpp> forwards here.
+// module itself stays free of motion/); include it where both are used.
 #pragma once
 
 #include <handemo/image.hpp>

@@ -155,7 +155,6 @@ inline double smoothstep(double x) noexcept
     return x * x * (3.0 - 2.0 * x);
 }
 
-inline bool is_bipolar(wave w) noexcept { return w == wave::sine; }
 
 /// Periodic waveform of period 1: sine in [-1, 1], the others in [0, 1] starting at 0.
 inline double wave_value(wave w, double phi, double width) noexcept

@@ -60,7 +60,6 @@ public:
     double fps() const noexcept { return fps_; }
     /// The longest clip's duration in seconds (frames / fps of that clip).
     double duration() const noexcept { return duration_; }
-    std::size_t clip_count() const noexcept { return clips_.size(); }
     const animation_options& options() const noexcept { return opt_; }
     /// Time of output frame k in seconds: k / fps.
     double time_of(std::size_t k) const noexcept { return static_cast<double>(k) / fps_; }

@@ -46,34 +46,18 @@ inline constexpr bool wide_register_file = false;
 #endif
 
 /// Vectors per micro-tile along i, broadcast rows along j. 16 registers (AVX2): NV * NR = 12 accumulators
-/// + NV + 1 <= 16. 32 registers (AVX-512): chosen by measurement, see README "Performance". Overridable
-/// with -DHANDEMO_MICRO_NV / -DHANDEMO_MICRO_NR (to measure other blockings).
-#ifdef HANDEMO_MICRO_NV
-inline constexpr int micro_nv = HANDEMO_MICRO_NV;
-#else
-inline constexpr int micro_nv = 3;  // 3 x 4 on 16 and on 32 registers: no wider tile measured faster
-#endif
-#ifdef HANDEMO_MICRO_NR
-inline constexpr int micro_nr = HANDEMO_MICRO_NR;
-#else
+/// + NV + 1 <= 16. 32 registers (AVX-512): chosen by measurement (docs/performance.md): 3 x 4 on 16 and on
+/// 32 registers, no wider tile measured faster.
+inline constexpr int micro_nv = 3;
 inline constexpr int micro_nr = 4;
-#endif
 static_assert(micro_nv >= 1 && micro_nr >= 4, "micro_nr >= 4: backward_weight_stride1 and the dot path assume it");
 template <class T>
 inline constexpr int micro_mr = micro_nv * simd_lanes<T>;
 
 /// Tile of the dot-product micro-kernel (micro_dot): out channels x pixels, NO * NP accumulators + NP + 1
-/// registers. At least 4 x 3 (backward_weight_stride1 uses 4 x 3 tiles). -DHANDEMO_DOT_NO / _NP override.
-#ifdef HANDEMO_DOT_NO
-inline constexpr int dot_no = HANDEMO_DOT_NO;
-#else
+/// registers. At least 4 x 3 (backward_weight_stride1 uses 4 x 3 tiles).
 inline constexpr int dot_no = wide_register_file ? 6 : 4;
-#endif
-#ifdef HANDEMO_DOT_NP
-inline constexpr int dot_np = HANDEMO_DOT_NP;
-#else
 inline constexpr int dot_np = wide_register_file ? 4 : 3;
-#endif
 static_assert(dot_no >= 4 && dot_np >= 3, "backward_weight_stride1 calls micro_dot with 4 x 3 tiles");
 /// Reduction block of the forward pass: the packed V block (kc x MR) stays in L1.
 inline constexpr int forward_kc = 256;
