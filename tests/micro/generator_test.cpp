@@ -40,13 +40,17 @@ float max_diff_to_host(std::uint64_t seed)
         label[t] = 1.f;
         g.infer(xp.data(), label.data(), yp.data(), hws);
         stargan::crop_image(yp.data(), H, W, host.data(), K, J);
-        mg::infer(x.data(), t, dev.data(), ws);
+        CHECK(mg::infer(x.data(), t, dev.data(), ws));
         for (std::size_t i = 0; i < host.size(); ++i) worst = std::max(worst, std::abs(host[i] - dev[i]));
         // the output is not trivially the input or zero
         float change = 0.f;
         for (std::size_t i = 0; i < host.size(); ++i) change = std::max(change, std::abs(host[i] - (Residual ? x[i] : 0.f)));
         CHECK(change > 0.05f);
     }
+    // a target that is not a domain: refused (false), the output zeroed, nothing run
+    std::fill(dev.begin(), dev.end(), 7.f);
+    CHECK_FALSE(mg::infer(x.data(), C, dev.data(), ws));
+    CHECK(std::all_of(dev.begin(), dev.end(), [](float v) { return v == 0.f; }));
     return worst;
 }
 

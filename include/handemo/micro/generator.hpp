@@ -298,8 +298,14 @@ public:
 
     /// @brief G on a motion image: in [3, K, J] (Eq. 3, in [-1, 1]), target domain index, out [3, K, J].
     /// Pads into ws.x (zeros at the bottom and right, as training does) and crops from ws.y.
-    static void infer(const float* in, std::size_t target, float* out, workspace& ws) noexcept
+    /// @return false, with `out` set to zeros and G not run, when `target` is not a domain index (< C): this
+    /// path has no exceptions, so the caller checks.
+    static bool infer(const float* in, std::size_t target, float* out, workspace& ws) noexcept
     {
+        if (target >= C) {
+            for (std::size_t i = 0; i < 3 * K * J; ++i) out[i] = 0.f;
+            return false;
+        }
         for (std::size_t ch = 0; ch < 3; ++ch)
             for (std::size_t i = 0; i < H; ++i)
                 for (std::size_t j = 0; j < W; ++j)
@@ -310,6 +316,7 @@ public:
         for (std::size_t ch = 0; ch < 3; ++ch)
             for (std::size_t i = 0; i < K; ++i)
                 for (std::size_t j = 0; j < J; ++j) out[(ch * K + i) * J + j] = ws.y[(ch * H + i) * W + j];
+        return true;
     }
 
 private:
