@@ -31,7 +31,8 @@ import sys
 
 # ---------------------------------------------------------------- safetensors in plain Python
 FMT = {"F32": ("f", 4), "F64": ("d", 8), "I64": ("q", 8), "I32": ("i", 4), "U8": ("B", 1),
-       "I8": ("b", 1), "U64": ("Q", 8), "U32": ("I", 4), "I16": ("h", 2), "U16": ("H", 2), "BOOL": ("B", 1)}
+       "I8": ("b", 1), "U64": ("Q", 8), "U32": ("I", 4), "I16": ("h", 2), "U16": ("H", 2), "BOOL": ("B", 1),
+       "F16": ("e", 2)}
 
 
 def st_write(path, tensors, metadata=None):
@@ -83,11 +84,15 @@ def st_read(path):
             cnt *= d
         if en - b != cnt * size or en > len(data):
             raise ValueError(f"{path}: {name}: bad offsets")
-        a = array.array(code)
-        a.frombytes(data[b:en])
-        if sys.byteorder != "little":
-            a.byteswap()
-        out[name] = (e["dtype"], list(e["shape"]), list(a))
+        if code == "e":  # array has no binary16 type code; struct reads little-endian halves exactly
+            values = list(struct.unpack(f"<{cnt}e", data[b:en]))
+        else:
+            a = array.array(code)
+            a.frombytes(data[b:en])
+            if sys.byteorder != "little":
+                a.byteswap()
+            values = list(a)
+        out[name] = (e["dtype"], list(e["shape"]), values)
         spans.append((b, en))
     pos = 0
     for b, en in sorted(spans):

@@ -26,8 +26,8 @@ trap 'rm -rf "$work"' EXIT
 "$cli" train --data "$work/data" --out "$work/model" --config hand-embedded --iters "$iters" --seed 1 --shards 2 \
   --checkpoint-every "$iters"
 mkdir -p "$out"
-# the inference part only (metadata and the EMA generator's weights): what transfer reads, a quarter of the size
-"$cli" export --inference "$work/model" --out "$out/checkpoint.safetensors"
+# the inference part only (metadata and the EMA generator's weights, stored as binary16): what transfer reads
+"$cli" export --inference "$work/model" --half --out "$out/checkpoint.safetensors"
 cp "$work/model/losses.svg" "$out/losses.svg.tmp"
 mv "$out/losses.svg.tmp" "$out/losses.svg"
 echo "make_hand_model.sh: wrote $out/checkpoint.safetensors and $out/losses.svg"

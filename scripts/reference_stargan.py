@@ -132,7 +132,7 @@ def load_generator(path):
     g, _, _ = build(info.get("config", "hand-embedded"), bool(options.get("residual", False)))
     names = set(tensors)
     prefix = "G_ema." if "G_ema.main.0.weight" in names else "G." if "G.main.0.weight" in names else ""
-    dtypes = {"F32": torch.float32, "F64": torch.float64}
+    dtypes = {"F16": torch.float32, "F32": torch.float32, "F64": torch.float64}  # binary16 values held exactly in float
     state = {}
     for name, (dt, shape, values) in tensors.items():
         if name.startswith(prefix):

@@ -19,6 +19,7 @@ struct export_cli {
     std::string model, inference, out;
     stargan::header_export_options opt;
     bool no_self_test = false;
+    bool half = false;
 };
 
 inline void run_export(export_cli& o)
@@ -26,11 +27,12 @@ inline void run_export(export_cli& o)
     if (o.model.empty() == o.inference.empty()) throw value_error("export: give one of --header MODEL or --inference MODEL");
     if (!o.inference.empty()) {
         namespace fs = std::filesystem;
-        const fs::path in = fs::is_directory(o.inference) ? fs::path(o.inference) / "checkpoint.safetensors" : fs::path(o.inference);
-        const auto slim = stargan::inference_checkpoint(stargan::read_checkpoint(in).first);
+        const fs::path in = stargan::checkpoint_file(o.inference);
+        const auto slim = stargan::inference_checkpoint(stargan::read_checkpoint(in).first, o.half);
         (void)stargan::parse_checkpoint(slim);  // what load_model() will check
         write_safetensors(o.out, slim);
-        std::cout << "export: " << in.string() << " -> " << o.out << " (inference only: metadata and the generator's weights, "
+        std::cout << "export: " << in.string() << " -> " << o.out << " (inference only: metadata and the generator's weights"
+                  << (o.half ? " as binary16" : "") << ", "
                   << fs::file_size(o.out) << " bytes)\n";
         return;
     }
@@ -54,6 +56,7 @@ static handemo::cli::add_command reg_export{55, [](CLI::App& app) {
                     "Model folder or checkpoint.safetensors: write its inference part (metadata and generator weights, what "
                     "'transfer --model' reads) as a smaller checkpoint");
     sub->add_option("--out", o->out, "File to write: the header (e.g. model.hpp) or, with --inference, the checkpoint")->required();
+    sub->add_flag("--half", o->half, "With --inference: store the weights as IEEE binary16 (half the bytes; the weights rounded)");
     sub->add_option("--namespace", o->opt.name_space, "Namespace of the generated struct")->capture_default_str();
     sub->add_option("--name", o->opt.struct_name, "Name of the generated struct")->capture_default_str();
     sub->add_option("--self-test-emotion", o->opt.self_test_emotion, "Target domain of the embedded self-test (default: the first non-neutral)");

@@ -275,14 +275,13 @@ inline retarget_map make_map(const skeleton& source, const skeleton& target, con
         "looked for hips, both thighs, both upper arms and a neck (e.g. Hips, LeftUpLeg, LeftArm, Neck (CMU/Mixamo), pelvis, left_hip, "
         "left_shoulder (SMPL), Hips, UpperLeg_L, UpperArm_L (Bandai), pelvis, thigh_l, upperarm_l (Unreal))";
     const std::string target_hands = hands_of(m.target_slots);
+    m.source_slots = o.source_slots ? *o.source_slots : detect(source, o.hand ? o.hand : 'r');
     // a body target takes a body; a hand target, or a body target from a source that is only a hand, takes a hand
-    const bool target_body = has_body(m.target_slots) && (target_hands.empty() || has_body(detect(source, o.hand ? o.hand : 'r')) ||
-                                                          (o.source_slots && has_body(*o.source_slots)));
+    const bool target_body = has_body(m.target_slots) && (target_hands.empty() || has_body(m.source_slots));
     if (!has_body(m.target_slots) && target_hands.empty())
         throw value_error("retarget: target skeleton '" + target.name + "': no hand or body recognised (tried conventions " + tried_conventions() +
                           "; " + looked_hand + "; " + looked_body + "): describe it with a map file");
     m.kind = target_body ? target_kind::body : target_kind::hand;
-    m.source_slots = o.source_slots ? *o.source_slots : detect(source, o.hand ? o.hand : 'r');
     const std::string best = m.source_slots.slots.empty() ? std::string("none matched a joint")
                                                           : "best match " + m.source_slots.convention + " with " +
                                                                 std::to_string(m.source_slots.slots.size()) + " joints";

@@ -636,17 +636,43 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
 /// @brief The inference part of a verified checkpoint: its metadata and the generator's weights (the EMA weights
 /// when it has them), without D, the optimiser state, the random state and the log, with its checksum made anew
 /// and metadata 'inference_only' set. load_model() reads it like the whole checkpoint; `train --resume` cannot.
-inline safetensors_file inference_checkpoint(const safetensors_file& f)
+/// `half`: the float weights stored as IEEE binary16 (half the bytes; load_model() widens them back, so the model
+/// is the trained one with its weights rounded, as kernels::weight_storage::f16 rounds them), metadata
+/// 'weights' = 'binary16'. A weight binary16 cannot hold is refused naming the tensor.
+inline safetensors_file inference_checkpoint(const safetensors_file& f, bool half = false)
 {
     const std::string prefix = f.find("G_ema.main.0.weight") ? "G_ema." : "G.";
     safetensors_file out;
     out.source = f.source;
     out.metadata = f.metadata;
-    for (const auto& t : f.tensors)
-        if (t.name.compare(0, prefix.size(), prefix) == 0) out.tensors.push_back(t);
+    for (const auto& t : f.tensors) {
+        if (t.name.compare(0, prefix.size(), prefix) != 0) continue;
+        if (!half || t.dtype != st_dtype::f32) {
+            out.tensors.push_back(t);
+            continue;
+        }
+        st_tensor h{t.name, st_dtype::f16, t.shape, std::string(t.numel() * 2, '\0')};
+        for (std::size_t i = 0; i < t.numel(); ++i) {
+            const float v = handemo::detail::read_element<float>(t.data.data(), t.dtype, i);
+            const std::uint16_t b = float_to_half(v);
+            if (std::isfinite(v) && !std::isfinite(half_to_float(b)))
+                throw value_error("export: " + f.source + ": weight " + std::to_string(i) + " of " + t.name + " (" + std::to_string(v) +
+                                  ") is beyond binary16's range");
+            handemo::detail::store_le(h.data.data() + 2 * i, b);
+        }
+        out.tensors.push_back(std::move(h));
+    }
+    if (half) out.metadata["weights"] = "binary16";
     out.metadata["inference_only"] = "true";
     out.metadata["checksum"] = detail::checkpoint_checksum(out);
     return out;
+}
+
+/// @brief The checkpoint file of a model path: `path/checkpoint.safetensors` for a training output folder, else
+/// `path` itself.
+inline std::filesystem::path checkpoint_file(const std::filesystem::path& path)
+{
+    return std::filesystem::is_directory(path) ? path / "checkpoint.safetensors" : path;
 }
 
 /// @brief Reads and verifies a checkpoint file (format, checksum, metadata fields).

@@ -448,7 +448,7 @@ inline std::unique_ptr<emotion_model> load_model(const safetensors_file& f, cons
 inline std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path,
                                                  kernels::weight_storage storage = kernels::weight_storage::native)
 {
-    const auto file = std::filesystem::is_directory(path) ? path / "checkpoint.safetensors" : path;
+    const auto file = checkpoint_file(path);
     // No structured binding here: clang 14 cannot capture one in a lambda (C++20's P1091 came in clang 16).
     const auto loaded = read_checkpoint(file);
     return load_model(loaded.first, loaded.second, storage);
