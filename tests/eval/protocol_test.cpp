@@ -8,6 +8,8 @@
 #include <cmath>
 #include <filesystem>
 #include <set>
+#include <stdlib.h>
+#include <string>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -196,12 +198,17 @@ TEST_CASE("eval refuses an unknown held-out content and a one-content data set")
     o.train.iters = 1;
     o.progress_out = nullptr;
     o.folds = {"swimming"};
-    const fs::path dir = fs::temp_directory_path() / "handemo_eval_never_written";
+    // a folder of this run's own (mkdtemp): a leftover of an earlier run cannot be mistaken for one written here
+    std::string base = (fs::temp_directory_path() / "handemo_eval_refuses_XXXXXX").string();
+    REQUIRE(::mkdtemp(base.data()) != nullptr);
+    const fs::path dir = fs::path(base) / "never_written";
     CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("swimming"), value_error);
+    CHECK(!fs::exists(dir));
     std::erase_if(clips, [](const labelled_clip& c) { return c.content != "patting"; });
     o.folds.clear();
     CHECK_THROWS_AS(run_eval<hand_tiny>(clips, info, o, dir), value_error);
     CHECK(!fs::exists(dir));
+    fs::remove_all(base);
 }
 
 TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed is refused before training")

@@ -8,8 +8,10 @@
 #include <handemo/stargan.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -137,10 +139,14 @@ TEST_CASE("export: float literals round-trip exactly and always parse as float")
         const std::string s = stargan::detail::float_literal(v);
         CHECK(s.back() == 'f');
         CHECK(s.find_first_of(".e") != std::string::npos);
-        float back = 0.f;
-        std::from_chars(s.data(), s.data() + s.size() - 1, back);
-        CHECK(back == v);
+        float back = 1.f;
+        const auto r = std::from_chars(s.data(), s.data() + s.size() - 1, back);
+        CHECK(r.ec == std::errc{});
+        CHECK(r.ptr == s.data() + s.size() - 1);
+        // the same bits: == would let -0.f come back as 0.f
+        CHECK(std::bit_cast<std::uint32_t>(back) == std::bit_cast<std::uint32_t>(v));
     }
+    CHECK(stargan::detail::float_literal(-0.f).front() == '-');
     CHECK_THROWS_AS(stargan::detail::float_literal(std::nanf("")), value_error);
 }
 

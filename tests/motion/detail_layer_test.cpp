@@ -14,14 +14,14 @@ constexpr double tau = 2 * std::numbers::pi;
 
 // A smooth base motion plus, on channels 3k (k < 6), a sinusoid of `hz` and amplitude `amp` with a zero at every
 // keyframe when `hz` is a multiple of 4 at 241 frames and 120 fps (keyframes every 0.25 s).
-clip detailed_clip(double hz, double amp, std::size_t frames = 241, double fps = 120.0)
+clip detailed_clip(double hz, double amp, std::size_t frames = 241, double fps = 120.0, double base = 15.0)
 {
     clip c = clip::make(hand_skeleton(), frames, fps);
     const std::size_t C = c.skel.size() * 3;
     for (std::size_t f = 0; f < frames; ++f) {
         const double t = static_cast<double>(f) / fps;
         for (std::size_t ch = 0; ch < C; ++ch) {
-            double v = 15.0 * std::sin(tau * 0.3 * t + 0.2 * static_cast<double>(ch));
+            double v = base * std::sin(tau * 0.3 * t + 0.2 * static_cast<double>(ch));
             if (ch % 3 == 0 && ch < 18) v += amp * std::sin(tau * hz * t);
             c.angles[f * C + ch] = v;
         }
@@ -87,7 +87,6 @@ TEST_CASE("detail_layer: fit learns per-emotion amplitude and frequency, apply m
     CHECK(layer.gain("calm", "shaky", 0) == doctest::Approx(3.0).epsilon(0.03));
     CHECK(layer.gain("shaky", "calm", 0) == doctest::Approx(1.0 / 3.0).epsilon(0.03));
     CHECK(layer.frequency[1] / layer.frequency[0] > 3.0);  // pooled over all channels: the base pulls both down
-    CHECK(layer.rate("calm", "shaky") == doctest::Approx(layer.frequency[1] / layer.frequency[0]));
     CHECK(layer.rate("calm", "calm") == 1.0);
 
     // The transfer calm -> shaky of a calm input whose output is its own keyframe spline (no detail).
@@ -118,6 +117,41 @@ TEST_CASE("detail_layer: fit learns per-emotion amplitude and frequency, apply m
         CHECK(max_keyframe_change(out2, longer) < 1e-9);
         CHECK(measure_detail<9>(out2).amplitude[0] > 0.5 * layer.gain("calm", "shaky", 0) * si.amplitude[0]);
     }
+}
+
+TEST_CASE("detail_layer: frequencies and rates with known answers, the rate bounded and raised to the strength")
+{
+    // Sinusoids alone (no base motion): a multiple of 4 Hz is zero at every keyframe, so the detail is the sinusoid
+    // and each emotion's frequency is its own, times the backward difference's sinc factor sin(x) / x, x = pi f / fps.
+    const auto measured = [](double hz) {
+        const double x = std::numbers::pi * hz / 120.0;
+        return hz * std::sin(x) / x;
+    };
+    const clip c4 = detailed_clip(4.0, 1.0, 241, 120.0, 0.0), c12 = detailed_clip(12.0, 2.0, 241, 120.0, 0.0);
+    const clip c20 = detailed_clip(20.0, 1.5, 241, 120.0, 0.0), still = detailed_clip(4.0, 0.0, 241, 120.0, 0.0);
+    auto layer = detail_layer::fit({{&c4, "calm"}, {&c12, "lively"}, {&c20, "frantic"}, {&still, "still"}});
+    REQUIRE(layer.emotions == std::vector<std::string>{"calm", "lively", "frantic", "still"});
+    CHECK(layer.frequency[0] == doctest::Approx(measured(4.0)).epsilon(0.01));
+    CHECK(layer.frequency[1] == doctest::Approx(measured(12.0)).epsilon(0.01));
+    CHECK(layer.frequency[2] == doctest::Approx(measured(20.0)).epsilon(0.01));
+    CHECK(layer.frequency[3] == 0.0);
+    // F[t] / F[s]
+    const double r = measured(12.0) / measured(4.0);  // about 2.96
+    CHECK(layer.rate("calm", "lively") == doctest::Approx(r).epsilon(0.01));
+    CHECK(layer.rate("lively", "calm") == doctest::Approx(1 / r).epsilon(0.01));
+    // bounded to [1/4, 4]: 20 Hz against 4 Hz is about 4.9
+    CHECK(layer.rate("calm", "frantic") == 4.0);
+    CHECK(layer.rate("frantic", "calm") == 0.25);
+    CHECK(layer.rate("lively", "frantic") == doctest::Approx(measured(20.0) / measured(12.0)).epsilon(0.01));
+    // an emotion without detail plays the input's detail at its own rate
+    CHECK(layer.rate("still", "lively") == 1.0);
+    CHECK(layer.rate("calm", "still") == 1.0);
+    // the strength is the exponent
+    layer.strength = 0.5;
+    CHECK(layer.rate("calm", "lively") == doctest::Approx(std::sqrt(r)).epsilon(0.01));
+    CHECK(layer.rate("calm", "frantic") == 2.0);
+    layer.strength = 0.0;
+    CHECK(layer.rate("calm", "frantic") == 1.0);
 }
 
 TEST_CASE("detail_layer::fit_checked: where the statistics hold on every content, it keeps them (strength 1)")

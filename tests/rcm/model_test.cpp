@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 
 using namespace handemo;
 using doctest::Approx;
@@ -109,13 +110,53 @@ TEST_CASE("model: fit on the synthetic hand set")
     for (std::size_t i = 0; i < mean.size(); ++i) CHECK(want(i) == Approx(mean(i)).epsilon(1e-6));
 }
 
-TEST_CASE("model: analysis of a clip is a clamped circumplex point")
+TEST_CASE("model: analysis is Eq. 1 at each emotion's mean features, clamped to the diagram beyond it")
 {
     const auto& m = fitted();
-    const auto a = m.analyse(shared().data.front().c);
-    CHECK(std::abs(a.valence) <= 1.0);
-    CHECK(std::abs(a.arousal) <= 1.0);
-    CHECK(a.quadrant == rcm::quadrant(a.valence, a.arousal));
+    const auto& sh = shared();
+    // PCA is affine, so each emotion's mean selected features project onto its centre, where Eq. 1 gives that
+    // emotion's coordinates: inside the diagram, nothing is clamped
+    std::map<std::string, rcm::vector> mean;
+    std::map<std::string, double> count;
+    for (const auto& c : sh.clips) {
+        const auto s = m.selected_features(rcm::world_positions(*c.motion), c.motion->fps, m.roles_for(c.motion->skel));
+        if (!mean.count(c.emotion)) mean[c.emotion] = xt::zeros<double>({m.selected.size()});
+        mean[c.emotion] += s;
+        count[c.emotion] += 1;
+    }
+    REQUIRE(mean.size() == 5);
+    std::set<int> quadrants;
+    for (auto& [emo, s] : mean) {
+        CAPTURE(emo);
+        s /= count[emo];
+        const auto& l = sh.table.at(emo);
+        const auto a = m.analyse_features(s);
+        CHECK(a.valence == Approx(l.valence).epsilon(1e-6));
+        CHECK(a.arousal == Approx(l.arousal).epsilon(1e-6));
+        CHECK(a.raw_valence == a.valence);
+        CHECK(a.raw_arousal == a.arousal);
+        CHECK(a.quadrant == rcm::quadrant(l.valence, l.arousal));
+        quadrants.insert(a.quadrant);
+    }
+    CHECK(quadrants == std::set<int>{1, 2, 3, 4});  // the five emotions cover every quadrant
+    // a clip's analysis is that of its selected features
+    const clip& first = sh.data.front().c;
+    const auto a = m.analyse(first);
+    const auto b = m.analyse_features(m.selected_features(rcm::world_positions(first), first.fps, m.roles_for(first.skel)));
+    CHECK(a.valence == b.valence);
+    CHECK(a.arousal == b.arousal);
+    CHECK(a.raw_valence == b.raw_valence);
+    // far beyond happy on the line from sad (Eq. 1's linear term grows without bound there): the raw values pass
+    // the edge, the analysis stops at it and keeps the raw point
+    rcm::analysis far;
+    for (double t = 1; t < 1e9 && std::max(std::abs(far.raw_valence), std::abs(far.raw_arousal)) <= 1.5; t *= 2)
+        far = m.analyse_features(mean["happy"] + t * (mean["happy"] - mean["sad"]));
+    REQUIRE(std::max(std::abs(far.raw_valence), std::abs(far.raw_arousal)) > 1.5);
+    const auto edge = [](double raw) { return raw > 1 ? 1.0 : raw < -1 ? -1.0 : raw; };
+    CHECK(far.valence == edge(far.raw_valence));
+    CHECK(far.arousal == edge(far.raw_arousal));
+    CHECK(std::max(std::abs(far.valence), std::abs(far.arousal)) == 1.0);
+    CHECK(far.quadrant == rcm::quadrant(far.raw_valence, far.raw_arousal));
     // a body clip has no hand roles
     auto body = clip::make(skeleton{"b", {joint{"Hips", -1}, joint{"Head", 0}}}, 40, 30);
     CHECK_THROWS_WITH_AS(m.analyse(body), doctest::Contains("role 'wrist'"), value_error);
@@ -187,9 +228,28 @@ TEST_CASE("model: leave-one-content-out evaluation runs every fold")
     opt.cluster = false;
     const auto r = rcm::evaluate_loo(sh.clips, group, sh.table, "circumplex.json", opt);
     CHECK(r.folds.size() == 7);
-    CHECK(r.samples.size() + 5 * r.failed_folds.size() == sh.clips.size());
-    CHECK(r.mean_distance >= 0);
-    CHECK(r.mean_distance <= 2 * std::sqrt(2.0));
-    CHECK(r.quadrant_accuracy >= 0);
-    CHECK(r.quadrant_accuracy <= 1);
+    // every fold fits and analyses its five held-out clips (a fold that failed would leave its clips out)
+    CHECK(r.failed_folds.empty());
+    REQUIRE(r.samples.size() == sh.clips.size());
+    std::map<std::string, std::set<std::string>> held;  // fold -> emotions of its held-out clips
+    double distance = 0, quadrant_ok = 0;
+    for (std::size_t i = 0; i < r.samples.size(); ++i) {
+        const auto& s = r.samples[i];
+        CAPTURE(s.name);
+        held[s.held_out].insert(s.emotion);
+        const auto& l = sh.table.at(s.emotion);
+        CHECK(s.true_valence == l.valence);
+        CHECK(s.true_arousal == l.arousal);
+        CHECK(s.distance == Approx(std::hypot(s.valence - l.valence, s.arousal - l.arousal)));
+        CHECK(s.quadrant_ok == (rcm::quadrant(s.valence, s.arousal) == rcm::quadrant(l.valence, l.arousal)));
+        distance += s.distance / static_cast<double>(r.samples.size());
+        quadrant_ok += s.quadrant_ok ? 1 : 0;
+    }
+    CHECK(held.size() == 7);
+    for (const auto& [fold, emotions] : held) CHECK(emotions.size() == 5);
+    CHECK(r.mean_distance == Approx(distance));
+    CHECK(r.quadrant_accuracy == Approx(quadrant_ok / static_cast<double>(r.samples.size())));
+    CHECK(r.mean_distance > 0);  // held-out clips are not the training means
+    CHECK(r.mean_selected >= 12);
+    CHECK(r.mean_pca_dims >= 1);
 }
