@@ -1,11 +1,16 @@
 #include <doctest/doctest.h>
 #include <handemo/core/io.hpp>
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
+#include <stdlib.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -98,6 +103,58 @@ TEST_CASE("make_directories creates parents and names the folder it cannot creat
     CHECK(std::filesystem::is_directory(base / "a" / "b"));
     handemo::make_directories(base / "a" / "b");  // exists: nothing to do
     handemo::write_file_atomic(base / "file", "x");
-    CHECK_THROWS_WITH_AS(handemo::make_directories(base / "file" / "sub"), doctest::Contains("cannot create folder"), handemo::io_error);
+    const auto sub = base / "file" / "sub";
+    CHECK_THROWS_WITH_AS(handemo::make_directories(sub), doctest::Contains(("cannot create folder " + sub.string()).c_str()), handemo::io_error);
     std::filesystem::remove_all(base);
+}
+
+namespace {
+/// A fresh folder of this run's own under the temporary directory, removed with everything in it at the end.
+struct scratch_dir {
+    fs::path path;
+    scratch_dir()
+    {
+        std::string t = (fs::temp_directory_path() / "handemo_io_status_XXXXXX").string();
+        if (!::mkdtemp(t.data())) throw std::runtime_error("mkdtemp failed");
+        path = t;
+    }
+    ~scratch_dir() { fs::remove_all(path); }
+};
+}  // namespace
+
+TEST_CASE("path_exists, is_folder and regular_files_in answer, and name the path whose status cannot be read")
+{
+    const scratch_dir d;
+    handemo::write_file_atomic(d.path / "a.bvh", "x");
+    handemo::make_directories(d.path / "sub");
+    fs::create_symlink(d.path / "a.bvh", d.path / "link.bvh");   // a link to a file counts as the file
+    fs::create_symlink(d.path / "gone", d.path / "broken.bvh");  // a broken link is no file
+    CHECK(handemo::path_exists(d.path / "a.bvh"));
+    CHECK(handemo::path_exists(d.path / "sub"));
+    CHECK(!handemo::path_exists(d.path / "missing"));
+    CHECK(!handemo::path_exists(d.path / "a.bvh" / "below_a_file"));
+    CHECK(handemo::is_folder(d.path / "sub"));
+    CHECK(!handemo::is_folder(d.path / "a.bvh"));
+    CHECK(!handemo::is_folder(d.path / "missing"));
+    auto files = handemo::regular_files_in(d.path);
+    std::sort(files.begin(), files.end());
+    CHECK(files == std::vector<fs::path>{d.path / "a.bvh", d.path / "link.bvh"});
+
+    // a link to itself (ELOOP) and a name longer than any file system takes (ENAMETOOLONG): the standard
+    // library's throwing calls raise std::filesystem::filesystem_error here, these raise io_error naming the path
+    const fs::path loop = d.path / "loop";
+    fs::create_symlink(loop, loop);
+    const fs::path too_long = d.path / std::string(300, 'n');
+    CHECK_THROWS_AS(static_cast<void>(fs::exists(loop)), fs::filesystem_error);
+    CHECK_THROWS_AS(static_cast<void>(fs::is_directory(too_long)), fs::filesystem_error);
+    for (const fs::path& p : {loop, too_long, loop / "below"}) {
+        CAPTURE(p);
+        CHECK_THROWS_WITH_AS(handemo::path_exists(p), doctest::Contains(("cannot read the status of " + p.string()).c_str()), handemo::io_error);
+        CHECK_THROWS_WITH_AS(handemo::is_folder(p), doctest::Contains(p.string().c_str()), handemo::io_error);
+        CHECK_THROWS_WITH_AS(handemo::regular_files_in(p), doctest::Contains(("cannot list the folder " + p.string()).c_str()), handemo::io_error);
+    }
+    // a folder holding the loop cannot be listed as files: its entry's status cannot be read
+    CHECK_THROWS_WITH_AS(handemo::regular_files_in(d.path), doctest::Contains(loop.string().c_str()), handemo::error);
+    CHECK_THROWS_WITH_AS(handemo::regular_files_in(d.path / "a.bvh"), doctest::Contains((d.path / "a.bvh").string().c_str()), handemo::io_error);
+    CHECK_THROWS_AS(handemo::regular_files_in(d.path / "missing"), handemo::io_error);
 }

@@ -211,6 +211,16 @@ TEST_CASE("eval refuses an unknown held-out content and a one-content data set")
     fs::remove_all(base);
 }
 
+TEST_CASE("write_report names the folder it cannot create (io_error, not std::filesystem::filesystem_error)")
+{
+    std::string base = (fs::temp_directory_path() / "handemo_eval_report_XXXXXX").string();
+    REQUIRE(::mkdtemp(base.data()) != nullptr);
+    write_file_atomic(fs::path(base) / "file", "x");
+    const fs::path dir = fs::path(base) / "file" / "report";  // below a file
+    CHECK_THROWS_WITH_AS(write_report(eval_result{}, dir), doctest::Contains(dir.string().c_str()), io_error);
+    fs::remove_all(base);
+}
+
 TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed is refused before training")
 {
     const auto clips = toy_set(3);  // synthesize_dataset(1, 3) at 60 fps

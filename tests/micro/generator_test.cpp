@@ -12,8 +12,11 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
+
+#include <stdlib.h>
 
 using namespace handemo;
 
@@ -148,6 +151,18 @@ TEST_CASE("export: float literals round-trip exactly and always parse as float")
     }
     CHECK(stargan::detail::float_literal(-0.f).front() == '-');
     CHECK_THROWS_AS(stargan::detail::float_literal(std::nanf("")), value_error);
+}
+
+TEST_CASE("export: a model path whose status cannot be read is an io_error naming it")
+{
+    std::string t = (std::filesystem::temp_directory_path() / "handemo_export_XXXXXX").string();
+    REQUIRE(::mkdtemp(t.data()) != nullptr);
+    const std::filesystem::path loop = std::filesystem::path(t) / "model";
+    std::filesystem::create_symlink(loop, loop);  // a link to itself: stat fails with ELOOP
+    CHECK_THROWS_WITH_AS(stargan::export_generator_header(loop, {}), doctest::Contains(loop.string().c_str()), io_error);
+    CHECK_THROWS_WITH_AS(stargan::export_generator_header(loop / "checkpoint.safetensors", {}), doctest::Contains(loop.string().c_str()),
+                         io_error);
+    std::filesystem::remove_all(t);
 }
 
 TEST_CASE("export: the header holds the configuration, every weight and a host-computed self-test")

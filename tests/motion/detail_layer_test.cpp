@@ -152,6 +152,9 @@ TEST_CASE("detail_layer: frequencies and rates with known answers, the rate boun
     CHECK(layer.rate("calm", "frantic") == 2.0);
     layer.strength = 0.0;
     CHECK(layer.rate("calm", "frantic") == 1.0);
+    // a channel past the layer's is a value_error naming it (not std::out_of_range), as is an unknown emotion
+    CHECK_THROWS_WITH_AS(layer.gain("calm", "lively", 69), doctest::Contains("channel 69 out of range (69 channels)"), value_error);
+    CHECK_THROWS_WITH_AS(layer.rate("calm", "bored"), doctest::Contains("'bored'"), value_error);
 }
 
 TEST_CASE("detail_layer::fit_checked: where the statistics hold on every content, it keeps them (strength 1)")

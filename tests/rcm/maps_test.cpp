@@ -5,6 +5,8 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <limits>
+#include <stdexcept>
 
 using namespace handemo;
 using doctest::Approx;
@@ -39,6 +41,19 @@ TEST_CASE("pca: recovers a known orthonormal basis and variances, keeps 95%")
     CHECK(rcm::fit_pca(x, 1.0).dims() == 3);
     CHECK(rcm::fit_pca(x, 0.5).dims() == 1);
     CHECK_THROWS_WITH_AS(rcm::fit_pca(xt::ones<double>({std::size_t{4}, std::size_t{3}})), doctest::Contains("no variance"), value_error);
+    // values LAPACK cannot take are refused before it runs (its failure would escape as std::runtime_error),
+    // naming the row and column
+    rcm::matrix bad = x;
+    bad(5, 2) = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_WITH_AS(rcm::fit_pca(bad), doctest::Contains("rcm::fit_pca: row 5 column 2 is nan"), value_error);
+    bad(5, 2) = -std::numeric_limits<double>::infinity();
+    CHECK_THROWS_WITH_AS(rcm::fit_pca(bad), doctest::Contains("row 5 column 2 is -inf"), value_error);
+    bad(5, 2) = 1e300;  // finite, but its square is not
+    CHECK_THROWS_WITH_AS(rcm::fit_pca(bad), doctest::Contains("covariance overflows"), value_error);
+    // and a LAPACK failure that still happens comes back as value_error naming the function
+    CHECK_THROWS_WITH_AS(rcm::detail::lapack("rcm::f", []() -> int { throw std::runtime_error("did not converge"); }),
+                         doctest::Contains("rcm::f: LAPACK failed: did not converge"), value_error);
+    CHECK_THROWS_WITH_AS(rcm::detail::lapack("rcm::f", []() -> int { throw shape_error("kept"); }), doctest::Contains("kept"), shape_error);
 }
 
 TEST_CASE("rbf: interpolation is exact at the centres for both kernels")

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include <stdlib.h>
+
 namespace fs = std::filesystem;
 using namespace handemo;
 
@@ -49,6 +51,22 @@ TEST_CASE("manifest.csv labels clips and bad manifests are refused with the line
     CHECK(tempo[2] == doctest::Approx(1.0));  // no data: unchanged
     write_file_atomic(dir / "manifest.csv", "path,content,emotion\na.bvh,wave\n");
     CHECK_THROWS_WITH_AS(stargan::load_folder(dir), doctest::Contains("manifest.csv:2"), format_error);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("load_folder names a path whose status cannot be read (io_error, not std::filesystem::filesystem_error)")
+{
+    std::string t = (fs::temp_directory_path() / "handemo_load_folder_XXXXXX").string();
+    REQUIRE(::mkdtemp(t.data()) != nullptr);
+    const fs::path dir = t;
+    const fs::path loop = dir / "loop";
+    fs::create_symlink(loop, loop);  // a link to itself: stat fails with ELOOP
+    CHECK_THROWS_WITH_AS(stargan::load_folder(loop), doctest::Contains(loop.string().c_str()), io_error);
+    CHECK_THROWS_WITH_AS(stargan::load_folder(dir), doctest::Contains(loop.string().c_str()), io_error);  // an entry
+    fs::remove(loop);
+    const fs::path manifest = dir / "manifest.csv";
+    fs::create_symlink(manifest, manifest);
+    CHECK_THROWS_WITH_AS(stargan::load_folder(dir), doctest::Contains(manifest.string().c_str()), io_error);
     fs::remove_all(dir);
 }
 

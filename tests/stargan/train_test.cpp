@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <memory>
 
+#include <stdlib.h>
+
 namespace fs = std::filesystem;
 using namespace handemo;
 using namespace handemo::stargan;
@@ -435,4 +437,16 @@ TEST_CASE("the checkpoint carries the detail layer; checkpoints without it load;
     f.metadata["checksum"] = handemo::stargan::detail::checkpoint_checksum(f);
     write_safetensors(old / "checkpoint.safetensors", f);
     CHECK_THROWS_WITH_AS(read_checkpoint(old / "checkpoint.safetensors"), doctest::Contains("metadata 'skeleton' joint 5 is 'renamed'"), format_error);
+}
+
+TEST_CASE("resume names a checkpoint path whose status cannot be read (io_error, not std::filesystem::filesystem_error)")
+{
+    std::string t = (fs::temp_directory_path() / "handemo_resume_XXXXXX").string();
+    REQUIRE(::mkdtemp(t.data()) != nullptr);
+    const fs::path dir = t, ck = dir / "checkpoint.safetensors";
+    fs::create_symlink(ck, ck);  // a link to itself: stat fails with ELOOP
+    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(toy_set(3), tiny_info()), quiet(1));
+    CHECK_THROWS_WITH_AS(tr.run(dir, /*resume=*/true), doctest::Contains(ck.string().c_str()), io_error);
+    CHECK_THROWS_WITH_AS(read_checkpoint(checkpoint_file(ck)), doctest::Contains(ck.string().c_str()), io_error);
+    fs::remove_all(dir);
 }

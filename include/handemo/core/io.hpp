@@ -12,6 +12,7 @@
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <vector>
 
 namespace handemo {
 
@@ -34,6 +35,49 @@ inline void make_directories(const std::filesystem::path& dir)
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw io_error("cannot create folder " + dir.string() + ": " + ec.message());
+}
+
+namespace detail {
+
+/// The status of `path`; a path that does not exist has type not_found.
+/// @throws io_error naming the path when its status cannot be read (a folder on the way that cannot be
+/// searched, a symbolic link loop, a name too long), never std::filesystem::filesystem_error.
+inline std::filesystem::file_status status_of(const std::filesystem::path& path)
+{
+    std::error_code ec;
+    const auto st = std::filesystem::status(path, ec);
+    if (!std::filesystem::status_known(st)) throw io_error("cannot read the status of " + path.string() + ": " + ec.message());
+    return st;
+}
+
+}  // namespace detail
+
+/// @brief Whether `path` names an existing file or folder.
+/// @throws io_error naming the path when its status cannot be read (see detail::status_of()).
+inline bool path_exists(const std::filesystem::path& path) { return std::filesystem::exists(detail::status_of(path)); }
+
+/// @brief Whether `path` names an existing folder (or a link to one).
+/// @throws io_error naming the path when its status cannot be read.
+inline bool is_folder(const std::filesystem::path& path) { return std::filesystem::is_directory(detail::status_of(path)); }
+
+/// @brief The regular files directly in folder `dir` (links followed), in no particular order.
+/// @throws io_error naming the folder when it cannot be listed, never std::filesystem::filesystem_error.
+inline std::vector<std::filesystem::path> regular_files_in(const std::filesystem::path& dir)
+{
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    std::vector<fs::path> files;
+    const auto fail = [&] { return io_error("cannot list the folder " + dir.string() + ": " + ec.message()); };
+    fs::directory_iterator it(dir, ec);
+    if (ec) throw fail();
+    for (; it != fs::directory_iterator(); it.increment(ec)) {  // an error ends the walk with ec set
+        std::error_code sec;
+        const auto st = it->status(sec);  // a broken link is not_found: left out, as it is no file
+        if (!fs::status_known(st)) throw io_error("cannot read the status of " + it->path().string() + ": " + sec.message());
+        if (fs::is_regular_file(st)) files.push_back(it->path());
+    }
+    if (ec) throw fail();
+    return files;
 }
 
 /// @brief Writes `data` to `path` atomically: a temporary file beside it, flushed, then renamed over.

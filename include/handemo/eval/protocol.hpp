@@ -294,7 +294,7 @@ void reuse_fold_model(const std::vector<stargan::labelled_clip>& train, const st
                           std::to_string(ck.step) + " steps with options " + ck.options.dump() + ", this run wants " +
                           info.name + ", " + std::to_string(to.iters) + " steps, " + to.to_json().dump() +
                           " (remove the folder or drop --reuse-models)");
-    const std::string log = fs::exists(fold_dir / "log.csv") ? read_file(fold_dir / "log.csv") : std::string();
+    const std::string log = path_exists(fold_dir / "log.csv") ? read_file(fold_dir / "log.csv") : std::string();
     fsum.train_d_acc = csv_tail_mean(log, "D/acc");
     fsum.train_g_cls = csv_tail_mean(log, "G/cls");
     fsum.reused_model = true;
@@ -555,7 +555,7 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
     detail::gate_check_sum total;
     for (const auto& f : r.folds) {
         const auto gate_dir = out_dir / "folds" / f.held_out / "gate";
-        if (!std::filesystem::exists(gate_dir / "gate.csv")) continue;
+        if (!path_exists(gate_dir / "gate.csv")) continue;
         const auto lines = detail::csv_rows(read_file(gate_dir / "gate.csv"));
         if (lines.empty()) continue;
         const auto& head = lines[0];
@@ -581,7 +581,7 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
         }
         if (sum.pairs <= 0 || sum.cross_pairs <= 0) continue;
         std::string margin = "(fixed)";
-        if (std::filesystem::exists(gate_dir / "gate_margins.csv"))
+        if (path_exists(gate_dir / "gate_margins.csv"))
             for (const auto& cells : detail::csv_rows(read_file(gate_dir / "gate_margins.csv")))
                 if (cells.size() == 6 && cells[5] == "1") margin = cells[0];
         total.add(sum);
@@ -650,7 +650,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         const fs::path fold_dir = out_dir / "folds" / held;
         auto t0 = clock::now();
         const auto to = detail::fold_train_options(opt, contents, held);
-        if (opt.reuse_models && fs::exists(fold_dir / "checkpoint.safetensors"))
+        if (opt.reuse_models && path_exists(fold_dir / "checkpoint.safetensors"))
             detail::reuse_fold_model<Config>(train, info, to, opt, fold_dir, fsum);
         else
             detail::train_fold_model<Config>(train, info, to, held, fold_dir, fsum);

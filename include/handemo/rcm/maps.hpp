@@ -25,6 +25,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -36,12 +37,26 @@ using vector = xt::xtensor<double, 1>;
 
 namespace detail {
 
+/// Runs an xtensor-blas call, whose LAPACK failures (no convergence, a singular factor) come back as
+/// std::runtime_error, and rethrows those as value_error naming `who`.
+template <class F>
+auto lapack(const std::string& who, F&& f) -> decltype(f())
+{
+    try {
+        return f();
+    } catch (const error&) {
+        throw;
+    } catch (const std::runtime_error& e) {
+        throw value_error(who + ": LAPACK failed: " + e.what());
+    }
+}
+
 /// Throws value_error when a matrix is singular or too ill-conditioned to solve (SVD, LAPACK gesdd).
 inline void check_conditioning(const matrix& a, const std::string& who, const std::string& why)
 {
     for (double v : a)
         if (!std::isfinite(v)) throw value_error(who + ": the system has a non-finite entry");
-    const auto s = std::get<1>(xt::linalg::svd(a, false, true));
+    const auto s = std::get<1>(lapack(who, [&] { return xt::linalg::svd(a, false, true); }));
     const double smax = s.size() ? s(0) : 0.0, smin = s.size() ? s(s.size() - 1) : 0.0;
     if (!(smax > 0) || smin <= 1e-11 * smax)
         throw value_error(who + ": the linear system is singular (smallest/largest singular value " + std::to_string(smin) +
@@ -102,18 +117,26 @@ struct pca_model {
 /// @brief Fits PCA on the rows of `[N, D]` (covariance with 1/N, LAPACK syevd via xt::linalg::eigh) and keeps
 /// the fewest leading components whose variances reach `keep` of the total, at most `max_dims`.
 /// Each component's sign is fixed so that its largest-magnitude entry is positive.
-/// @throws value_error when there are no rows or the data has no variance.
+/// @throws value_error when there are no rows, a value is not finite, the covariance overflows or the data has no
+/// variance.
 inline pca_model fit_pca(const matrix& x, double keep = 0.95, std::size_t max_dims = std::numeric_limits<std::size_t>::max())
 {
     const std::size_t n = x.shape()[0], D = x.shape()[1];
     if (n == 0 || D == 0) throw value_error("rcm::fit_pca: empty data (" + std::to_string(n) + " x " + std::to_string(D) + ")");
     if (!(keep > 0 && keep <= 1)) throw value_error("rcm::fit_pca: variance share " + std::to_string(keep) + " is not in (0, 1]");
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < D; ++j)
+            if (!std::isfinite(x(i, j)))
+                throw value_error("rcm::fit_pca: row " + std::to_string(i) + " column " + std::to_string(j) + " is " + std::to_string(x(i, j)) +
+                                  ", not a finite number");
     pca_model m;
     m.mean = xt::mean(x, {0});
     matrix c = x;
     for (std::size_t i = 0; i < n; ++i) xt::view(c, i, xt::all()) -= m.mean;
     const matrix cov = xt::linalg::dot(xt::transpose(c), c) / static_cast<double>(n);
-    const auto [evals, evecs] = xt::linalg::eigh(cov);  // ascending
+    for (double v : cov)
+        if (!std::isfinite(v)) throw value_error("rcm::fit_pca: the covariance overflows (values too large to square)");
+    const auto [evals, evecs] = detail::lapack("rcm::fit_pca", [&] { return xt::linalg::eigh(cov); });  // ascending
     double total = 0;
     for (double v : evals) total += std::max(0.0, v);
     if (!(total > 0)) throw value_error("rcm::fit_pca: the data has no variance");
@@ -230,7 +253,7 @@ inline rbf_map fit_rbf_interpolant(const matrix& centres, const matrix& values, 
         for (std::size_t o = 0; o < m; ++o) b(k, o) = values(k, o);
     }
     detail::check_conditioning(a, who, "centres coincide or are affinely dependent");
-    const matrix sol = xt::linalg::solve(a, b);
+    const matrix sol = detail::lapack(who, [&] { return matrix(xt::linalg::solve(a, b)); });
     detail::require_finite_solution(sol, who);
     rbf_map r;
     r.kernel = kernel;
@@ -259,7 +282,7 @@ inline rbf_map fit_rbf_regression(const matrix& samples, const matrix& targets, 
     matrix design = xt::ones<double>({N, d + 1});
     xt::view(design, xt::all(), xt::range(1, d + 1)) = samples;
     detail::check_conditioning(design, who, "the samples do not span their dimensions (duplicate or collinear feature vectors)");
-    const matrix w = std::get<0>(xt::linalg::lstsq(design, targets));
+    const matrix w = std::get<0>(detail::lapack(who, [&] { return xt::linalg::lstsq(design, targets); }));
     const matrix phi = detail::rbf_gram(centres, kernel, sigma);
     matrix resid = xt::zeros<double>({K, m});
     for (std::size_t k = 0; k < K; ++k) {
@@ -270,7 +293,7 @@ inline rbf_map fit_rbf_regression(const matrix& samples, const matrix& targets, 
         }
     }
     detail::check_conditioning(phi, who, "two centres coincide");
-    const matrix lambda = xt::linalg::solve(phi, resid);
+    const matrix lambda = detail::lapack(who, [&] { return matrix(xt::linalg::solve(phi, resid)); });
     detail::require_finite_solution(lambda, who);
     rbf_map r;
     r.kernel = kernel;

@@ -174,14 +174,14 @@ inline std::vector<labelled_clip> read_manifest(const std::filesystem::path& dir
 inline std::vector<labelled_clip> load_folder(const std::filesystem::path& dir, const load_options& opt = {})
 {
     namespace fs = std::filesystem;
-    if (!fs::is_directory(dir)) throw io_error("dataset: " + dir.string() + " is not a folder");
+    if (!is_folder(dir)) throw io_error("dataset: " + dir.string() + " is not a folder");
     std::vector<labelled_clip> items;
-    if (fs::exists(dir / "manifest.csv")) {
+    if (path_exists(dir / "manifest.csv")) {
         items = read_manifest(dir);
     } else {
         std::vector<fs::path> files;
-        for (const auto& e : fs::directory_iterator(dir))
-            if (e.is_regular_file() && (detail::is_bvh(e.path()) || detail::is_csv(e.path()))) files.push_back(e.path());
+        for (const auto& f : regular_files_in(dir))
+            if (detail::is_bvh(f) || detail::is_csv(f)) files.push_back(f);
         std::sort(files.begin(), files.end());
         std::set<std::string> bvh_stems;
         for (const auto& f : files)

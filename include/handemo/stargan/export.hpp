@@ -141,7 +141,7 @@ std::string generator_header(generator<float, Config>& g, const checkpoint_info&
 /// @throws io_error, format_error (unreadable checkpoint), value_error (unknown configuration).
 inline std::string export_generator_header(const std::filesystem::path& model, header_export_options o)
 {
-    const auto file = std::filesystem::is_directory(model) ? model / "checkpoint.safetensors" : model;
+    const auto file = checkpoint_file(model);
     // not a structured binding: clang 14 cannot capture one in the lambda below (C++20 allows it, clang 16 does)
     const auto ck = read_checkpoint(file);
     const safetensors_file& f = ck.first;

@@ -672,7 +672,7 @@ inline safetensors_file inference_checkpoint(const safetensors_file& f, bool hal
 /// `path` itself.
 inline std::filesystem::path checkpoint_file(const std::filesystem::path& path)
 {
-    return std::filesystem::is_directory(path) ? path / "checkpoint.safetensors" : path;
+    return is_folder(path) ? path / "checkpoint.safetensors" : path;
 }
 
 /// @brief Reads and verifies a checkpoint file (format, checksum, metadata fields).
@@ -908,7 +908,7 @@ public:
         make_directories(out_dir);
         const fs::path ck = out_dir / "checkpoint.safetensors";
         if (resume) {
-            if (!fs::exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
+            if (!path_exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
             load(ck);
         }
         progress bar("train " + info_.name, opt_.iters, opt_.progress_out);
