@@ -1,6 +1,6 @@
 // The glove subcommands (list, record, calibrate, live, simulate) in their own translation unit: the only
-// one of the CLI that includes <handemo/glove.hpp> (hidapi), built into the CLI only when the
-// handemo::glove target exists (examples/CMakeLists.txt).
+// one of the CLI that includes <handemo/glove.hpp>, and <handemo/glove/hid.hpp> (hidapi) when the
+// handemo::glove target exists (HANDEMO_HAVE_HIDAPI, examples/CMakeLists.txt).
 #include "registry.hpp"
 
 #include "glove/common.hpp"
@@ -11,7 +11,7 @@
 #include "glove/live.hpp"
 
 static handemo::cli::add_command reg_glove{85, [](CLI::App& app) {
-    auto* glove = app.add_subcommand("glove", "Capture hand motion with a data glove (HID): list, record, calibrate, live transfer, simulate");
+    auto* glove = app.add_subcommand("glove", "Capture hand motion with a data glove (Senso, OpenGloves, 5DT, HID profiles): list, record, calibrate, live transfer, simulate");
     glove->require_subcommand(1);
     handemo::cli::glove_cmd::add_list(glove);
     handemo::cli::glove_cmd::add_record(glove);

@@ -1,8 +1,9 @@
-# `handemo glove` through the built CLI, without hardware: list (no devices here: one clear line), simulate
-# a glove into a raw stream with lost and malformed reports, record from the replay (counts in the summary,
-# a valid BVH), record --raw and replay the copy, calibrate a flex glove (flat + fist) and record with it,
-# live transfer with a 2-iteration hand-tiny model, and the one-line errors.
-# Usage: cmake -DHANDEMO_CLI=<exe> -DPROFILES=<examples/glove> -DWORK_DIR=<dir> -P cli_test.cmake
+# `handemo glove` through the built CLI, without hardware: list (no devices here: one clear line each), simulate
+# a glove of each protocol (a HID profile, senso, opengloves, 5dt) into a raw stream with lost and malformed
+# reports, record from the replay (counts in the summary, a valid BVH), record --raw and replay the copy,
+# calibrate a flex glove (flat + fist) and record with it, live transfer with a 2-iteration hand-tiny model
+# (also through the reader thread at the recorded pace), and the one-line errors.
+# Usage: cmake -DHANDEMO_CLI=<exe> -DPROFILES=<examples/glove> -DHID=ON|OFF -DWORK_DIR=<dir> -P cli_test.cmake
 include(${CMAKE_CURRENT_LIST_DIR}/../cli_expect.cmake)
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
@@ -17,62 +18,106 @@ function(expect_output re)
 endfunction()
 
 run_ok(list glove list)
-if(NOT last_output MATCHES "no HID devices found|usage [0-9a-f]+:[0-9a-f]+")
+if(NOT last_output MATCHES "no HID devices found|usage [0-9a-f]+:[0-9a-f]+|built without hidapi")
   message(FATAL_ERROR "glove list printed neither devices nor the 'no HID devices found' line:\n${last_output}")
 endif()
+if(NOT last_output MATCHES "no serial ports that look like a glove|serial /dev/[a-zA-Z]+[0-9]+ .*--glove opengloves"
+   OR NOT last_output MATCHES "senso: its server is looked for at 127.0.0.1:53450")
+  message(FATAL_ERROR "glove list did not list serial ports and the senso server:\n${last_output}")
+endif()
 
-run_ok(simulate glove simulate --profile ${IMU} --out ${W}/imu.raw --seconds 3 --drop-every 50 --garbage-every 70)
+run_ok(simulate glove simulate --glove ${IMU} --out ${W}/imu.raw --seconds 3 --drop-every 50 --garbage-every 70)
 expect_output("393 reports at 100 Hz .* 7 dropped, 5 garbage")
-run_ok(record glove record --profile ${IMU} --replay ${W}/imu.raw --out ${W}/take.bvh --raw ${W}/copy.raw)
+run_ok(record glove record --glove ${IMU} --replay ${W}/imu.raw --out ${W}/take.bvh --raw ${W}/copy.raw)
 expect_output("393 samples \\(3.99 s, 98.2 Hz\\) -> .*take.bvh: 240 frames at 60 fps; dropped reports 7, malformed 5 \\(short 2, unknown id 2, non-unit quaternion 1\\)")
 run_ok(info info ${W}/take.bvh)
 expect_output("joints: 23 .*frames: 240, fps: 60")
 # the --raw copy replays to the same take
-run_ok(record_copy glove record --profile ${IMU} --replay ${W}/copy.raw --out ${W}/take2.bvh)
+run_ok(record_copy glove record --glove ${IMU} --replay ${W}/copy.raw --out ${W}/take2.bvh)
 expect_output("393 samples .* 240 frames at 60 fps; dropped reports 7, malformed 5")
 file(READ ${W}/take.bvh a)
 file(READ ${W}/take2.bvh b)
 if(NOT a STREQUAL b)
   message(FATAL_ERROR "the replayed --raw copy gives another BVH")
 endif()
-run_ok(record_seconds glove record --profile ${IMU} --replay ${W}/imu.raw --out ${W}/short.bvh --seconds 1 --fps 30)
+run_ok(record_seconds glove record --glove ${IMU} --replay ${W}/imu.raw --out ${W}/short.bvh --seconds 1 --fps 30)
 expect_output("-> .*short.bvh: 31 frames at 30 fps")
 
-run_ok(simulate_flex glove simulate --profile ${FLEX} --out ${W}/flex.raw --motion crawling --seconds 2)
-run_ok(calibrate glove calibrate --profile ${FLEX} --replay ${W}/flex.raw --out ${W}/calib.json)
+run_ok(simulate_flex glove simulate --glove ${FLEX} --out ${W}/flex.raw --motion crawling --seconds 2)
+run_ok(calibrate glove calibrate --glove ${FLEX} --replay ${W}/flex.raw --out ${W}/calib.json)
 expect_output("90 flat and 90 fist samples")
-run_ok(record_flex glove record --profile ${FLEX} --replay ${W}/flex.raw --calib ${W}/calib.json --out ${W}/flex.bvh)
+run_ok(record_flex glove record --glove ${FLEX} --replay ${W}/flex.raw --calib ${W}/calib.json --out ${W}/flex.bvh)
 expect_output("360 samples \\(3.99 s, 90.0 Hz\\)")
+
+# the other protocols: their own messages, their own faults, counted by name
+run_ok(simulate_senso glove simulate --glove senso --out ${W}/senso.raw --seconds 2 --drop-every 50 --garbage-every 70)
+expect_output("senso .* 393 reports at 100 Hz .* 7 dropped, 5 garbage")
+run_ok(record_senso glove record --glove senso --replay ${W}/senso.raw --out ${W}/senso.bvh)
+expect_output("393 samples .* dropped reports 7, malformed 5 \\(non-unit quaternion 1, syntax 4\\)")
+# the stream holds the right hand only: the left hand's recording finds nothing and says so
+execute_process(COMMAND ${HANDEMO_CLI} glove record --glove senso --hand left --replay ${W}/senso.raw --out ${W}/senso_left.bvh
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT err MATCHES "\nhandemo: error: glove record: .*no complete samples in 398 reports \\(4 malformed \\(syntax 4\\)\\); nothing written\n$")
+  message(FATAL_ERROR "record_senso_left: exit ${rc}\n${err}")
+endif()
+run_ok(simulate_og glove simulate --glove opengloves --analog-max 1023 --out ${W}/og.raw --seconds 2 --garbage-every 40)
+expect_output("opengloves .* 240 reports at 60 Hz .* 0 dropped, 5 garbage")
+run_ok(record_og glove record --glove opengloves --analog-max 1023 --replay ${W}/og.raw --out ${W}/og.bvh)
+expect_output("240 samples .* malformed 5 \\(out of range 1, syntax 4\\)")
+run_ok(simulate_5dt glove simulate --glove 5dt --sensors 5 --hand left --out ${W}/5dt.raw --seconds 2)
+expect_output("5dt-ultra-5-left .* 300 reports at 75 Hz")
+run_ok(calibrate_5dt glove calibrate --glove 5dt --sensors 5 --hand left --replay ${W}/5dt.raw --out ${W}/5dt.json)
+expect_output("75 flat and 75 fist samples")
+run_ok(record_5dt glove record --glove 5dt --sensors 5 --hand left --replay ${W}/5dt.raw --calib ${W}/5dt.json --out ${W}/5dt.bvh)
+expect_output("300 samples \\(3.99 s, 75.0 Hz\\)")
+run_ok(info_5dt info ${W}/5dt.bvh)
+expect_output("joints: 23 .*frames: 240, fps: 60")
 
 run_ok(synth synth --out ${W}/data --takes 1)
 run_ok(train train --data ${W}/data --config hand-tiny --iters 2 --out ${W}/model --threads 1)
-run_ok(live glove live --model ${W}/model --emotion angry --profile ${IMU} --replay ${W}/imu.raw --out ${W}/rolling.bvh --window 1 --every 0.5)
+run_ok(live glove live --model ${W}/model --emotion angry --glove ${IMU} --replay ${W}/imu.raw --out ${W}/rolling.bvh --window 1 --every 0.5)
 expect_output("glove live: 7 windows of 1.0 s transferred to angry -> .*rolling.bvh; latency from report to output mean")
 run_ok(info_rolling info ${W}/rolling.bvh)
 expect_output("joints: 23")
-run_ok(live_print glove live --model ${W}/model --emotion sad --profile ${IMU} --replay ${W}/imu.raw --print --seconds 2)
+# through the reader thread, at the recorded pace: it keeps reading while a window is transferred
+run_ok(live_realtime glove live --model ${W}/model --emotion angry --glove senso --replay ${W}/senso.raw --realtime --print --seconds 1.2 --window 1 --every 0.5)
+expect_output("glove live: [1-9] windows of 1.0 s transferred to angry; latency from report to output mean [0-9.]+ ms, worst [0-9.]+ ms; .* overruns 0")
+run_ok(live_print glove live --model ${W}/model --emotion sad --glove ${IMU} --replay ${W}/imu.raw --print --seconds 2)
 expect_output("t=1.01 latency=[0-9.]+ms forearm=")
 
-run_fail(bad_profile glove record --profile ${W}/take.bvh --replay ${W}/imu.raw --out ${W}/x.bvh)
+run_fail(bad_profile glove record --glove ${W}/take.bvh --replay ${W}/imu.raw --out ${W}/x.bvh)
 expect_error_matches("glove profile: .*take.bvh: .*parse error")
-run_fail(not_raw glove record --profile ${IMU} --replay ${W}/take.bvh --out ${W}/x.bvh)
+run_fail(not_raw glove record --glove ${IMU} --replay ${W}/take.bvh --out ${W}/x.bvh)
 expect_error_matches("not a raw glove stream")
-run_fail(no_device glove record --profile ${IMU} --out ${W}/x.bvh)
+run_fail(no_device glove record --glove ${IMU} --out ${W}/x.bvh)
 expect_error_matches("has no vendor/product id: give --device")
-run_fail(missing_device glove record --profile ${IMU} --device 1234:abcd --out ${W}/x.bvh)
-expect_error_matches("no HID device 1234:abcd")
+if(HID)
+  run_fail(missing_device glove record --glove ${IMU} --device 1234:abcd --out ${W}/x.bvh)
+  expect_error_matches("no HID device 1234:abcd")
+else()
+  run_fail(missing_device glove record --glove ${IMU} --device 1234:abcd --out ${W}/x.bvh)
+  expect_error_matches("HID device 1234:abcd: this handemo was built without hidapi")
+endif()
+run_fail(og_no_port glove record --glove opengloves --out ${W}/x.bvh)
+expect_error_matches("--glove opengloves reads a serial port: give --device")
+run_fail(og_missing_port glove record --glove opengloves --device ${W}/no-such-tty --out ${W}/x.bvh)
+expect_error_matches("cannot open serial port .*no-such-tty")
+run_fail(senso_no_server glove record --glove senso --device 127.0.0.1:1 --out ${W}/x.bvh)
+expect_error_matches("cannot connect to TCP 127.0.0.1:1")
+run_fail(senso_bad_address glove record --glove senso --device localhost --out ${W}/x.bvh)
+expect_error_matches("'localhost' is not HOST:PORT")
 # a replay of another glove: warnings on the way, then the error as the last line, and no file
-execute_process(COMMAND ${HANDEMO_CLI} glove record --profile ${FLEX} --replay ${W}/imu.raw --out ${W}/x.bvh
+execute_process(COMMAND ${HANDEMO_CLI} glove record --glove ${FLEX} --replay ${W}/imu.raw --out ${W}/x.bvh
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(rc EQUAL 0 OR NOT err MATCHES "glove: warning: report 1 skipped: report id 1 is not in the profile"
    OR NOT err MATCHES "\nhandemo: error: glove record: .*no complete samples in 398 reports \\(398 malformed \\(unknown id 398\\)\\); nothing written\n$"
    OR EXISTS ${W}/x.bvh)
   message(FATAL_ERROR "wrong_glove: exit ${rc}\n${err}")
 endif()
-run_fail(calib_other glove record --profile ${IMU} --calib ${W}/calib.json --replay ${W}/imu.raw --out ${W}/x.bvh)
+run_fail(calib_other glove record --glove ${IMU} --calib ${W}/calib.json --replay ${W}/imu.raw --out ${W}/x.bvh)
 expect_error_matches("made for profile 'flex15-example'")
-run_fail(live_emotion glove live --model ${W}/model --emotion furious --profile ${IMU} --replay ${W}/imu.raw --print)
+run_fail(live_emotion glove live --model ${W}/model --emotion furious --glove ${IMU} --replay ${W}/imu.raw --print)
 expect_error_matches("unknown emotion 'furious'")
-run_fail(live_no_output glove live --model ${W}/model --emotion sad --profile ${IMU} --replay ${W}/imu.raw)
+run_fail(live_no_output glove live --model ${W}/model --emotion sad --glove ${IMU} --replay ${W}/imu.raw)
 expect_error_matches("give --out rolling.bvh or --print")
 file(REMOVE_RECURSE "${WORK_DIR}")

@@ -179,13 +179,21 @@ TEST_CASE("seconds limit, keep_seconds window and a truncated raw file")
     fake_transport t;
     feed(t, p, sim, 0, 500, 0, 0.0);
     record_options o;
-    o.seconds = 2;
+    o.seconds = 4.5;  // past twice keep_seconds, where the recorder trims
     o.keep_seconds = 1;
     o.raw = dir / "r.raw";
     glove_recorder rec(t, p, std::nullopt, o);
     rec.run();
-    CHECK(rec.stats().duration == doctest::Approx(2.0));
-    CHECK(rec.times().back() - rec.times().front() <= 2.0 + 1e-9);
+    CHECK(rec.stats().duration >= 4.5);
+    CHECK(rec.stats().duration < 4.5 + 0.011);
+    // only the newest 1..2 s of poses are kept: the oldest ones were cut
+    const auto times = rec.times();
+    REQUIRE(times.size() >= 2);
+    CHECK(times.size() < rec.stats().samples);
+    CHECK(times.back() - times.front() >= 1.0 - 1e-9);
+    CHECK(times.back() - times.front() <= 2.0 + 1e-9);
+    CHECK(times.front() >= 4.5 - 2.0 - 1e-9);
+    CHECK(rec.poses().size() == times.size() * hand_joint_count * 3);
     const clip last = rec.take(1.0);
     CHECK(last.frames == 61);
     // cut the raw file inside its last record: the replay ignores that record and says where

@@ -4,6 +4,7 @@
 // a device_error naming it. Exits 77 (CTest: skipped, not passed) where /dev/uhid is missing or not
 // writable, or the created hidraw node cannot be opened (permissions).
 #include <handemo/glove.hpp>
+#include <handemo/glove/hid.hpp>
 
 #include <linux/uhid.h>
 

@@ -1,4 +1,4 @@
-// `handemo glove calibrate --profile P.json [--device ID|--replay FILE] --out calib.json [--hold S] [--settle S]`:
+// `handemo glove calibrate --glove senso|opengloves|5dt|P.json [--device ID|--replay FILE] --out calib.json [--hold S] [--settle S]`:
 // the flat-hand pose (every glove) and a fist (flex gloves), each held for --hold seconds after --settle
 // seconds to get there; from a replay, the first --hold seconds are the flat hand and the next the fist.
 #pragma once
@@ -18,7 +18,7 @@ struct calibrate_cli {
 
 /// Collects the complete samples of `seconds` (sample time) after skipping `settle` seconds (host time, live
 /// only). The sample that ends a window is carried into the next one (a replay's poses follow each other).
-inline std::vector<glove_sample> collect(glove_transport& t, report_decoder& d, double seconds, double settle, std::size_t& malformed,
+inline std::vector<glove_sample> collect(glove_transport& t, glove_decoder& d, double seconds, double settle, std::size_t& malformed,
                                          std::optional<glove_sample>& carry)
 {
     const double skip_until = host_seconds() + settle;
@@ -46,11 +46,13 @@ inline std::vector<glove_sample> collect(glove_transport& t, report_decoder& d, 
 
 inline void run_calibrate(const calibrate_cli& o)
 {
-    const auto p = read_glove_profile(o.src.profile);
-    auto t = open_source(o.src, p);
+    const auto choice = o.src.choice();
+    const auto& p = choice.profile;
+    auto t = open_source(o.src, choice);
     const bool live = o.src.replay.empty();
     const double settle = live ? o.settle : 0;
-    report_decoder d(p);
+    const auto decoder = make_decoder(choice);
+    auto& d = *decoder;
     std::size_t malformed = 0;
     std::optional<glove_sample> carry;
     catch_interrupt();
@@ -58,7 +60,9 @@ inline void run_calibrate(const calibrate_cli& o)
               << (live ? ", starting in " + std::to_string(static_cast<int>(settle)) + " s" : "") << "\n";
     const auto flat = collect(*t, d, o.hold, settle, malformed, carry);
     std::vector<glove_sample> fist;
-    if (!p.flexes.empty()) {
+    bool fist_needed = false;
+    for (const auto* f : p.flexes) fist_needed = fist_needed || f->fist_calibrated;
+    if (fist_needed) {
         std::cerr << "glove calibrate: make a fist" << (live ? ", starting in " + std::to_string(static_cast<int>(settle)) + " s" : "") << "\n";
         fist = collect(*t, d, o.hold, settle, malformed, carry);
         if (fist.empty()) throw device_error("glove calibrate: " + t->name() + ": no samples of the fist");

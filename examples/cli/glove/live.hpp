@@ -1,8 +1,9 @@
-// `handemo glove live --model MODEL --emotion E --profile P.json [--device ID|--replay FILE] [--window S]
+// `handemo glove live --model MODEL --emotion E --glove senso|opengloves|5dt|P.json [--device ID|--replay FILE] [--window S]
 // [--every S] (--out rolling.bvh | --print)`: the last --window seconds of the glove are transferred to
 // emotion E every --every seconds (stargan load_model(...)->transfer(clip, E)) and written as a rolling
 // BVH (atomically replaced) or printed as joint angles, with the latency from the newest report's arrival
-// to the output.
+// to the output. A device is read on the reader thread, which keeps reading (and stamping arrivals) while a
+// window is transferred here.
 #pragma once
 
 #include "common.hpp"
@@ -33,14 +34,15 @@ inline void run_live(const live_cli& o)
     if (!(o.window > 0.2)) throw value_error("glove live: --window " + std::to_string(o.window) + " s is too short (at least 0.2 s)");
     const auto model = load_emotion_model(o.model);
     (void)model->domain(o.emotion);  // an unknown emotion fails now, not after the first window
-    const auto p = read_glove_profile(o.src.profile);
+    const auto c = o.src.choice();
+    const auto& p = c.profile;
     std::optional<glove_calibration> calib;
     if (!o.src.calib.empty()) calib = read_glove_calibration(o.src.calib, p);
-    auto t = open_source(o.src, p);
+    auto t = open_source(o.src, c);
     record_options ro;
     ro.fps = o.fps, ro.seconds = o.seconds, ro.keep_seconds = o.window;
     ro.reconnect_window = o.src.replay.empty() ? o.src.reconnect : 1;
-    glove_recorder rec(*t, p, calib, ro);
+    glove_recorder rec(*t, make_decoder(c), calib, ro);
     warning_printer warn;
     rec.on_warning = [&](const std::string& w) { warn(w); };
     catch_interrupt();
@@ -48,9 +50,11 @@ inline void run_live(const live_cli& o)
     double last_out = -1e9, newest_arrival = 0, worst = 0, sum = 0;
     std::size_t outputs = 0, seen = 0;
     while (!interrupted() && rec.step()) {
-        const auto& s = rec.stats();
-        if (s.samples != seen) seen = s.samples, newest_arrival = host_seconds();
-        if (rec.times().size() < 2 || s.duration - last_out < o.every || rec.times().back() - rec.times().front() < o.window * 0.5) {
+        const auto s = rec.stats();
+        // the newest report's arrival: stamped by the reader thread, else (a replay) when it was seen here
+        if (s.samples != seen) seen = s.samples, newest_arrival = s.last_arrival > 0 ? s.last_arrival : host_seconds();
+        const auto [poses, span] = rec.extent();
+        if (poses < 2 || s.duration - last_out < o.every || span < o.window * 0.5) {
             line.update(s);
             continue;
         }
@@ -73,11 +77,11 @@ inline void run_live(const live_cli& o)
         line.update(s, extra, true);
     }
     line.end();
-    const auto& s = rec.stats();
+    const auto s = rec.stats();
     std::printf("glove live: %zu windows of %.1f s transferred to %s%s%s; latency from report to output mean %.1f ms, worst %.1f ms; "
-                "%zu samples, dropped %zu, malformed %zu%s\n",
+                "%zu samples, dropped %zu, malformed %zu%s, overruns %zu\n",
                 outputs, o.window, o.emotion.c_str(), o.out.empty() ? "" : " -> ", o.out.c_str(), outputs ? sum / static_cast<double>(outputs) * 1000 : 0.0,
-                worst * 1000, s.samples, s.dropped, s.malformed, fault_summary(s).c_str());
+                worst * 1000, s.samples, s.dropped, s.malformed, fault_summary(s).c_str(), s.overruns);
     if (outputs == 0) throw device_error("glove live: " + t->name() + ": not enough samples for one window of " + std::to_string(o.window) + " s");
 }
 

@@ -1,6 +1,6 @@
 // The HID transport (hidapi): enumerate devices, open one by VID:PID or path, read input reports with a
 // timeout, send and get feature reports, reopen after a disconnect. This is the only file of handemo that
-// includes hidapi; it is reached through <handemo/glove.hpp> and the CMake target handemo::glove.
+// includes hidapi; include it after <handemo/glove.hpp> and link the CMake target handemo::glove.
 #pragma once
 
 #include <handemo/core/error.hpp>

@@ -61,6 +61,7 @@ struct glove_field {
     double range_min = -std::numeric_limits<double>::infinity(), range_max = std::numeric_limits<double>::infinity();
     double flat = 0, fist = 1;      ///< nominal raw values with the hand flat and in a fist (calibration overrides)
     double fist_angle = 90;         ///< the joint angle (degrees) the fist value stands for
+    bool fist_calibrated = true;    ///< a fist moves this sensor (bend); false for spread sensors, which keep `fist`
     axis rotation_axis = axis::x;   ///< which angle of the bone a flex sensor measures (x: flexion)
     std::size_t sensor = 0;         ///< index among the profile's sensors of this kind (set by the parser)
     std::size_t bytes() const noexcept { return value_size(type) * (kind == field_kind::quaternion ? 4 : 1); }
@@ -312,11 +313,17 @@ inline glove_profile read_glove_profile(const std::filesystem::path& path)
 }
 
 /// Why a report was refused.
-enum class report_fault : std::uint8_t { none, short_report, unknown_id, not_finite, non_unit_quaternion, out_of_range, clock_backwards };
-inline constexpr std::size_t report_fault_count = 7;
+enum class report_fault : std::uint8_t {
+    none, short_report, unknown_id, not_finite, non_unit_quaternion, out_of_range, clock_backwards,
+    syntax,         ///< a text line that is not the protocol's syntax (malformed JSON, garbage, a cut line)
+    missing_field,  ///< a required value is absent
+    unknown_key     ///< a key the protocol does not define (a warning: the rest of the line is used)
+};
+inline constexpr std::size_t report_fault_count = 10;
 constexpr std::string_view to_string(report_fault f) noexcept
 {
-    constexpr std::string_view n[] = {"ok", "short", "unknown id", "NaN/inf", "non-unit quaternion", "out of range", "clock backwards"};
+    constexpr std::string_view n[] = {"ok", "short", "unknown id", "NaN/inf", "non-unit quaternion", "out of range", "clock backwards",
+                                      "syntax", "missing field", "unknown key"};
     return n[static_cast<int>(f)];
 }
 
@@ -336,6 +343,22 @@ struct decode_result {
     report_fault fault = report_fault::none;
     std::string message;                ///< what was wrong (empty when fine)
     std::uint64_t dropped = 0;          ///< reports missing before this one (sequence counter gap)
+    report_fault warning = report_fault::none;  ///< something to report in a report that was still used
+    std::string warning_message;
+};
+
+/// @brief Turns reports (HID report bytes or text lines) into samples of a profile's sensors. One per
+/// glove protocol: report_decoder (HID profiles as data), senso_decoder, opengloves_decoder. A refused
+/// report sets `fault` and changes no state.
+class glove_decoder {
+public:
+    virtual ~glove_decoder() = default;
+    /// The sensors the samples carry (bones, calibration defaults) for calibration and the solve.
+    virtual const glove_profile& profile() const noexcept = 0;
+    /// @brief Decodes one report received at `host_time`; on `frame`, `out` holds the sample.
+    virtual decode_result decode(std::span<const std::uint8_t> bytes, double host_time, glove_sample& out) = 0;
+    /// Forgets clocks and counters (after a reconnect: the device may have restarted).
+    virtual void reset() = 0;
 };
 
 namespace detail {
@@ -384,19 +407,21 @@ inline void store_value(std::uint8_t* p, value_type t, bool big, double v) noexc
 /// @brief Turns report bytes into samples with one profile. Keeps the latest value of every sensor (a
 /// device may spread its sensors over several report ids) and the unwrapping state of the device clock
 /// and the sequence counter. Decoding allocates nothing after construction.
-class report_decoder {
+class report_decoder : public glove_decoder {
 public:
-    explicit report_decoder(const glove_profile& p) : p_(p)
+    explicit report_decoder(const glove_profile& p) : p_(p) { reset(); }
+    const glove_profile& profile() const noexcept override { return p_; }
+    void reset() override
     {
         current_.imu.assign(p_.imus.size(), quat{});
         current_.flex.assign(p_.flexes.size(), 0.0);
         scratch_ = current_;
+        has_ts_ = false, ts_time_ = 0, ts_raw_ = 0, seq_raw_ = 0, seq_ = -1;
     }
-    const glove_profile& profile() const noexcept { return p_; }
 
     /// @brief Decodes one report received at `host_time` (seconds); on `frame`, `out` holds the sample.
     /// A refused report changes nothing: not the sensors, the clock or the counter.
-    decode_result decode(std::span<const std::uint8_t> bytes, double host_time, glove_sample& out)
+    decode_result decode(std::span<const std::uint8_t> bytes, double host_time, glove_sample& out) override
     {
         decode_result r;
         const glove_report_layout* L = nullptr;
@@ -412,7 +437,8 @@ public:
         }
         if (bytes.size() < L->size) {
             r.fault = report_fault::short_report;
-            r.message = "report id " + std::to_string(L->id) + " has " + std::to_string(bytes.size()) + " bytes, expected at least " + std::to_string(L->size);
+            r.message = (L->id >= 0 ? "report id " + std::to_string(L->id) : std::string("report")) + " has " + std::to_string(bytes.size()) +
+                        " bytes, expected at least " + std::to_string(L->size);
             return r;
         }
         // Decode into scratch state, commit only when every field is fine.

@@ -7,7 +7,10 @@
 // counted by fault and skipped with a warning; the recording goes on. The BVH is rewritten atomically
 // every flush_seconds and on every exit path (end, stop, a disconnect that does not come back), so the
 // file on disk is always a valid BVH of everything captured so far. After a reconnect the decoder's clock
-// and counter restart and the timeline continues from the host time of the gap.
+// and counter restart and the timeline continues from the host time of the gap. Any protocol's decoder
+// (glove_decoder) feeds it; with a glove_reader as the transport, the device is read on its own thread and
+// the queue's overruns are counted here too. The accessors copy under a lock, so another thread may read
+// them while step() runs.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -24,6 +27,7 @@
 #include <cmath>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
@@ -49,11 +53,14 @@ struct record_options {
 /// @brief Counters of a recording.
 struct record_stats {
     std::size_t reports = 0, samples = 0, malformed = 0, dropped = 0, timeouts = 0, reconnects = 0;
-    std::array<std::size_t, report_fault_count> faults{};  ///< malformed reports by report_fault
+    std::size_t warnings = 0;   ///< reports used with a warning (an unknown key)
+    std::size_t overruns = 0;   ///< reports lost in a full reader queue (glove_reader)
+    std::array<std::size_t, report_fault_count> faults{};  ///< malformed reports and warnings by report_fault
     std::size_t frames = 0, gap_frames = 0;  ///< output frames of the last take() and those inside gaps
     double duration = 0;                     ///< seconds from the first to the last sample
     double rate_hz = 0;                      ///< measured sample rate
     double last_host_time = 0;               ///< host time of the report that completed the newest sample
+    double last_arrival = 0;                 ///< when the reader thread received that report (0: no reader thread)
 };
 
 /// @brief Records a glove through a transport (see the file comment).
@@ -62,7 +69,12 @@ public:
     /// @param calib a calibration, or empty: flex gloves use the profile's nominal values, IMU gloves take
     ///              the first calibration_seconds as the flat hand.
     glove_recorder(glove_transport& t, const glove_profile& p, std::optional<glove_calibration> calib, record_options o)
-        : t_(t), p_(p), o_(std::move(o)), decoder_(std::make_unique<report_decoder>(p_))
+        : glove_recorder(t, std::make_unique<report_decoder>(p), std::move(calib), std::move(o))
+    {
+    }
+    /// @brief Records with any protocol's decoder; its profile() describes the sensors.
+    glove_recorder(glove_transport& t, std::unique_ptr<glove_decoder> decoder, std::optional<glove_calibration> calib, record_options o)
+        : t_(t), p_(decoder->profile()), o_(std::move(o)), decoder_(std::move(decoder))
     {
         if (!(o_.fps > 0 && o_.fps <= 10000)) throw value_error("glove record: fps " + std::to_string(o_.fps) + " is not in (0, 10000]");
         if (calib) solver_.emplace(p_, std::move(*calib));
@@ -78,7 +90,10 @@ public:
     /// @throws device_error after a disconnect that did not come back within the window (the BVH is written first).
     bool step()
     {
-        if (stop_.load() || (o_.seconds > 0 && stats_.duration >= o_.seconds) || t_.finished()) return false;
+        {
+            std::lock_guard lock(m_);
+            if (stop_.load() || (o_.seconds > 0 && stats_.duration >= o_.seconds) || t_.finished()) return false;
+        }
         std::optional<hid_report> r;
         try {
             r = t_.read(o_.read_timeout);
@@ -88,9 +103,10 @@ public:
                 const double start = host_seconds();
                 do {
                     if (t_.reconnect()) {
+                        std::lock_guard lock(m_);
                         ++stats_.reconnects;
-                        if (raw_) raw_->write(hid_report{{}, host_seconds()});  // the reconnect marker
-                        decoder_ = std::make_unique<report_decoder>(p_);
+                        if (raw_) raw_->write(hid_report{{}, host_seconds(), 0});  // the reconnect marker
+                        decoder_->reset();
                         resync_ = true;
                         warn("reconnected to " + t_.name() + "; the recording goes on");
                         return true;
@@ -103,6 +119,8 @@ public:
                 throw device_error(std::string(e.what()) + "; no reconnect within " + std::to_string(o_.reconnect_window) + " s");
             throw;
         }
+        std::unique_lock lock(m_);
+        stats_.overruns = t_.overruns();
         if (!r) {
             ++stats_.timeouts;
             return true;
@@ -114,8 +132,19 @@ public:
             fault(d.fault, d.message);
             return true;
         }
+        if (d.warning != report_fault::none) {
+            ++stats_.warnings;
+            ++stats_.faults[static_cast<std::size_t>(d.warning)];
+            warn("report " + std::to_string(stats_.reports) + ": " + d.warning_message);
+        }
         if (p_.has_sequence) stats_.dropped += d.dropped;
-        if (d.frame) add(sample_);
+        if (d.frame) {
+            arrival_ = r->arrival;
+            if (add(sample_)) {
+                lock.unlock();
+                flush();
+            }
+        }
         return true;
     }
 
@@ -129,18 +158,49 @@ public:
         flush();
     }
 
-    bool calibrated() const noexcept { return solver_.has_value(); }
-    const std::optional<hand_solver>& solver() const noexcept { return solver_; }
-    const record_stats& stats() const noexcept { return stats_; }
-    /// Timestamps (seconds from the first sample) of the solved poses.
-    const std::vector<double>& times() const noexcept { return times_; }
-    /// Solved poses, [samples, 23, 3] degrees.
-    const std::vector<double>& poses() const noexcept { return poses_; }
+    bool calibrated() const
+    {
+        std::lock_guard lock(m_);
+        return solver_.has_value();
+    }
+    /// The calibration in use (empty while an IMU glove is still collecting its flat-hand seconds).
+    std::optional<glove_calibration> calibration() const
+    {
+        std::lock_guard lock(m_);
+        return solver_ ? std::optional<glove_calibration>(solver_->calibration()) : std::nullopt;
+    }
+    const glove_profile& profile() const noexcept { return p_; }
+    /// The decoder (protocol state such as opengloves_decoder::state()); use it from the recording thread.
+    const glove_decoder& decoder() const noexcept { return *decoder_; }
+    record_stats stats() const
+    {
+        std::lock_guard lock(m_);
+        return stats_;
+    }
+    /// Timestamps (seconds from the first sample) of the solved poses, a copy.
+    std::vector<double> times() const
+    {
+        std::lock_guard lock(m_);
+        return times_;
+    }
+    /// Solved poses, [samples, 23, 3] degrees, a copy.
+    std::vector<double> poses() const
+    {
+        std::lock_guard lock(m_);
+        return poses_;
+    }
+    /// Number of solved poses and the seconds they span.
+    std::pair<std::size_t, double> extent() const
+    {
+        std::lock_guard lock(m_);
+        return {times_.size(), times_.empty() ? 0.0 : times_.back() - times_.front()};
+    }
 
     /// @brief The recording at the output frame rate (the newest `last_seconds` of it when > 0).
     /// Updates stats().frames and stats().gap_frames.
     clip take(double last_seconds = 0)
     {
+        std::lock_guard lock(m_);
         constexpr std::size_t J3 = hand_joint_count * 3;
         const std::size_t n = times_.size();
         if (n == 0) return clip::make(hand_skeleton(), 0, o_.fps);
@@ -173,10 +233,15 @@ public:
     /// @brief Writes the BVH (when `out` is set and something was captured), atomically.
     void flush()
     {
-        if (raw_) raw_->flush();
-        if (o_.out.empty() || times_.empty()) return;
-        write_bvh(o_.out, take());
-        last_flush_ = times_.back();
+        clip c;
+        {
+            std::lock_guard lock(m_);
+            if (raw_) raw_->flush();
+            if (o_.out.empty() || times_.empty()) return;
+            c = take();
+            last_flush_ = times_.back();
+        }
+        write_bvh(o_.out, c);
     }
 
 private:
@@ -190,7 +255,8 @@ private:
         ++stats_.faults[static_cast<std::size_t>(f)];
         warn("report " + std::to_string(stats_.reports) + " skipped: " + m);
     }
-    void add(const glove_sample& s)
+    /// Adds a sample; true when the BVH is due to be rewritten.
+    bool add(const glove_sample& s)
     {
         constexpr std::size_t J3 = hand_joint_count * 3;
         if (resync_ || !started_) {
@@ -202,7 +268,7 @@ private:
         const double t = s.time() + offset_;
         if (started_ && !(t > last_time_)) {
             fault(report_fault::clock_backwards, "sample time " + std::to_string(t) + " s does not advance past " + std::to_string(last_time_) + " s");
-            return;
+            return false;
         }
         if (started_ && !p_.has_sequence) {
             const double missing = std::round((t - last_time_) * p_.rate_hz) - 1;
@@ -212,13 +278,14 @@ private:
         started_ = true;
         last_time_ = t;
         stats_.last_host_time = s.host_time;
+        stats_.last_arrival = arrival_;
         ++stats_.samples;
         stats_.duration = t - first_time_;
         stats_.rate_hz = stats_.duration > 0 ? static_cast<double>(stats_.samples - 1) / stats_.duration : 0;
         if (!solver_) {
             pending_.push_back(s);
             pending_times_.push_back(t);
-            if (t - first_time_ < o_.calibration_seconds) return;
+            if (t - first_time_ < o_.calibration_seconds) return false;
             solver_.emplace(p_, calibrate_glove(p_, pending_));
             for (std::size_t i = 0; i < pending_.size(); ++i) push_pose(pending_[i], pending_times_[i]);
             pending_.clear(), pending_times_.clear();
@@ -231,7 +298,7 @@ private:
             times_.erase(times_.begin(), times_.begin() + static_cast<std::ptrdiff_t>(cut));
             poses_.erase(poses_.begin(), poses_.begin() + static_cast<std::ptrdiff_t>(cut * J3));
         }
-        if (!o_.out.empty() && !times_.empty() && times_.back() - last_flush_ >= o_.flush_seconds) flush();
+        return !o_.out.empty() && !times_.empty() && times_.back() - last_flush_ >= o_.flush_seconds;
     }
     void push_pose(const glove_sample& s, double t)
     {
@@ -245,7 +312,7 @@ private:
     glove_transport& t_;
     glove_profile p_;
     record_options o_;
-    std::unique_ptr<report_decoder> decoder_;
+    std::unique_ptr<glove_decoder> decoder_;
     std::optional<hand_solver> solver_;
     std::unique_ptr<raw_writer> raw_;
     glove_sample sample_;
@@ -254,7 +321,8 @@ private:
     record_stats stats_;
     std::atomic<bool> stop_{false};
     bool started_ = false, resync_ = false;
-    double offset_ = 0, first_time_ = 0, last_time_ = 0, last_flush_ = 0;
+    double offset_ = 0, first_time_ = 0, last_time_ = 0, last_flush_ = 0, arrival_ = 0;
+    mutable std::recursive_mutex m_;
 };
 
 }  // namespace handemo

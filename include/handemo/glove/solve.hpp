@@ -83,7 +83,7 @@ inline glove_calibration calibrate_glove(const glove_profile& p, std::span<const
     };
     for (std::size_t k = 0; k < p.flexes.size(); ++k) {
         c.flex_flat[k] = mean(flat, k);
-        if (!fist.empty()) c.flex_fist[k] = mean(fist, k);
+        if (!fist.empty() && p.flexes[k]->fist_calibrated) c.flex_fist[k] = mean(fist, k);
         const double span = std::abs(p.flexes[k]->fist - p.flexes[k]->flat);
         if (std::abs(c.flex_fist[k] - c.flex_flat[k]) < 1e-3 * span)
             throw value_error("glove calibrate: sensor '" + p.flexes[k]->name + "' reads " + std::to_string(c.flex_flat[k]) +

@@ -1,7 +1,9 @@
-// Where glove reports come from, behind one small interface: a HID device (hid.hpp, hidapi), a replay of
-// a recorded report stream (the `--raw` file of `handemo glove record`), and an in-memory fake for tests
-// that scripts reports, timeouts, disconnects and reconnects. A read that times out returns an empty
-// std::optional (no data yet is not an error); a disconnect throws device_error naming the device.
+// Where glove reports come from, behind one small interface: a HID device (hid.hpp, hidapi), a serial
+// line (serial.hpp, termios), a TCP line stream (tcp.hpp), a replay of a recorded report stream (the
+// `--raw` file of `handemo glove record`), and an in-memory fake for tests that scripts reports, timeouts,
+// disconnects and reconnects. A report is one HID input report or one text line (without its line end).
+// A read that times out returns an empty std::optional (no data yet is not an error); a disconnect throws
+// device_error naming the device. The reader thread (reader.hpp) wraps any of them.
 //
 // Raw stream file (`handemo-glove-raw/1`): the 8 bytes "HGLVRAW1", then one record per report:
 // host time in seconds (float64, little-endian), length (uint16, little-endian), the report bytes. It is
@@ -22,6 +24,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -31,6 +34,7 @@ namespace handemo {
 struct hid_report {
     std::vector<std::uint8_t> bytes;
     double host_time = 0;  ///< seconds on the host's steady clock (or the recorded one, on replay)
+    double arrival = 0;    ///< host seconds when the reader thread received it (0: read without one)
 };
 
 /// Seconds on the host's steady clock.
@@ -53,6 +57,13 @@ public:
     virtual bool reconnect() { return false; }
     /// True when no report will ever come again (the end of a replay).
     virtual bool finished() const { return false; }
+    /// @brief Sends bytes to the glove (a command line of a text protocol: vibration, force feedback).
+    /// @throws device_error naming the device.
+    virtual void write(std::span<const std::uint8_t>) { throw device_error(name() + ": sending to the glove is not supported"); }
+    /// Sends text (a command line with its line end).
+    void write_text(std::string_view text) { write(std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size())); }
+    /// Reports lost because a queue between the device and its reader was full (reader.hpp).
+    virtual std::size_t overruns() const { return 0; }
     /// @brief Sends a feature report (first byte: report id). @throws device_error.
     virtual void send_feature(std::span<const std::uint8_t>) { throw device_error(name() + ": feature reports are not supported"); }
     /// @brief Reads feature report `id` (up to `size` bytes, id included). @throws device_error.
@@ -175,7 +186,9 @@ class fake_transport : public glove_transport {
 public:
     explicit fake_transport(std::string name = "fake glove") : name_(std::move(name)) {}
     std::string name() const override { return name_; }
-    void push(std::vector<std::uint8_t> bytes, double host_time) { q_.push_back({event::report, {std::move(bytes), host_time}}); }
+    void push(std::vector<std::uint8_t> bytes, double host_time) { q_.push_back({event::report, {std::move(bytes), host_time, 0}}); }
+    /// A text line (a report of a line protocol), without its line end.
+    void push_line(std::string_view line, double host_time) { push({line.begin(), line.end()}, host_time); }
     void push_timeout() { q_.push_back({event::timeout, {}}); }
     /// The next read after the queued events throws device_error; `failed_reconnects` attempts fail first.
     void push_disconnect(int failed_reconnects = 0) { q_.push_back({event::disconnect, {}}), fail_reconnects_ = failed_reconnects; }
@@ -201,7 +214,8 @@ public:
     }
     bool finished() const override { return closed_ && q_.empty(); }
     void send_feature(std::span<const std::uint8_t> b) override { features_sent.emplace_back(b.begin(), b.end()); }
-    std::vector<std::vector<std::uint8_t>> features_sent;
+    void write(std::span<const std::uint8_t> b) override { written.emplace_back(b.begin(), b.end()); }
+    std::vector<std::vector<std::uint8_t>> features_sent, written;
     int reconnect_attempts = 0;
 
 private:
