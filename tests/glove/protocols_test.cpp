@@ -166,6 +166,7 @@ TEST_CASE("senso: a hand-made position packet, both hands, and every fault refus
     bad(good.substr(0, good.size() / 2), report_fault::syntax, "not a JSON object");  // a cut line
     bad("\x01\x02garbage", report_fault::syntax, "not a JSON object");
     bad("[1,2,3]", report_fault::syntax, "not a JSON object");
+    bad(std::string(20000, '[') + std::string(20000, ']'), report_fault::syntax, "nested deeper than 8 levels");
     bad(R"({"data":{}})", report_fault::missing_field, "no \"type\"");
     bad(edit("\"rh\"", "\"xx\""), report_fault::missing_field, "\"rh\" or \"lh\"");
     bad(edit("\"quat2\":[1,0,0,0],", ""), report_fault::missing_field, "finger thumb: no \"quat2\"");
@@ -216,20 +217,20 @@ TEST_CASE("senso over loopback TCP: both hands, vibration sent, a disconnect and
     const glove_simulator sim(p, 2, 15);
     const clip c = synthesize(hand_motion::gripping, emotion::neutral, 0, 1, 100.0);
     std::vector<double> flat(hand_joint_count * 3, 0.0);
-    auto lines = [&](std::size_t from, std::size_t n) {
-        std::string out;
+    // both hands' packets of frames [from, from + n), about a millisecond apart
+    auto send_lines = [&](int fd, std::size_t from, std::size_t n) {
         for (std::size_t i = from; i < from + n; ++i) {
             const double* a = i < 60 ? flat.data() : c.frame_angles(i % c.frames);
             const glove_sample s = sim.sample(a, 0);
-            out += senso_position_line(s, hand_side::right) + "\n" + senso_position_line(s, hand_side::left) + "\n";
+            send_all(fd, senso_position_line(s, hand_side::right) + "\n" + senso_position_line(s, hand_side::left) + "\n");
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
         }
-        return out;
     };
     loopback_server server;
     std::string vibration;
     std::thread glove([&] {
         int fd = server.accept_one();
-        send_all(fd, lines(0, 100));
+        send_lines(fd, 0, 100);
         // the vibration command the client sends after its first samples
         std::string got;
         char ch;
@@ -240,7 +241,7 @@ TEST_CASE("senso over loopback TCP: both hands, vibration sent, a disconnect and
         fd = server.accept_one();  // the client reconnects
         ::close(server.fd);        // and after this connection, nothing listens any more
         server.fd = -1;
-        send_all(fd, lines(100, 50));
+        send_lines(fd, 100, 50);
         ::close(fd);
     });
     auto tcp = std::make_unique<tcp_transport>(server.address());
@@ -248,10 +249,15 @@ TEST_CASE("senso over loopback TCP: both hands, vibration sent, a disconnect and
     glove_reader reader(std::move(tcp), {.capacity = 4096, .poll = std::chrono::milliseconds(10), .reconnect_window = 0.5, .reconnect_poll = 0.02});
     record_options o;
     o.raw = dir / "senso.raw";
+    o.out = dir / "senso.bvh";
     o.reconnect_window = 0.5;
     o.reconnect_poll = 0.01;
     o.read_timeout = std::chrono::milliseconds(50);
-    glove_recorder rec(reader, std::make_unique<senso_decoder>(hand_side::right), std::nullopt, o);
+    // the lines come in bursts (timed on arrival), so the calibration is given rather than taken from the first 0.5 s
+    glove_sample flat_sample;
+    senso_decoder cd;
+    REQUIRE(decode_line(cd, senso_position_line(sim.sample(flat.data(), 0), hand_side::right), flat_sample).frame);
+    glove_recorder rec(reader, std::make_unique<senso_decoder>(hand_side::right), calibrate_glove(p, std::vector<glove_sample>{flat_sample}), o);
     std::vector<std::string> warnings;
     rec.on_warning = [&](const std::string& w) { warnings.push_back(w); };
     bool sent = false;
@@ -263,8 +269,11 @@ TEST_CASE("senso over loopback TCP: both hands, vibration sent, a disconnect and
         error = e.what();
     }
     glove.join();
-    rec.flush();
     const auto st = rec.stats();
+    // the server that did not come back ended the recording, and the take written so far is a valid BVH
+    const clip take = read_bvh(o.out);
+    CHECK(take.frames == rec.take().frames);
+    CHECK(take.frames > 5);  // 150 packets a millisecond or more apart
     CHECK(vibration == senso_vibration("aa", "index", 200, 5));
     CHECK(st.samples == 150);  // the right hand's packets; the left hand's are skipped
     CHECK(st.reconnects == 1);

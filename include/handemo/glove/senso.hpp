@@ -115,11 +115,14 @@ public:
         using nlohmann::json;
         const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
         json j;
+        bool too_deep = false;
         try {
-            j = json::parse(text, nullptr, true);
+            // a position packet nests 5 levels: deeper input is refused before it is built
+            j = json::parse(text, [&](int depth, json::parse_event_t, json&) { return !(too_deep = too_deep || depth > 8); }, true);
         } catch (const json::exception& e) {
             return fault(r, report_fault::syntax, std::string("not a JSON object: ") + e.what());
         }
+        if (too_deep) return fault(r, report_fault::syntax, "JSON nested deeper than 8 levels");
         if (!j.is_object()) return fault(r, report_fault::syntax, "not a JSON object");
         const auto type = j.find("type");
         if (type == j.end() || !type->is_string()) return fault(r, report_fault::missing_field, "no \"type\"");
