@@ -44,8 +44,10 @@ public:
                 if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
                 break;
             case detail::fd_read::closed: {
+                const std::size_t partial = lines_.pending();
                 close();
-                throw device_error("glove: " + name() + " disconnected (" + closed_what() + ")");
+                throw device_error("glove: " + name() + " disconnected (" + closed_what() + ")" +
+                                   (partial ? "; a partial line of " + std::to_string(partial) + " bytes was dropped" : ""));
             }
             }
         }

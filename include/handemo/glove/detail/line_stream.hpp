@@ -63,6 +63,8 @@ public:
         buf_.clear();
         skipping_ = false;
     }
+    /// Bytes of a line whose end has not come yet (0 while skipping the rest of a cut line).
+    std::size_t pending() const noexcept { return skipping_ ? 0 : buf_.size(); }
     std::size_t overlong() const noexcept { return overlong_; }
     std::size_t partial_dropped() const noexcept { return partial_dropped_; }
 
