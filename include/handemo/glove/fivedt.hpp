@@ -16,7 +16,6 @@
 #pragma once
 
 #include <handemo/glove/profile.hpp>
-#include <handemo/glove/senso.hpp>
 
 #include <cstdint>
 #include <string>

@@ -21,8 +21,8 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/glove/profile.hpp>
-#include <handemo/glove/senso.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>

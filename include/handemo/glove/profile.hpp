@@ -31,6 +31,17 @@
 
 namespace handemo {
 
+/// Which hand a glove is on.
+enum class hand_side : std::uint8_t { right, left };
+constexpr std::string_view to_string(hand_side h) noexcept { return h == hand_side::right ? "right" : "left"; }
+/// @throws value_error for anything but "right" or "left".
+inline hand_side hand_side_from_string(std::string_view s)
+{
+    if (s == "right") return hand_side::right;
+    if (s == "left") return hand_side::left;
+    throw value_error("glove: hand '" + std::string(s) + "' is not right or left");
+}
+
 /// Binary type of one value in a report.
 enum class value_type : std::uint8_t { u8, i8, u16, i16, u32, i32, f32 };
 /// What a field carries.

@@ -30,17 +30,6 @@
 
 namespace handemo {
 
-/// Which hand a glove is on.
-enum class hand_side : std::uint8_t { right, left };
-constexpr std::string_view to_string(hand_side h) noexcept { return h == hand_side::right ? "right" : "left"; }
-/// @throws value_error for anything but "right" or "left".
-inline hand_side hand_side_from_string(std::string_view s)
-{
-    if (s == "right") return hand_side::right;
-    if (s == "left") return hand_side::left;
-    throw value_error("glove: hand '" + std::string(s) + "' is not right or left");
-}
-
 /// Mirrors a rotation of a left hand onto the right-hand model (x kept, y and z negated) and back.
 constexpr quat mirror_hand(const quat& q) noexcept { return {q.w, q.x, -q.y, -q.z}; }
 
