@@ -2,7 +2,8 @@
 # a glove of each protocol (a HID profile, senso, opengloves, 5dt) into a raw stream with lost and malformed
 # reports, record from the replay (counts in the summary, a valid BVH), record --raw and replay the copy,
 # calibrate a flex glove (flat + fist) and record with it, live transfer with a 2-iteration hand-tiny model
-# (also through the reader thread at the recorded pace), and the one-line errors.
+# (also through the reader thread at the recorded pace), commands sent to a pseudo-terminal, and the one-line
+# errors.
 # Usage: cmake -DHANDEMO_CLI=<exe> -DPROFILES=<examples/glove> -DHID=ON|OFF -DWORK_DIR=<dir> -P cli_test.cmake
 include(${CMAKE_CURRENT_LIST_DIR}/../cli_expect.cmake)
 file(REMOVE_RECURSE "${WORK_DIR}")
@@ -88,6 +89,22 @@ run_ok(live_realtime glove live --model ${W}/model --emotion angry --glove senso
 expect_output("glove live: [1-9] windows of 1.0 s transferred to angry; latency from report to output mean [0-9.]+ ms, worst [0-9.]+ ms; .* overruns 0")
 run_ok(live_print glove live --model ${W}/model --emotion sad --glove ${IMU} --replay ${W}/imu.raw --print --seconds 2)
 expect_output("t=1.01 latency=[0-9.]+ms forearm=")
+
+# commands to the glove: checked before the device is opened; sent to a pseudo-terminal's master (/dev/ptmx)
+run_ok(send_force glove send --glove opengloves --device /dev/ptmx --force-feedback 0,0.5,1,0,0.25)
+expect_output("glove send: A0B500C1000D0E250 -> serial port /dev/ptmx")
+run_ok(send_haptics glove send --glove opengloves --device /dev/ptmx --haptics 180,0.5,0.75)
+expect_output("glove send: F180.00G0.50H0.75 -> serial port /dev/ptmx")
+run_fail(send_bad_lock glove send --glove opengloves --device /dev/ptmx --force-feedback 0,2,0,0,0)
+expect_error_matches("force feedback: index 2.000000 is not in \\[0, 1\\]")
+run_fail(send_bad_finger glove send --glove senso --device 127.0.0.1:1 --vibrate elbow,500,7)
+expect_error_matches("finger 'elbow' is not thumb, index, middle, ring or pinky")
+run_fail(send_no_server glove send --glove senso --device 127.0.0.1:1 --vibrate index,500,7 --to aa:bb)
+expect_error_matches("cannot connect to TCP 127.0.0.1:1")
+run_fail(send_5dt glove send --glove 5dt --haptics 1,1,1)
+expect_error_matches("--glove 5dt takes no commands")
+run_fail(send_nothing glove send --glove opengloves --device /dev/ptmx)
+expect_error_matches("give one of --vibrate \\(senso\\), --force-feedback or --haptics")
 
 run_fail(bad_profile glove record --glove ${W}/take.bvh --replay ${W}/imu.raw --out ${W}/x.bvh)
 expect_error_matches("glove profile: .*take.bvh: .*parse error")
