@@ -245,7 +245,7 @@ TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed 
         if (s.method == "oracle") {
             const clip expected = synthesize_as(hand_motion::pointing, emotion::neutral, emotion_from_string(s.target), 0, 3);
             CHECK(s.rmse_real > 0);  // the real take has its own per-take variation
-            CHECK(s.rmse_real == doctest::Approx(keyframe_rmse(expected, synthesize(hand_motion::pointing, emotion_from_string(s.target), 0, 3))));
+            CHECK(s.rmse_real == doctest::Approx(metrics::keyframe_rmse(expected, synthesize(hand_motion::pointing, emotion_from_string(s.target), 0, 3))));
             oracle += s.rmse_real;
         }
         if (s.method == "identity") identity += s.rmse_real;

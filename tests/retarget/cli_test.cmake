@@ -27,9 +27,9 @@ transfer_hand(sad right sad "convention smpl -> model hand-embedded .handemo-han
 transfer_hand(angry_left left angry "left hand .mirrored.")
 
 # the README's 10-line example (examples/transfer.cpp) on the same capture with the shipped model
-execute_process(COMMAND ${EXAMPLE} ${SOURCE_DIR}/data/models/hand-embedded ${cap} happy ${WORK_DIR}/example right
+execute_process(COMMAND ${EXAMPLE} ${SOURCE_DIR}/data/models/hand-embedded ${cap} happy ${WORK_DIR}/example.bvh right
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0 OR NOT out MATCHES "retargeted" OR NOT EXISTS ${WORK_DIR}/example.png)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "retargeted" OR NOT EXISTS ${WORK_DIR}/example.bvh)
   message(FATAL_ERROR "the README example on the capture failed (${rc}): ${out}${err}")
 endif()
 execute_process(COMMAND ${CHECK} ${cap} ${WORK_DIR}/example.bvh right RESULT_VARIABLE rc)

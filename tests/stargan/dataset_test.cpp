@@ -94,7 +94,7 @@ using namespace handemo::test;
 TEST_CASE("tempo_fit recovers consistent duration ratios and prefers the simplest exact estimator")
 {
     const std::vector<std::string> domains{"neutral", "slow", "fast"};
-    std::vector<stargan::labelled_clip> d;
+    std::vector<handemo::labelled_clip> d;
     const double neutral_seconds[] = {2.0, 3.0, 4.0, 5.0};
     for (int i = 0; i < 4; ++i) {
         const std::string content = "c" + std::to_string(i);
@@ -126,7 +126,7 @@ TEST_CASE("tempo_fit does not blow up when one content's neutral capture is trun
     // Bandai's dash/run/walk-back neutrals are 20-31 frame fragments: the per-take ratio becomes 4-13x while the
     // other contents agree on 1.5x. Here one of five contents has its neutral cut to a sixth.
     const std::vector<std::string> domains{"neutral", "slow"};
-    std::vector<stargan::labelled_clip> d;
+    std::vector<handemo::labelled_clip> d;
     for (int i = 0; i < 5; ++i) {
         const std::string content = "c" + std::to_string(i);
         const double n = 2.0 + i;
@@ -147,7 +147,7 @@ TEST_CASE("tempo_fit keeps the duration when contents disagree on the direction 
 {
     // "x" doubles the duration of c0 and c2 and halves that of c1 and c3: no factor predicts a left-out content.
     const std::vector<std::string> domains{"neutral", "x"};
-    std::vector<stargan::labelled_clip> d;
+    std::vector<handemo::labelled_clip> d;
     for (int i = 0; i < 4; ++i) {
         const std::string content = "c" + std::to_string(i);
         d.push_back(timed_clip(content, "neutral", 2.0));
@@ -164,7 +164,7 @@ TEST_CASE("tempo_fit keeps the duration when contents disagree on the direction 
 TEST_CASE("tempo_fit without a second content uses the duration-weighted ratio and reports no CV error")
 {
     const std::vector<std::string> domains{"neutral", "slow"};
-    const std::vector<stargan::labelled_clip> d{timed_clip("a", "neutral", 2.0, "0"), timed_clip("a", "slow", 6.0, "0"),
+    const std::vector<handemo::labelled_clip> d{timed_clip("a", "neutral", 2.0, "0"), timed_clip("a", "slow", 6.0, "0"),
                                                 timed_clip("a", "neutral", 4.0, "1"), timed_clip("a", "slow", 6.0, "1")};
     const auto r = stargan::tempo_fit(d, domains, "neutral");
     CHECK(r.cv_contents == 0);

@@ -1,7 +1,7 @@
 // The change gate (gate.hpp): fitted on held-out training contents, stored in the checkpoint, applied by
 // transfer as posture (the change's keyframe mean) and motion (the rest) weights.
 #include <doctest/doctest.h>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/compare.hpp>
 #include <handemo/stargan.hpp>
 
 #include "helpers.hpp"
@@ -126,9 +126,13 @@ TEST_CASE("change gate: fitted on held-out training contents, stored in the chec
         // the handemo preset's rule: the lowest RMSE among the settings recognised at most 10 points below the
         // real clips; so whenever G's whole change is recognised well enough, the choice is no worse than it
         REQUIRE(std::isfinite(r.emotion_real));
-        if (r.emotion_full >= r.emotion_real - o.gate_margin - 1e-12) CHECK(r.rmse_gated <= r.rmse_full);
+        // (the rule itself, with known answers, is the "change gate rule" test case below; here: what it implies
+        // for the rows, checked on every row whichever way it went)
+        const bool full_ok = r.emotion_full >= r.emotion_real - o.gate_margin - 1e-12;
+        const bool gated_ok = r.emotion_gated >= r.emotion_real - o.gate_margin - 1e-12;
+        CHECK((!full_ok || r.rmse_gated <= r.rmse_full));
         // the chosen setting is recognised well enough, or it is the most recognised of all (then at least G's)
-        if (r.emotion_gated < r.emotion_real - o.gate_margin - 1e-12) CHECK(r.emotion_gated >= r.emotion_full);
+        CHECK((gated_ok || r.emotion_gated >= r.emotion_full));
     }
     CHECK(fs::exists(d / "gate" / "gate.csv"));
     CHECK(fs::exists(d / "gate" / "inner1" / "checkpoint.safetensors"));
@@ -160,7 +164,7 @@ TEST_CASE("change gate: fitted on held-out training contents, stored in the chec
             }
             REQUIRE(in);
             REQUIRE(real);
-            sum += eval::keyframe_rmse(extract_keyframes<9>(inner->transfer(in->motion, row.target).motion), extract_keyframes<9>(real->motion));
+            sum += metrics::keyframe_rmse(extract_keyframes<9>(inner->transfer(in->motion, row.target).motion), extract_keyframes<9>(real->motion));
         }
         CHECK(sum / 3 == doctest::Approx(row.rmse_gated).epsilon(1e-12));
     }
@@ -234,7 +238,7 @@ TEST_CASE("change gate without the prior and the emotion rule: the lowest RMSE o
             const auto parts = model.parts(in->motion, r.target);
             for (std::size_t a = 0; a < gate_grid.size(); ++a)
                 for (std::size_t b = 0; b < gate_grid.size(); ++b)
-                    (group == 1 ? g1 : g2)[a * gate_grid.size() + b] += eval::keyframe_rmse(
+                    (group == 1 ? g1 : g2)[a * gate_grid.size() + b] += metrics::keyframe_rmse(
                         extract_keyframes<9>(model.finish(in->motion, parts, gate_grid[a], gate_grid[b], 0.0)), extract_keyframes<9>(real->motion));
         }
         const auto s1 = static_cast<std::size_t>(std::min_element(g1.begin(), g1.end()) - g1.begin());
@@ -279,16 +283,16 @@ TEST_CASE("change gate, margin chosen inside the training set (gate_auto_margin)
         pos = text.find('\n', pos) + 1;
     }
     REQUIRE(rows.size() == 5);
-    std::size_t expect = rows.size(), top = 0;
+    // (choose_gate_margin's rule with known answers is the "change gate rule" test case; here: the table lists
+    // every candidate over all 12 pairs and marks exactly the margin the gate used)
+    std::size_t chosen = rows.size(), marked = 0;
     for (std::size_t i = 0; i < rows.size(); ++i) {
         CHECK(rows[i][0] == doctest::Approx(gate_margin_candidates(0.1)[i]).epsilon(1e-9));
         CHECK(rows[i][4] == 12);  // 4 targets x 3 held-out pairs
-        if (expect == rows.size() && rows[i][2] >= rows[i][3] - o.gate_margin - 1e-4) expect = i;
-        if (rows[i][2] > rows[top][2] + 1e-4) top = i;
+        if (rows[i][5] == 1) chosen = i, ++marked;
     }
-    if (expect == rows.size()) expect = top;
-    for (std::size_t i = 0; i < rows.size(); ++i) CHECK(rows[i][5] == (i == expect ? 1 : 0));
-    CHECK(g.margin == doctest::Approx(rows[expect][0]).epsilon(1e-9));
+    REQUIRE(marked == 1);
+    CHECK(g.margin == doctest::Approx(rows[chosen][0]).epsilon(1e-9));
     // the gate is the one the fixed rule gives with that margin (inner models reused)
     auto fixed = o;
     fixed.gate_auto_margin = false;
@@ -314,8 +318,97 @@ TEST_CASE("change gate, margin chosen inside the training set (gate_auto_margin)
         }
     // the real clips' recognition does not depend on the scoring; with hits, a setting's rank is its share
     for (std::size_t i = 0; i < gh.rows.size(); ++i) CHECK(gh.rows[i].emotion_real == g.rows[i].emotion_real);
-    for (const auto& r : gh.rows)
-        if (r.emotion_full >= r.emotion_real - hits.gate_margin - 1e-12) CHECK(r.rmse_gated <= r.rmse_full);
+    for (const auto& r : gh.rows) CHECK((r.emotion_full < r.emotion_real - hits.gate_margin - 1e-12 || r.rmse_gated <= r.rmse_full));
+}
+
+namespace {
+
+/// A tally of one pair per `pairs` with every setting at rmse 20 and score/hits 0, the real clips recognised.
+gate_tally tally_of(std::size_t settings, double pairs)
+{
+    auto t = gate_tally::zeros(settings);
+    std::fill(t.rmse.begin(), t.rmse.end(), 20.0 * pairs);
+    t.pairs = pairs, t.real_hits = pairs, t.real_score = pairs;
+    return t;
+}
+
+}  // namespace
+
+TEST_CASE("change gate rule: settings, the choice, the cross-check and the margin, with known answers")
+{
+    const gate_settings with_prior{true}, without{false};
+    CHECK(without.size() == 25);
+    CHECK(with_prior.size() == 125);
+    for (const auto* set : {&with_prior, &without}) {
+        const std::size_t s = set->index(1, 3, set->prior ? 2 : 0);
+        CHECK(set->posture(s) == gate_grid[1]);
+        CHECK(set->motion(s) == gate_grid[3]);
+        CHECK(set->prior_weight(s) == (set->prior ? gate_grid[2] : 0.0));
+        CHECK(set->posture(set->full()) == 1.0);
+        CHECK(set->motion(set->full()) == 1.0);
+        CHECK(set->prior_weight(set->full()) == 0.0);
+        CHECK(set->posture(set->none()) == 0.0);
+        CHECK(set->motion(set->none()) == 0.0);
+        CHECK(set->prior_weight(set->none()) == 0.0);
+    }
+
+    // with recognition, margin 0.1 (real clips recognised 2 of 2): setting 3 is the lowest RMSE among those
+    // scored at least 0.9; setting 7 has a lower RMSE but is recognised too rarely
+    auto p = tally_of(25, 2);
+    p.score[0] = 2, p.rmse[0] = 10;
+    p.score[3] = 1.9, p.rmse[3] = 5;
+    p.score[7] = 1.0, p.rmse[7] = 1;
+    CHECK(choose_gate_setting(p, 0.1, true) == 3);
+    CHECK(choose_gate_setting(p, 0.0, true) == 0);   // stricter: only setting 0 qualifies
+    CHECK(choose_gate_setting(p, 0.6, true) == 7);   // looser: setting 7 qualifies and is the lowest RMSE
+    CHECK(choose_gate_setting(p, 0.1, false) == 7);  // without recognition: the lowest RMSE
+    // none recognised well enough: the most recognised, then the lowest RMSE
+    auto q = tally_of(25, 2);
+    q.score[4] = 1.5, q.rmse[4] = 9;
+    q.score[5] = 1.5, q.rmse[5] = 8;
+    CHECK(choose_gate_setting(q, 0.1, true) == 5);
+    // equal RMSE: the lower index, more of G's change
+    auto r = tally_of(25, 1);
+    r.rmse[9] = 0.5, r.rmse[2] = 0.5;
+    CHECK(choose_gate_setting(r, 0.1, false) == 2);
+    CHECK(choose_gate_setting(tally_of(25, 0), 0.1, false) == 25);  // no pairs: no choice
+
+    // two groups that disagree, one target: each group prefers its own setting, so the setting chosen on the
+    // other group scores 5 deg on each, where the setting chosen on both pooled (1, the lower index of a tie)
+    // looks like 3 deg: the cross-check is the honest estimate
+    std::vector<std::vector<gate_tally>> two(2, std::vector<gate_tally>(1, tally_of(25, 1)));
+    two[0][0].rmse[1] = 1, two[0][0].rmse[2] = 5;
+    two[1][0].rmse[1] = 5, two[1][0].rmse[2] = 1;
+    const gate_cross x = cross_check_gate(two, 0, 0.1, false);
+    CHECK(x.pairs == 2);
+    CHECK(x.rmse == doctest::Approx(10));
+    config_info one;
+    one.domains = 1;
+    one.domain_names = {"sad"};
+    const gate_fit fit = gate_from_tallies(two, one, without, 0.1, false);
+    REQUIRE(fit.rows.size() == 1);
+    CHECK(fit.motion[0] == gate_grid[1]);  // setting 1: posture 1, motion 0.75
+    CHECK(fit.rows[0].rmse_gated == doctest::Approx(3));
+    CHECK(fit.rows[0].rmse_cross == doctest::Approx(5));
+    CHECK(fit.rows[0].rmse_none == doctest::Approx(20));
+
+    // the margin: at 0.1 each group would choose setting 1 (score 0.95 of 1, but never a hit), which the
+    // cross-check finds recognised 0% against the real clips' 100%; at 0.0 only setting 0 qualifies, recognised
+    // every time: the least strict margin that passes is 0.0 (candidate 1)
+    std::vector<std::vector<gate_tally>> m(2, std::vector<gate_tally>(1, tally_of(25, 1)));
+    for (auto& g : m) {
+        g[0].score[0] = 1, g[0].hits[0] = 1, g[0].rmse[0] = 10;
+        g[0].score[1] = 0.95, g[0].hits[1] = 0, g[0].rmse[1] = 1;
+    }
+    std::vector<gate_cross> pooled;
+    const auto candidates = gate_margin_candidates(0.1);
+    CHECK(choose_gate_margin(m, candidates, 0.1, pooled) == 1);
+    REQUIRE(pooled.size() == candidates.size());
+    CHECK(pooled[0].hits == 0);
+    CHECK(pooled[1].hits == 2);
+    // when no margin passes, the one whose choices were recognised most
+    for (auto& g : m) g[0].hits[0] = 0.5;
+    CHECK(choose_gate_margin(m, candidates, 0.0, pooled) == 1);
 }
 
 TEST_CASE("posture prior: the keyframe mean of the training pairs' difference emotion - neutral")

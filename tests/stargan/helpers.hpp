@@ -14,13 +14,13 @@ namespace handemo::test {
 
 /// A toy set: 3 motion types (gripping, patting, pointing) x 5 emotions x 1 take of the synthetic hand data
 /// (`seed`, `fps`), as labelled clips.
-inline std::vector<stargan::labelled_clip> toy_set(std::uint64_t seed = 7, double fps = 60.0)
+inline std::vector<handemo::labelled_clip> toy_set(std::uint64_t seed = 7, double fps = 60.0)
 {
-    std::vector<stargan::labelled_clip> out;
+    std::vector<handemo::labelled_clip> out;
     for (auto& it : synthesize_dataset(1, seed, fps)) {
         if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing)
             continue;
-        stargan::labelled_clip c;
+        handemo::labelled_clip c;
         c.path = it.file_stem + ".bvh";
         const auto n = stargan::parse_clip_name(it.file_stem);
         c.content = n.content;
@@ -56,10 +56,10 @@ inline std::filesystem::path fresh_dir(const char* name)
 }
 
 /// A labelled clip of `seconds` at 10 fps (the tempo estimators read durations only).
-inline stargan::labelled_clip timed_clip(const std::string& content, const std::string& emotion, double seconds,
+inline handemo::labelled_clip timed_clip(const std::string& content, const std::string& emotion, double seconds,
                                          const std::string& take = "0")
 {
-    stargan::labelled_clip c;
+    handemo::labelled_clip c;
     c.path = content + "_" + emotion + "_" + take;
     c.content = content, c.emotion = emotion, c.take = take;
     c.motion = clip::make(hand_skeleton(), static_cast<std::size_t>(std::lround(seconds * 10)), 10);

@@ -5,7 +5,7 @@
 #include <doctest/doctest.h>
 #include <handemo/motion/synth.hpp>
 #include <handemo/stargan.hpp>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/compare.hpp>
 #include <handemo/eval/retargeted.hpp>
 
 #include "helpers.hpp"
@@ -112,7 +112,7 @@ TEST_CASE("tempo_fit on Bandai: its choice predicts left-out contents' durations
     double chosen = 0, keep = 0;
     const auto contents = stargan::contents_of(d);
     for (const auto& held : contents) {
-        std::vector<stargan::labelled_clip> train, test;
+        std::vector<handemo::labelled_clip> train, test;
         for (const auto& c : d) (c.content == held ? test : train).push_back(c);
         const auto f = stargan::tempo_fit(train, domains, "normal").factors;
         double e = 0, k = 0;
@@ -170,10 +170,10 @@ TEST_CASE("retargeted transfer: Bandai held-out clips moved to a foreign CMU-nam
         CHECK(cr.retargeted);
         const clip back = retarget::retarget_clip(cr.motion, rig->to_model, co.reference);
         REQUIRE(back.frames == direct.motion.frames);
-        const double e_direct = eval::keyframe_rmse(direct.motion, real), e_retargeted = eval::keyframe_rmse(back, real);
+        const double e_direct = metrics::keyframe_rmse(direct.motion, real), e_retargeted = metrics::keyframe_rmse(back, real);
         INFO(style << ": direct " << e_direct << " deg, retargeted " << e_retargeted << " deg");
         CHECK(std::abs(e_direct - e_retargeted) <= 0.5);
-        CHECK(eval::keyframe_rmse(back, direct.motion) < 0.5);
+        CHECK(metrics::keyframe_rmse(back, direct.motion) < 0.5);
     }
 }
 

@@ -1,5 +1,5 @@
 #include <doctest/doctest.h>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/compare.hpp>
 #include <handemo/motion/synth.hpp>
 #include <handemo/stargan.hpp>
 
@@ -359,8 +359,8 @@ TEST_CASE("end to end: where emotions are large offsets, transfer of an unseen c
         if (c.emotion == "neutral") continue;
         const auto out = model->transfer(in->motion, c.emotion);
         const auto real = extract_keyframes<9>(c.motion);
-        s_model += eval::keyframe_rmse(extract_keyframes<9>(out.motion), real);
-        s_identity += eval::keyframe_rmse(extract_keyframes<9>(in->motion), real);
+        s_model += metrics::keyframe_rmse(extract_keyframes<9>(out.motion), real);
+        s_identity += metrics::keyframe_rmse(extract_keyframes<9>(in->motion), real);
     }
     MESSAGE("held-out content: transfer RMSE " << s_model / 4 << " deg, identity " << s_identity / 4 << " deg");
     CHECK(s_model < 0.85 * s_identity);

@@ -40,7 +40,7 @@ inline void add_fit_options(CLI::App* sub, fit_cli& o)
 
 /// The labelled clips of a folder, with contents as performers.
 struct loaded_set {
-    std::vector<handemo::stargan::labelled_clip> items;
+    std::vector<handemo::labelled_clip> items;
     std::vector<handemo::rcm::training_clip> clips;
 };
 

@@ -6,8 +6,8 @@
 #include "../registry.hpp"
 #include "options.hpp"
 
-#include <handemo/eval/baselines.hpp>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/baselines.hpp>
+#include <handemo/metrics/compare.hpp>
 #include <handemo/image.hpp>
 #include <handemo/motion.hpp>
 #include <handemo/image/keyframe_image.hpp>
@@ -70,14 +70,14 @@ inline void run_demo(demo_cli& o)
     std::vector<clip> strip, truth;
     std::vector<std::string> titles;
     // the baselines StarGAN has to beat, fitted on the same training clips
-    const auto offset = eval::mean_offset_baseline<9>::fit(clips, m->info().neutral);
+    const auto offset = metrics::mean_offset_baseline<9>::fit(clips, m->info().neutral);
     std::printf("  keyframe RMSE to the real clip of each emotion (deg), lower is better:\n");
     std::printf("  %-8s %6s %7s %9s %9s %12s %6s %11s %12s\n", "emotion", "tempo", "frames", "stargan", "identity",
                 "mean-offset", "wins", "ROM out/in", "ROM real/in");
     double sum_s = 0, sum_i = 0, sum_o = 0;
     int wins = 0, n = 0;
     std::string detail_lines;  // the detail layer's full-rate speed, printed after the table
-    const double speed_in = eval::mean_speed(input);
+    const double speed_in = metrics::mean_speed(input);
     for (const auto& e : m->info().domains) {
         if (e == m->info().neutral) {
             strip.push_back(input);
@@ -89,20 +89,20 @@ inline void run_demo(demo_cli& o)
         write_bvh(outdir / (mname + "_" + e + ".bvh"), r.motion);
         write_bmp(outdir / (mname + "_" + e + ".bmp"), to_image(r.image));
         const clip real = read_bvh(data / (file_stem(held, emotion_from_string(e), 0) + ".bvh"));
-        const double rs = eval::keyframe_rmse(r.motion, real), ri = eval::keyframe_rmse(input, real),
-                     ro = eval::keyframe_rmse(offset.transfer(input, e, r.tempo), real);
+        const double rs = metrics::keyframe_rmse(r.motion, real), ri = metrics::keyframe_rmse(input, real),
+                     ro = metrics::keyframe_rmse(offset.transfer(input, e, r.tempo), real);
         const bool win = rs < ri && rs < ro;
         sum_s += rs, sum_i += ri, sum_o += ro, wins += win, ++n;
         std::printf("  %-8s %6.2f %7zu %9.2f %9.2f %12.2f %6s %11.2f %12.2f\n", e.c_str(), r.tempo, r.motion.frames, rs, ri, ro,
-                    win ? "yes" : "no", eval::range_of_motion(r.motion) / eval::range_of_motion(input),
-                    eval::range_of_motion(real) / eval::range_of_motion(input));
+                    win ? "yes" : "no", metrics::range_of_motion(r.motion) / metrics::range_of_motion(input),
+                    metrics::range_of_motion(real) / metrics::range_of_motion(input));
         if (m->has_detail()) {
             // the same transfer with the detail layer (`transfer --detail`): full-rate speed against the real clip's
             const clip d = m->add_detail(r.motion, input, e);
             write_bvh(outdir / (mname + "_" + e + "_detail.bvh"), d);
             char line[160];
-            std::snprintf(line, sizeof line, "  %-8s %9.2f %9.2f %9.2f\n", e.c_str(), eval::mean_speed(r.motion) / speed_in,
-                          eval::mean_speed(d) / speed_in, eval::mean_speed(real) / speed_in);
+            std::snprintf(line, sizeof line, "  %-8s %9.2f %9.2f %9.2f\n", e.c_str(), metrics::mean_speed(r.motion) / speed_in,
+                          metrics::mean_speed(d) / speed_in, metrics::mean_speed(real) / speed_in);
             detail_lines += line;
         }
         strip.push_back(r.motion);

@@ -21,8 +21,8 @@ namespace handemo::eval {
 struct fold_context {
     std::string held_out;                                ///< the held-out content
     std::string neutral;                                 ///< the neutral label (inputs are its clips)
-    const std::vector<stargan::labelled_clip>* train = nullptr;  ///< the fold's training clips: the only ones to fit on
-    std::vector<const stargan::labelled_clip*> test;     ///< the held-out clips (every emotion), for scoring only
+    const std::vector<labelled_clip>* train = nullptr;  ///< the fold's training clips: the only ones to fit on
+    std::vector<const labelled_clip*> test;     ///< the held-out clips (every emotion), for scoring only
     std::size_t fold_index = 0;
     std::FILE* progress_out = nullptr;
 };
@@ -38,7 +38,7 @@ public:
     /// @brief Output clips for one held-out neutral input and a target emotion, as (method name, clip); each is
     /// scored against the real target clip exactly as the built-in methods are. Empty when the extension has
     /// nothing for this pair (it should say why in its report section).
-    virtual std::vector<std::pair<std::string, clip>> transfer(const stargan::labelled_clip& input, const std::string& target) = 0;
+    virtual std::vector<std::pair<std::string, clip>> transfer(const labelled_clip& input, const std::string& target) = 0;
     /// @brief Adds the extension's own numbers to a sample of any method whose output clip is `out`.
     virtual void score(sample_record& s, const clip& out) { (void)s, (void)out; }
     /// @brief Called after each fold's samples are in `r`: add or replace the extension's report sections.

@@ -11,10 +11,10 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/progress.hpp>
-#include <handemo/eval/baselines.hpp>
-#include <handemo/eval/classifier.hpp>
+#include <handemo/metrics/baselines.hpp>
+#include <handemo/metrics/classifier.hpp>
 #include <handemo/eval/extension.hpp>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/compare.hpp>
 #include <handemo/eval/report.hpp>
 #include <handemo/eval/retargeted.hpp>
 #include <handemo/motion/detail_layer.hpp>
@@ -86,10 +86,10 @@ namespace detail {
 
 template <std::size_t K>
 struct prepared_clip {
-    const stargan::labelled_clip* src;
+    const labelled_clip* src;
     keyframes<K> kf;
-    characteristics ch;
-    characteristics full;  ///< measured on the clip as it is (measure_full())
+    metrics::characteristics ch;
+    metrics::characteristics full;  ///< measured on the clip as it is (measure_full())
 };
 
 /// Mean of a loss column over the last 10% of logged rows.
@@ -146,7 +146,7 @@ inline std::string options_text(const eval_options& o)
 /// Labels of a synthetic clip for the oracle, checking that `seed` and `fps` regenerate every neutral clip (a
 /// wrong seed would make the oracle a different take). Angles are compared to 1e-3 degrees (BVH and CSV keep 6
 /// decimals).
-inline std::vector<stem_labels> synth_labels(const std::vector<stargan::labelled_clip>& clips, const std::string& neutral,
+inline std::vector<stem_labels> synth_labels(const std::vector<labelled_clip>& clips, const std::string& neutral,
                                              std::uint64_t seed, double fps)
 {
     std::vector<stem_labels> out;
@@ -206,11 +206,11 @@ inline eval_result new_result(const stargan::config_info& info, const eval_optio
 
 /// Every clip's keyframes and characteristics, once.
 template <std::size_t K>
-std::vector<prepared_clip<K>> prepare_clips(const std::vector<stargan::labelled_clip>& clips)
+std::vector<prepared_clip<K>> prepare_clips(const std::vector<labelled_clip>& clips)
 {
     std::vector<prepared_clip<K>> all;
     all.reserve(clips.size());
-    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), measure<K>(c.motion), measure_full(c.motion)});
+    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), metrics::measure<K>(c.motion), metrics::measure_full(c.motion)});
     return all;
 }
 
@@ -228,7 +228,7 @@ public:
         double best = std::numeric_limits<double>::infinity();
         std::string c;
         for (const auto* r : refs_) {
-            const double d = keyframe_rmse(kf, r->kf);
+            const double d = metrics::keyframe_rmse(kf, r->kf);
             if (d < best) best = d, c = r->src->content;
         }
         return c;
@@ -241,7 +241,7 @@ private:
 /// One fold's clips: the held-out content's (test) and every other (train, also as copies to train on).
 template <std::size_t K>
 struct fold_split {
-    std::vector<stargan::labelled_clip> train;
+    std::vector<labelled_clip> train;
     std::vector<const prepared_clip<K>*> train_p, test_p;
 };
 template <std::size_t K>
@@ -274,7 +274,7 @@ inline stargan::train_options fold_train_options(const eval_options& opt, const 
 /// differ) and its training numbers from log.csv.
 /// @throws value_error when the checkpoint was trained for another configuration, step count or options.
 template <stargan::stargan_config Config>
-void reuse_fold_model(const std::vector<stargan::labelled_clip>& train, const stargan::config_info& info,
+void reuse_fold_model(const std::vector<labelled_clip>& train, const stargan::config_info& info,
                       const stargan::train_options& to, const eval_options& opt, const std::filesystem::path& fold_dir,
                       fold_summary& fsum)
 {
@@ -302,7 +302,7 @@ void reuse_fold_model(const std::vector<stargan::labelled_clip>& train, const st
 
 /// Trains the fold's model into `fold_dir` (checkpoint, log, losses.svg) and records its training numbers.
 template <stargan::stargan_config Config>
-void train_fold_model(const std::vector<stargan::labelled_clip>& train, const stargan::config_info& info,
+void train_fold_model(const std::vector<labelled_clip>& train, const stargan::config_info& info,
                       const stargan::train_options& to, const std::string& held, const std::filesystem::path& fold_dir,
                       fold_summary& fsum)
 {
@@ -356,13 +356,13 @@ private:
 
 /// The independent emotion classifier of a fold, fitted on its training clips; records its training accuracy.
 template <std::size_t K>
-nearest_centroid_classifier fit_classifier(const std::vector<const prepared_clip<K>*>& train_p, double shrinkage,
+metrics::nearest_centroid_classifier fit_classifier(const std::vector<const prepared_clip<K>*>& train_p, double shrinkage,
                                            fold_summary& fsum)
 {
-    nearest_centroid_classifier clf;
+    metrics::nearest_centroid_classifier clf;
     std::vector<std::vector<double>> x;
     std::vector<std::string> y;
-    for (const auto* p : train_p) x.push_back(motion_features(p->kf, p->ch.duration)), y.push_back(p->src->emotion);
+    for (const auto* p : train_p) x.push_back(metrics::motion_features(p->kf, p->ch.duration)), y.push_back(p->src->emotion);
     clf.fit(x, y, shrinkage);
     std::size_t ok = 0;
     for (std::size_t i = 0; i < x.size(); ++i) ok += clf.predict(x[i]) == y[i];
@@ -382,8 +382,8 @@ void seen_content_rmse(const Model& model, const std::vector<const prepared_clip
         if (in->src->emotion != neutral) continue;
         for (const auto* t : train_p) {
             if (t->src->content != in->src->content || t->src->take != in->src->take || t->src->emotion == neutral) continue;
-            ss += keyframe_rmse(extract_keyframes<K>(model.transfer(in->src->motion, t->src->emotion).motion), t->kf);
-            si += keyframe_rmse(in->kf, t->kf);
+            ss += metrics::keyframe_rmse(extract_keyframes<K>(model.transfer(in->src->motion, t->src->emotion).motion), t->kf);
+            si += metrics::keyframe_rmse(in->kf, t->kf);
             ++n;
         }
     }
@@ -488,32 +488,32 @@ inline report_section detail_section(const std::vector<track_series>& curves, co
 /// Scores one method's output against the real target clip and the input (the columns of results.csv).
 template <std::size_t K>
 sample_record score_output(const clip& out, const prepared_clip<K>& in, const prepared_clip<K>& real, const std::string& held,
-                           const std::string& target, const char* method, const nearest_centroid_classifier& clf,
+                           const std::string& target, const char* method, const metrics::nearest_centroid_classifier& clf,
                            const content_recogniser<K>& content_of, double real_rom, double real_speed,
                            const std::vector<std::shared_ptr<method_extension>>& extensions)
 {
     const auto kf = extract_keyframes<K>(out);
-    const auto ch = measure<K>(out);
-    const auto full = measure_full(out);
+    const auto ch = metrics::measure<K>(out);
+    const auto full = metrics::measure_full(out);
     sample_record s;
     s.fold = held, s.target = target, s.take = in.src->take, s.method = method;
-    s.rmse_real = keyframe_rmse(kf, real.kf);
-    s.rmse_input = keyframe_rmse(kf, in.kf);
-    s.predicted_emotion = clf.predict(motion_features(kf, ch.duration));
+    s.rmse_real = metrics::keyframe_rmse(kf, real.kf);
+    s.rmse_input = metrics::keyframe_rmse(kf, in.kf);
+    s.predicted_emotion = clf.predict(metrics::motion_features(kf, ch.duration));
     s.emotion_ok = s.predicted_emotion == target;
     s.predicted_content = content_of(kf);
     s.content_ok = s.predicted_content == held;
-    s.rom_ratio = ratio(ch.range_of_motion, in.ch.range_of_motion, "range of motion");
-    s.speed_ratio = ratio(ch.speed, in.ch.speed, "speed");
+    s.rom_ratio = metrics::ratio(ch.range_of_motion, in.ch.range_of_motion, "range of motion");
+    s.speed_ratio = metrics::ratio(ch.speed, in.ch.speed, "speed");
     s.real_rom_ratio = real_rom, s.real_speed_ratio = real_speed;
-    s.rom_error = log_ratio_error(s.rom_ratio, real_rom);
-    s.speed_error = log_ratio_error(s.speed_ratio, real_speed);
-    s.rom_ratio_full = ratio(full.range_of_motion, in.full.range_of_motion, "range of motion (full rate)");
-    s.speed_ratio_full = ratio(full.speed, in.full.speed, "speed (full rate)");
-    s.real_rom_ratio_full = ratio(real.full.range_of_motion, in.full.range_of_motion, "range of motion (full rate)");
-    s.real_speed_ratio_full = ratio(real.full.speed, in.full.speed, "speed (full rate)");
-    s.rom_error_full = log_ratio_error(s.rom_ratio_full, s.real_rom_ratio_full);
-    s.speed_error_full = log_ratio_error(s.speed_ratio_full, s.real_speed_ratio_full);
+    s.rom_error = metrics::log_ratio_error(s.rom_ratio, real_rom);
+    s.speed_error = metrics::log_ratio_error(s.speed_ratio, real_speed);
+    s.rom_ratio_full = metrics::ratio(full.range_of_motion, in.full.range_of_motion, "range of motion (full rate)");
+    s.speed_ratio_full = metrics::ratio(full.speed, in.full.speed, "speed (full rate)");
+    s.real_rom_ratio_full = metrics::ratio(real.full.range_of_motion, in.full.range_of_motion, "range of motion (full rate)");
+    s.real_speed_ratio_full = metrics::ratio(real.full.speed, in.full.speed, "speed (full rate)");
+    s.rom_error_full = metrics::log_ratio_error(s.rom_ratio_full, s.real_rom_ratio_full);
+    s.speed_error_full = metrics::log_ratio_error(s.speed_ratio_full, s.real_speed_ratio_full);
     for (const auto& x : extensions) x->score(s, out);
     return s;
 }
@@ -609,7 +609,7 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
 ///         in a fold; with opt.synth_seed, for a clip name that is not a synthetic take or a neutral clip the seed
 ///         does not reproduce; the errors of training and transfer otherwise.
 template <stargan::stargan_config Config>
-eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const stargan::config_info& info, const eval_options& opt,
+eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::config_info& info, const eval_options& opt,
                      const std::filesystem::path& out_dir)
 {
     namespace fs = std::filesystem;
@@ -661,7 +661,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
         auto ws = models.model.make_workspace(), ws_g_only = models.g_only.make_workspace(), ws_ungated = models.ungated.make_workspace();
 
         // ---- baselines and the independent emotion classifier, from the training clips only
-        const auto offset = mean_offset_baseline<K>::fit(train, info.neutral);
+        const auto offset = metrics::mean_offset_baseline<K>::fit(train, info.neutral);
         std::vector<detail_layer::sample> detail_data;
         for (const auto& c : train) detail_data.push_back({&c.motion, c.emotion, c.content, c.take});
         const auto fold_detail = detail_layer::fit_checked(detail_data, info.neutral, K);  // the detail layer, from training clips only
@@ -699,7 +699,7 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 if (o.has_amp) o.g_only = models.g_only.transfer(input, target, {}, ws_g_only).motion;
                 if (o.gated) o.ungated = models.ungated.transfer(input, target, {}, ws_ungated).motion;
                 if (o.has_amp) o.amp_only = detail::amplitude_only<K>(input, o.stargan);
-                o.nearest = &train[nearest_neighbour<K>(input, train, target)].motion;
+                o.nearest = &train[metrics::nearest_neighbour<K>(input, train, target)].motion;
                 o.mean_offset = offset.transfer(input, target, o.stargan.tempo);
                 o.input = &input, o.real = &real->src->motion;
                 if (opt.synth_seed) {
@@ -718,8 +718,8 @@ eval_result run_eval(const std::vector<stargan::labelled_clip>& clips, const sta
                 }
                 for (const auto& x : opt.extensions)
                     for (auto& e : x->transfer(*in->src, target)) o.extra.push_back(std::move(e));
-                const double real_rom = ratio(real->ch.range_of_motion, in->ch.range_of_motion, "range of motion");
-                const double real_speed = ratio(real->ch.speed, in->ch.speed, "speed");
+                const double real_rom = metrics::ratio(real->ch.range_of_motion, in->ch.range_of_motion, "range of motion");
+                const double real_speed = metrics::ratio(real->ch.speed, in->ch.speed, "speed");
                 for (const auto& [method, out] : o.rows())
                     res.samples.push_back(detail::score_output<K>(*out, *in, *real, held, target, method, clf, content_of, real_rom,
                                                                   real_speed, opt.extensions));

@@ -121,7 +121,7 @@ public:
         fi.fit_seconds = std::chrono::duration<double>(clock::now() - t0).count();
     }
 
-    std::vector<std::pair<std::string, clip>> transfer(const stargan::labelled_clip& input, const std::string& target) override
+    std::vector<std::pair<std::string, clip>> transfer(const labelled_clip& input, const std::string& target) override
     {
         if (!model_ || !opt_.synthesis) return {};
         const auto t0 = std::chrono::steady_clock::now();

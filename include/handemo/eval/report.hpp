@@ -330,11 +330,9 @@ inline std::string folds_svg(const eval_result& r)
     return plot_folds_svg(pts, o);
 }
 
-/// @brief The Markdown report (see write_report()).
-inline std::string markdown_report(const eval_result& r)
+/// @brief The report's opening: title, command, what was run, the methods and metrics, the options.
+inline std::string report_introduction(const eval_result& r, const std::vector<metric_def>& ms)
 {
-    const auto ms = metrics_of(r);
-    const auto targets = targets_of(r);
     std::string s;
     s += "# handemo eval: " + r.config + " on " + r.data + "\n\n";
     s += "Command: `" + r.command + "`\n\n";
@@ -385,7 +383,13 @@ inline std::string markdown_report(const eval_result& r)
     s += "\n\n";
     s += "Options:\n\n```\n" + r.options_text + "```\n\n";
 
-    // summary
+    return s;
+}
+
+/// @brief The summary table (mean +- std over folds) of every target ("all" first) and method, and its plots.
+inline std::string report_summary(const eval_result& r, const std::vector<metric_def>& ms, const std::vector<std::string>& targets)
+{
+    std::string s;
     s += "## Summary (mean +- std over folds)\n\n| target | method |";
     for (const auto& m : ms) s += " " + m.title + " |";
     s += "\n|---|---|";
@@ -406,10 +410,16 @@ inline std::string markdown_report(const eval_result& r)
     s += "\n![summary](summary.svg)\n\n";
     if (!r.samples.empty()) s += "![per fold](folds.svg)\n\n";
 
-    // plain statements
+    return s;
+}
+
+/// @brief Plain statements of where StarGAN beats each baseline and where it does not; `losses` receives the
+/// pooled (baseline, metric) pairs it does not beat.
+inline std::string report_versus_baselines(const eval_result& r, const std::vector<metric_def>& ms, std::vector<std::string>& losses)
+{
+    std::string s;
     s += "## Where StarGAN beats each baseline and where it does not\n\n";
     const auto cmp = compare_with_baselines(r);
-    std::vector<std::string> losses;
     for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour", "rcm"}) {
         if (!has_method(r, b)) continue;
         s += "**vs " + b + "**\n\n";
@@ -436,10 +446,13 @@ inline std::string markdown_report(const eval_result& r)
         s += "\n";
     }
 
-    // sections of extensions (eval/extension.hpp)
-    for (const auto& sec : r.sections) s += "## " + sec.title + "\n\n" + sec.markdown + "\n";
+    return s;
+}
 
-    // per-fold tables
+/// @brief One table per fold, with the fold's training and evaluation facts.
+inline std::string report_folds(const eval_result& r, const std::vector<metric_def>& ms, const std::vector<std::string>& targets)
+{
+    std::string s;
     s += "## Per fold\n\n";
     for (const auto& f : r.folds) {
         s += "### held out: " + f.held_out + "\n\n";
@@ -466,7 +479,13 @@ inline std::string markdown_report(const eval_result& r)
         s += "\n";
     }
 
-    // closing note
+    return s;
+}
+
+/// @brief The closing note: what StarGAN does not beat (report_versus_baselines()'s losses) and why it may be.
+inline std::string report_closing_note(const eval_result& r, const std::vector<std::string>& losses)
+{
+    std::string s;
     s += "## Closing note\n\n";
     if (losses.empty()) {
         s += "Pooled over targets, StarGAN is better than every baseline on every metric with a direction.\n";
@@ -493,6 +512,22 @@ inline std::string markdown_report(const eval_result& r)
              "ratio errors lose, G's amplitude change is too small (raise lambda_cls or train longer, judged on the training "
              "set) and the tempo is the training-set estimate (tempo_fit()), not the take's.\n";
     }
+    return s;
+}
+
+/// @brief The Markdown report (see write_report()): report_introduction(), report_summary(),
+/// report_versus_baselines(), the extensions' sections, report_folds() and report_closing_note().
+inline std::string markdown_report(const eval_result& r)
+{
+    const auto ms = metrics_of(r);
+    const auto targets = targets_of(r);
+    std::vector<std::string> losses;
+    std::string s = report_introduction(r, ms);
+    s += report_summary(r, ms, targets);
+    s += report_versus_baselines(r, ms, losses);
+    for (const auto& sec : r.sections) s += "## " + sec.title + "\n\n" + sec.markdown + "\n";
+    s += report_folds(r, ms, targets);
+    s += report_closing_note(r, losses);
     return s;
 }
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace handemo {
@@ -49,22 +50,39 @@ struct clip {
 
     /// @brief Checks sizes, frame rate and finiteness.
     /// @throws shape_error or value_error naming `what` (usually the file) and the field.
-    void validate(const std::string& what = "clip") const
+    void validate(std::string_view what = "clip") const
     {
         skel.validate(what);
+        const auto who = [&] { return std::string(what); };  // built only on an error
         const std::size_t n = frames * skel.size() * 3;
         if (angles.size() != n || positions.size() != n)
-            throw shape_error(what + ": angle/position arrays hold " + std::to_string(angles.size()) + "/" +
+            throw shape_error(who() + ": angle/position arrays hold " + std::to_string(angles.size()) + "/" +
                               std::to_string(positions.size()) + " values, expected frames*joints*3 = " +
                               std::to_string(n));
-        if (!(fps > 0) || !std::isfinite(fps)) throw value_error(what + ": frame rate " + std::to_string(fps) + " is not positive");
+        if (!(fps > 0) || !std::isfinite(fps)) throw value_error(who() + ": frame rate " + std::to_string(fps) + " is not positive");
         for (std::size_t i = 0; i < n; ++i) {
             if (!std::isfinite(angles[i]) || !std::isfinite(positions[i])) {
                 const std::size_t f = i / (skel.size() * 3), j = (i / 3) % skel.size();
-                throw value_error(what + ": frame " + std::to_string(f) + " joint '" + skel.joints[j].name +
+                throw value_error(who() + ": frame " + std::to_string(f) + " joint '" + skel.joints[j].name +
                                   "' has a non-finite value");
             }
         }
+    }
+
+    /// @brief Makes this clip `frames` frames of `s` at `fps`, every angle 0 and every position the joint's rest
+    /// offset, as make() does, reusing this clip's storage: no allocation when it already holds as many
+    /// values and a skeleton with names as long.
+    void reset(const skeleton& s, std::size_t n, double rate)
+    {
+        skel = s;
+        fps = rate;
+        frames = n;
+        const std::size_t J = skel.size();
+        angles.assign(n * J * 3, 0.0);
+        positions.resize(n * J * 3);
+        for (std::size_t f = 0; f < n; ++f)
+            for (std::size_t j = 0; j < J; ++j)
+                for (std::size_t k = 0; k < 3; ++k) position(f, j, k) = skel.joints[j].offset[k];
     }
 };
 

@@ -344,10 +344,9 @@ inline double decode_angle(double v, const angle_range& r, std::size_t ch) noexc
     return v / 255.0 * (r.hi_of(ch) - r.lo_of(ch)) + r.lo_of(ch);
 }
 
-/// @brief Encodes keyframes as an image by Eq. 3.
-/// @throws value_error for an invalid range; shape_error when the range records a different K or J.
+/// @brief encode() into `px`, its storage reused.
 template <std::size_t K>
-keyframe_pixels<K> encode(const keyframes<K>& kf, const angle_range& r)
+void encode_into(const keyframes<K>& kf, const angle_range& r, keyframe_pixels<K>& px)
 {
     r.validate("encode: range");
     if ((r.keyframes && r.keyframes != kf.count()) || (r.joints && r.joints != kf.joints))
@@ -357,13 +356,41 @@ keyframe_pixels<K> encode(const keyframes<K>& kf, const angle_range& r)
     if (kf.angles.size() != kf.count() * kf.joints * 3)
         throw shape_error("encode: keyframes hold " + std::to_string(kf.angles.size()) + " angles, expected " +
                           std::to_string(kf.count() * kf.joints * 3));
-    keyframe_pixels<K> px;
     px.count_ = kf.count();
     px.joints = kf.joints;
     px.values.resize(kf.angles.size());
     const std::size_t C = kf.joints * 3;
     for (std::size_t i = 0; i < kf.angles.size(); ++i) px.values[i] = encode_angle(kf.angles[i], r, i % C);
+}
+
+/// @brief Encodes keyframes as an image by Eq. 3.
+/// @throws value_error for an invalid range; shape_error when the range records a different K or J.
+template <std::size_t K>
+keyframe_pixels<K> encode(const keyframes<K>& kf, const angle_range& r)
+{
+    keyframe_pixels<K> px;
+    encode_into(kf, r, px);
     return px;
+}
+
+/// @brief decode() into `kf`, its storage reused (duration, fps and source frames set to 0).
+template <std::size_t K>
+void decode_into(const keyframe_pixels<K>& px, const angle_range& r, keyframes<K>& kf)
+{
+    r.validate("decode: range");
+    if (px.values.size() != px.count() * px.joints * 3)
+        throw shape_error("decode: image holds " + std::to_string(px.values.size()) + " values, expected " +
+                          std::to_string(px.count() * px.joints * 3));
+    if (px.count() < 2) throw value_error("keyframes: " + std::to_string(px.count()) + " keyframes, expected at least 2");
+    if (r.per_channel() && r.lo.size() != px.joints * 3)
+        throw shape_error("decode: image has " + std::to_string(px.joints) + " joints, the range file is for " +
+                          std::to_string(r.lo.size() / 3));
+    kf.count_ = px.count();
+    kf.joints = px.joints;
+    kf.angles.resize(px.values.size());
+    kf.duration = 0, kf.fps = 0, kf.source_frames = 0;
+    const std::size_t C = px.joints * 3;
+    for (std::size_t i = 0; i < px.values.size(); ++i) kf.angles[i] = decode_angle(px.values[i], r, i % C);
 }
 
 /// @brief Decodes an image by Eq. 6. The result has no duration/fps (set them from a reference clip).
@@ -371,16 +398,8 @@ keyframe_pixels<K> encode(const keyframes<K>& kf, const angle_range& r)
 template <std::size_t K>
 keyframes<K> decode(const keyframe_pixels<K>& px, const angle_range& r)
 {
-    r.validate("decode: range");
-    if (px.values.size() != px.count() * px.joints * 3)
-        throw shape_error("decode: image holds " + std::to_string(px.values.size()) + " values, expected " +
-                          std::to_string(px.count() * px.joints * 3));
-    auto kf = keyframes<K>::make(px.joints, px.count());
-    if (r.per_channel() && r.lo.size() != px.joints * 3)
-        throw shape_error("decode: image has " + std::to_string(px.joints) + " joints, the range file is for " +
-                          std::to_string(r.lo.size() / 3));
-    const std::size_t C = px.joints * 3;
-    for (std::size_t i = 0; i < px.values.size(); ++i) kf.angles[i] = decode_angle(px.values[i], r, i % C);
+    keyframes<K> kf;
+    decode_into(px, r, kf);
     return kf;
 }
 
@@ -395,11 +414,10 @@ struct network_image {
     constexpr std::size_t count() const noexcept { return K == dynamic_keyframes ? count_ : K; }
 };
 
-/// @brief Pixels to network range: x = v / 127.5 - 1, reordered [K, J, 3] -> [3, K, J].
+/// @brief Pixels to network range: x = v / 127.5 - 1, reordered [K, J, 3] -> [3, K, J], into `n` (storage reused).
 template <std::size_t K>
-network_image<K> to_network(const keyframe_pixels<K>& px)
+void to_network_into(const keyframe_pixels<K>& px, network_image<K>& n)
 {
-    network_image<K> n;
     n.count_ = px.count();
     n.joints = px.joints;
     const std::size_t plane = px.count() * px.joints;
@@ -407,19 +425,26 @@ network_image<K> to_network(const keyframe_pixels<K>& px)
     for (std::size_t p = 0; p < plane; ++p)
         for (std::size_t c = 0; c < 3; ++c)
             n.data[c * plane + p] = static_cast<float>(static_cast<double>(px.values[p * 3 + c]) / 127.5 - 1.0);
+}
+
+/// @brief to_network_into() a new image.
+template <std::size_t K>
+network_image<K> to_network(const keyframe_pixels<K>& px)
+{
+    network_image<K> n;
+    to_network_into(px, n);
     return n;
 }
 
 /// @brief Network output back to pixels: v = round((x + 1) 127.5) clamped to [0, 255] (NaN -> 0).
 /// @throws shape_error when the data size is not 3 K J.
 template <std::size_t K>
-keyframe_pixels<K> from_network(const network_image<K>& n)
+void from_network_into(const network_image<K>& n, keyframe_pixels<K>& px)
 {
     const std::size_t plane = n.count() * n.joints;
     if (n.data.size() != plane * 3)
         throw shape_error("from_network: " + std::to_string(n.data.size()) + " values, expected 3*K*J = " +
                           std::to_string(plane * 3));
-    keyframe_pixels<K> px;
     px.count_ = n.count();
     px.joints = n.joints;
     px.values.resize(plane * 3);
@@ -428,6 +453,15 @@ keyframe_pixels<K> from_network(const network_image<K>& n)
             const double v = std::round((static_cast<double>(n.data[c * plane + p]) + 1.0) * 127.5);
             px.values[p * 3 + c] = !(v >= 0.0) ? std::uint8_t{0} : v >= 255.0 ? std::uint8_t{255} : static_cast<std::uint8_t>(v);
         }
+}
+
+/// @brief from_network_into() new pixels.
+/// @throws shape_error when the data size is not 3 K J.
+template <std::size_t K>
+keyframe_pixels<K> from_network(const network_image<K>& n)
+{
+    keyframe_pixels<K> px;
+    from_network_into(n, px);
     return px;
 }
 

@@ -88,18 +88,19 @@ inline double wrap_degrees(double d) noexcept
 
 /// @brief Unwraps every joint/axis angle track in time: each step is moved by a multiple of 360 deg so
 /// that it lies in (-180, 180]. A joint passing 180 deg then continues to 181 instead of jumping to -179.
-inline void unwrap_angles(clip& c) noexcept
+inline void unwrap_angles(double* angles, std::size_t frames, std::size_t channels) noexcept
 {
-    const std::size_t J = c.skel.size();
-    for (std::size_t f = 1; f < c.frames; ++f)
-        for (std::size_t j = 0; j < J; ++j)
-            for (std::size_t a = 0; a < 3; ++a) {
-                const double prev = c.angle(f - 1, j, a);
-                double& cur = c.angle(f, j, a);
-                const double d = cur - prev;
-                if (d > 180.0 || d <= -180.0) cur -= 360.0 * std::ceil((d - 180.0) / 360.0);
-            }
+    for (std::size_t f = 1; f < frames; ++f)
+        for (std::size_t ch = 0; ch < channels; ++ch) {
+            const double prev = angles[(f - 1) * channels + ch];
+            double& cur = angles[f * channels + ch];
+            const double d = cur - prev;
+            if (d > 180.0 || d <= -180.0) cur -= 360.0 * std::ceil((d - 180.0) / 360.0);
+        }
 }
+
+/// @brief unwrap_angles() of every track of a clip.
+inline void unwrap_angles(clip& c) noexcept { unwrap_angles(c.angles.data(), c.frames, c.skel.size() * 3); }
 
 namespace detail {
 
@@ -116,17 +117,17 @@ inline void check_keyframe_args(const clip& c, std::size_t k, const char* fn)
 }
 
 /// Angles of clip `u` (already unwrapped) at fractional frame position `t`, linear interpolation.
-inline void sample_linear(const clip& u, double t, double* out)
+inline void sample_linear(const double* angles, std::size_t frames, std::size_t J3, double t, double* out)
 {
-    const std::size_t J3 = u.skel.size() * 3;
-    const double tc = std::clamp(t, 0.0, static_cast<double>(u.frames - 1));
+    const double tc = std::clamp(t, 0.0, static_cast<double>(frames - 1));
     const auto f0 = static_cast<std::size_t>(std::floor(tc));
-    const std::size_t f1 = std::min(f0 + 1, u.frames - 1);
+    const std::size_t f1 = std::min(f0 + 1, frames - 1);
     const double w = tc - static_cast<double>(f0);
-    const double* a = u.frame_angles(f0);
-    const double* b = u.frame_angles(f1);
+    const double* a = angles + f0 * J3;
+    const double* b = angles + f1 * J3;
     for (std::size_t i = 0; i < J3; ++i) out[i] = w == 0.0 ? a[i] : a[i] + w * (b[i] - a[i]);
 }
+inline void sample_linear(const clip& u, double t, double* out) { sample_linear(u.angles.data(), u.frames, u.skel.size() * 3, t, out); }
 
 template <std::size_t K>
 keyframes<K> start_keyframes(const clip& c, std::size_t k)
@@ -192,18 +193,36 @@ inline std::vector<double> dtw_match(const double* a, std::size_t n, const doubl
 /// @tparam K keyframe count; with dynamic_keyframes pass it as `k`.
 /// @return keyframes [K, J, 3] with the source duration, fps and frame count.
 /// @throws value_error for fewer than 2 frames or keyframes; shape_error for inconsistent clip arrays.
+/// @brief extract_keyframes() into `out`, with `unwrapped` as scratch for the unwrapped angles: no allocation
+/// when both already hold enough (a transfer's workspace reuses them).
+/// @throws as extract_keyframes().
+template <std::size_t K = 9>
+void extract_keyframes_into(const clip& c, keyframes<K>& out, std::vector<double>& unwrapped, std::size_t k = K)
+{
+    detail::check_keyframe_args(c, k, "extract_keyframes");
+    if (K != dynamic_keyframes && k != K)
+        throw value_error("keyframes: " + std::to_string(k) + " keyframes requested, the type holds " + std::to_string(K));
+    const std::size_t J3 = c.skel.size() * 3;
+    unwrapped.assign(c.angles.begin(), c.angles.end());
+    unwrap_angles(unwrapped.data(), c.frames, J3);
+    out.count_ = k;
+    out.joints = c.skel.size();
+    out.angles.resize(k * J3);
+    out.duration = c.duration();
+    out.fps = c.fps;
+    out.source_frames = c.frames;
+    for (std::size_t i = 0; i < k; ++i) {
+        const double t = static_cast<double>(i) * static_cast<double>(c.frames - 1) / static_cast<double>(k - 1);
+        detail::sample_linear(unwrapped.data(), c.frames, J3, t, out.angles.data() + i * J3);
+    }
+}
+
 template <std::size_t K = 9>
 keyframes<K> extract_keyframes(const clip& c, std::size_t k = K)
 {
-    detail::check_keyframe_args(c, k, "extract_keyframes");
-    clip u = c;
-    unwrap_angles(u);
-    auto r = detail::start_keyframes<K>(c, k);
-    const std::size_t J3 = c.skel.size() * 3;
-    for (std::size_t i = 0; i < k; ++i) {
-        const double t = static_cast<double>(i) * static_cast<double>(c.frames - 1) / static_cast<double>(k - 1);
-        detail::sample_linear(u, t, r.angles.data() + i * J3);
-    }
+    keyframes<K> r;
+    std::vector<double> unwrapped;
+    extract_keyframes_into(c, r, unwrapped, k);
     return r;
 }
 
@@ -278,8 +297,8 @@ inline std::vector<double> natural_spline_m(const std::vector<double>& y)
 /// @throws shape_error when J or the translation track's size does not match; value_error for N < 2 or
 ///         a non-positive fps.
 template <std::size_t K>
-clip reconstruct(const keyframes<K>& kf, const skeleton& skel, std::size_t frames, double fps,
-                 std::span<const double> root_translation = {}, interpolation method = interpolation::catmull_rom)
+void reconstruct_into(const keyframes<K>& kf, const skeleton& skel, std::size_t frames, double fps, clip& out,
+                      std::span<const double> root_translation = {}, interpolation method = interpolation::catmull_rom)
 {
     const std::size_t k = kf.count(), J = skel.size();
     if (kf.joints != J)
@@ -293,17 +312,21 @@ clip reconstruct(const keyframes<K>& kf, const skeleton& skel, std::size_t frame
     if (!root_translation.empty() && root_translation.size() != frames * 3)
         throw shape_error("reconstruct: root translation holds " + std::to_string(root_translation.size()) +
                           " values, expected frames*3 = " + std::to_string(frames * 3));
-    clip out = clip::make(skel, frames, fps);
-    std::vector<double> y(k), m2;
+    out.reset(skel, frames, fps);
+    std::vector<double> track, m2;  // only the natural spline needs the track as a vector
     for (std::size_t j = 0; j < J; ++j)
         for (std::size_t a = 0; a < 3; ++a) {
-            for (std::size_t i = 0; i < k; ++i) y[i] = kf.at(i, j, a);
-            if (method == interpolation::natural_spline) m2 = detail::natural_spline_m(y);
+            const auto y = [&](std::size_t i) { return kf.at(i, j, a); };
+            if (method == interpolation::natural_spline) {
+                track.resize(k);
+                for (std::size_t i = 0; i < k; ++i) track[i] = y(i);
+                m2 = detail::natural_spline_m(track);
+            }
             for (std::size_t f = 0; f < frames; ++f) {
                 const double u = static_cast<double>(f) * static_cast<double>(k - 1) / static_cast<double>(frames - 1);
                 const std::size_t i = std::min(static_cast<std::size_t>(std::floor(u)), k - 2);
                 const double t = u - static_cast<double>(i);
-                const double p0 = y[i], p1 = y[i + 1];
+                const double p0 = y(i), p1 = y(i + 1);
                 double v = 0;
                 if (method == interpolation::linear) {
                     v = p0 + t * (p1 - p0);
@@ -313,8 +336,8 @@ clip reconstruct(const keyframes<K>& kf, const skeleton& skel, std::size_t frame
                     v = s * p0 + t * p1 + ((s * s * s - s) * m2[i] + (t * t * t - t) * m2[i + 1]) / 6.0;
                 } else {
                     // Cubic Hermite with tangents m_i = (p_{i+1} - p_{i-1}) / 2, one-sided at the ends.
-                    const double m0 = i > 0 ? 0.5 * (p1 - y[i - 1]) : p1 - p0;
-                    const double m1 = i + 2 < k ? 0.5 * (y[i + 2] - p0) : p1 - p0;
+                    const double m0 = i > 0 ? 0.5 * (p1 - y(i - 1)) : p1 - p0;
+                    const double m1 = i + 2 < k ? 0.5 * (y(i + 2) - p0) : p1 - p0;
                     const double t2 = t * t, t3 = t2 * t;
                     v = (2 * t3 - 3 * t2 + 1) * p0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * p1 + (t3 - t2) * m1;
                 }
@@ -326,14 +349,23 @@ clip reconstruct(const keyframes<K>& kf, const skeleton& skel, std::size_t frame
             if (skel.joints[j].parent < 0 && skel.joints[j].has_position())
                 for (std::size_t f = 0; f < frames; ++f)
                     for (std::size_t a = 0; a < 3; ++a) out.position(f, j, a) = root_translation[f * 3 + a];
+}
+
+/// @brief reconstruct_into() a new clip.
+template <std::size_t K>
+clip reconstruct(const keyframes<K>& kf, const skeleton& skel, std::size_t frames, double fps,
+                 std::span<const double> root_translation = {}, interpolation method = interpolation::catmull_rom)
+{
+    clip out;
+    reconstruct_into(kf, skel, frames, fps, out, root_translation, method);
     return out;
 }
 
-/// @brief Resamples every position channel of `c` to `frames` frames (linear in time).
-inline std::vector<double> stretch_positions(const clip& c, std::size_t frames)
+/// @brief Resamples every position channel of `c` to `frames` frames (linear in time), into `out`.
+inline void stretch_positions_into(const clip& c, std::size_t frames, std::vector<double>& out)
 {
     const std::size_t J3 = c.skel.size() * 3;
-    std::vector<double> out(frames * J3);
+    out.resize(frames * J3);
     for (std::size_t f = 0; f < frames; ++f) {
         const double t = frames > 1 ? static_cast<double>(f) * static_cast<double>(c.frames - 1) / static_cast<double>(frames - 1) : 0.0;
         const auto f0 = static_cast<std::size_t>(std::floor(t));
@@ -342,6 +374,13 @@ inline std::vector<double> stretch_positions(const clip& c, std::size_t frames)
         for (std::size_t i = 0; i < J3; ++i)
             out[f * J3 + i] = (1 - a) * c.positions[f0 * J3 + i] + a * c.positions[f1 * J3 + i];
     }
+}
+
+/// @brief stretch_positions_into() a new vector.
+inline std::vector<double> stretch_positions(const clip& c, std::size_t frames)
+{
+    std::vector<double> out;
+    stretch_positions_into(c, frames, out);
     return out;
 }
 

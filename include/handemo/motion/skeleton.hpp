@@ -100,14 +100,17 @@ struct skeleton {
     /// @brief Checks that parents precede children and indices are valid.
     /// @throws format_error naming the offending joint.
     /// @param what what the skeleton was read from (a file name), put first in the message
-    void validate(const std::string& what = "skeleton") const
+    void validate(std::string_view what = "skeleton") const
     {
-        const std::string who = what + (name.empty() || what == name ? std::string() : " (skeleton '" + name + "')");
-        if (joints.empty()) throw format_error(who + ": skeleton has no joints");
+        // the message is built only on an error: a valid skeleton is checked without allocating
+        const auto who = [&] {
+            return std::string(what) + (name.empty() || what == name ? std::string() : " (skeleton '" + name + "')");
+        };
+        if (joints.empty()) throw format_error(who() + ": skeleton has no joints");
         for (std::size_t i = 0; i < joints.size(); ++i) {
             const int p = joints[i].parent;
             if (p >= static_cast<int>(i) || p < -1)
-                throw format_error(who + ": joint '" + joints[i].name + "' has parent index " + std::to_string(p) +
+                throw format_error(who() + ": joint '" + joints[i].name + "' has parent index " + std::to_string(p) +
                                    ", expected -1 or below " + std::to_string(i));
         }
     }

@@ -371,98 +371,111 @@ inline const std::vector<derived_feature>& derived_features(feature_set fs)
 /// @brief Number of derived features: 121 (body) or 83 (hand).
 inline std::size_t derived_count(feature_set fs) { return derived_features(fs).size(); }
 
-/// @brief Per-frame basic feature columns `[F, C]` (C = 38 body: f1..f29, three f30 columns, f31..f36;
-/// C = 27 hand: h1..h27). Window-level features (f37, h28) have no column.
-/// @param p `[F, P, 3]` world positions (world_positions()), @param fps frame rate
-/// @throws value_error naming a role the feature set needs and the skeleton lacks; shape_error for bad shapes.
-inline xt::xtensor<double, 2> basic_table(const positions_type& p, double fps, const role_map& r, feature_set fs,
-                                          const lma_options& opt = {})
+namespace detail {
+
+/// Checks the positions and the roles basic_table() reads.
+inline void check_basic_table(const positions_type& p, double fps, const role_map& r, feature_set fs)
 {
     detail::check_positions(p, fps, "rcm::basic_table");
     r.require(fs);
-    const std::size_t F = p.shape()[0], P = p.shape()[1];
+    const std::size_t P = p.shape()[1];
     for (std::size_t k = 0; k < role_count; ++k)
         if (r.index[k] >= static_cast<int>(P))
             throw shape_error("rcm::basic_table: role '" + std::string(to_string(static_cast<role>(k))) + "' is point " +
                               std::to_string(r.index[k]) + " but positions have " + std::to_string(P) + " points");
+}
+
+}  // namespace detail
+
+/// @brief The body's per-frame basic feature columns `[F, 38]`: f1..f29, three f30 columns, f31..f36 (see
+/// basic_table(); positions and roles already checked).
+inline xt::xtensor<double, 2> body_basic_table(const positions_type& p, double fps, const role_map& r, const lma_options& opt = {})
+{
+    const std::size_t F = p.shape()[0], P = p.shape()[1];
     const std::size_t up = static_cast<std::size_t>(opt.up_axis);
     using detail::dist;
     auto R = [&](role x) { return r.at(x); };
-    if (fs == feature_set::body) {
-        xt::xtensor<double, 2> t = xt::zeros<double>({F, detail::body_columns});
-        double ground = std::numeric_limits<double>::infinity();
-        for (std::size_t f = 0; f < F; ++f)
-            for (std::size_t q = 0; q < P; ++q) ground = std::min(ground, p(f, q, up));
-        const std::size_t pel = R(role::pelvis), lh = R(role::left_hand), rh = R(role::right_hand), lf = R(role::left_foot),
-                          rf = R(role::right_foot), head = R(role::head), chest = R(role::chest);
-        const std::array<std::size_t, 5> eff{pel, lh, rh, lf, rf};
-        std::vector<std::size_t> all(P);
-        for (std::size_t q = 0; q < P; ++q) all[q] = q;
-        const std::vector<std::size_t> five{head, lh, rh, lf, rf};
-        const std::vector<std::size_t> upper{head, R(role::neck), chest, R(role::left_shoulder), R(role::right_shoulder),
-                                             R(role::left_elbow), R(role::right_elbow), lh, rh};
-        const std::vector<std::size_t> lower{pel, R(role::left_hip), R(role::right_hip), R(role::left_knee), R(role::right_knee), lf, rf};
-        const std::vector<std::size_t> right{R(role::right_shoulder), R(role::right_elbow), rh, R(role::right_hip), R(role::right_knee), rf};
-        const std::vector<std::size_t> left{R(role::left_shoulder), R(role::left_elbow), lh, R(role::left_hip), R(role::left_knee), lf};
-        std::vector<double> mean_speed(F, 0.0);
-        const std::size_t h0 = (up + 1) % 3, h1 = (up + 2) % 3;
-        const long half = std::max(1L, std::lround(fps / 2));
-        for (std::size_t f = 0; f < F; ++f) {
-            t(f, 0) = dist(p, f, lf, pel);
-            t(f, 1) = dist(p, f, rf, pel);
-            t(f, 2) = dist(p, f, lh, R(role::left_shoulder));
-            t(f, 3) = dist(p, f, rh, R(role::right_shoulder));
-            t(f, 4) = dist(p, f, lh, rh);
-            t(f, 5) = dist(p, f, lh, head);
-            t(f, 6) = dist(p, f, rh, head);
-            t(f, 7) = dist(p, f, lh, pel);
-            t(f, 8) = dist(p, f, rh, pel);
-            t(f, 9) = p(f, pel, up) - ground;
-            t(f, 10) = t(f, 9) - 0.5 * (t(f, 0) + t(f, 1));
-            t(f, 11) = dist(p, f, lf, rf);
-            t(f, 12) = dist(p, f, lh, chest);
-            t(f, 13) = dist(p, f, rh, chest);
-            double jerk = 0;
-            for (std::size_t k = 0; k < 5; ++k) {
-                const double v = detail::derivative_norm(p, eff[k], f, 1, fps);
-                t(f, 15 + k) = v;
-                t(f, 20 + k) = detail::derivative_norm(p, eff[k], f, 2, fps);
-                jerk += detail::derivative_norm(p, eff[k], f, 3, fps);
-                mean_speed[f] += v / 5.0;
-            }
-            t(f, 25) = jerk / 5.0;
-            const auto axes = detail::body_axes(p, f, r, opt.up_axis);
-            t(f, 26) = detail::box_volume(p, f, five, axes);
-            t(f, 27) = detail::box_volume(p, f, all, axes);
-            t(f, 28) = dist(p, f, head, pel);
-            for (std::size_t hnd : {lh, rh}) {
-                const double y = p(f, hnd, up);
-                const std::size_t level = y < p(f, pel, up) ? 0 : y > p(f, head, up) ? 2 : 1;
-                t(f, 29 + level) += 0.5;
-            }
-            t(f, 32) = detail::box_volume(p, f, upper, axes);
-            t(f, 33) = detail::box_volume(p, f, lower, axes);
-            t(f, 34) = detail::box_volume(p, f, right, axes);
-            t(f, 35) = detail::box_volume(p, f, left, axes);
-            if (f > 0) {
-                const double dx = p(f, pel, h0) - p(f - 1, pel, h0), dz = p(f, pel, h1) - p(f - 1, pel, h1);
-                t(f, 36) = std::sqrt(dx * dx + dz * dz);
-            }
-            const std::size_t a = static_cast<std::size_t>(std::max(0L, static_cast<long>(f) - half));
-            const std::size_t b = std::min(F - 1, f + static_cast<std::size_t>(half));
-            double lo0 = p(a, pel, h0), hi0 = lo0, lo1 = p(a, pel, h1), hi1 = lo1;
-            for (std::size_t g = a; g <= b; ++g) {
-                lo0 = std::min(lo0, p(g, pel, h0)), hi0 = std::max(hi0, p(g, pel, h0));
-                lo1 = std::min(lo1, p(g, pel, h1)), hi1 = std::max(hi1, p(g, pel, h1));
-            }
-            const double seconds = static_cast<double>(b - a + 1) / fps;
-            t(f, 37) = (hi0 - lo0) * (hi1 - lo1) / seconds;
+    xt::xtensor<double, 2> t = xt::zeros<double>({F, detail::body_columns});
+    double ground = std::numeric_limits<double>::infinity();
+    for (std::size_t f = 0; f < F; ++f)
+        for (std::size_t q = 0; q < P; ++q) ground = std::min(ground, p(f, q, up));
+    const std::size_t pel = R(role::pelvis), lh = R(role::left_hand), rh = R(role::right_hand), lf = R(role::left_foot),
+                      rf = R(role::right_foot), head = R(role::head), chest = R(role::chest);
+    const std::array<std::size_t, 5> eff{pel, lh, rh, lf, rf};
+    std::vector<std::size_t> all(P);
+    for (std::size_t q = 0; q < P; ++q) all[q] = q;
+    const std::vector<std::size_t> five{head, lh, rh, lf, rf};
+    const std::vector<std::size_t> upper{head, R(role::neck), chest, R(role::left_shoulder), R(role::right_shoulder),
+                                         R(role::left_elbow), R(role::right_elbow), lh, rh};
+    const std::vector<std::size_t> lower{pel, R(role::left_hip), R(role::right_hip), R(role::left_knee), R(role::right_knee), lf, rf};
+    const std::vector<std::size_t> right{R(role::right_shoulder), R(role::right_elbow), rh, R(role::right_hip), R(role::right_knee), rf};
+    const std::vector<std::size_t> left{R(role::left_shoulder), R(role::left_elbow), lh, R(role::left_hip), R(role::left_knee), lf};
+    std::vector<double> mean_speed(F, 0.0);
+    const std::size_t h0 = (up + 1) % 3, h1 = (up + 2) % 3;
+    const long half = std::max(1L, std::lround(fps / 2));
+    for (std::size_t f = 0; f < F; ++f) {
+        t(f, 0) = dist(p, f, lf, pel);
+        t(f, 1) = dist(p, f, rf, pel);
+        t(f, 2) = dist(p, f, lh, R(role::left_shoulder));
+        t(f, 3) = dist(p, f, rh, R(role::right_shoulder));
+        t(f, 4) = dist(p, f, lh, rh);
+        t(f, 5) = dist(p, f, lh, head);
+        t(f, 6) = dist(p, f, rh, head);
+        t(f, 7) = dist(p, f, lh, pel);
+        t(f, 8) = dist(p, f, rh, pel);
+        t(f, 9) = p(f, pel, up) - ground;
+        t(f, 10) = t(f, 9) - 0.5 * (t(f, 0) + t(f, 1));
+        t(f, 11) = dist(p, f, lf, rf);
+        t(f, 12) = dist(p, f, lh, chest);
+        t(f, 13) = dist(p, f, rh, chest);
+        double jerk = 0;
+        for (std::size_t k = 0; k < 5; ++k) {
+            const double v = detail::derivative_norm(p, eff[k], f, 1, fps);
+            t(f, 15 + k) = v;
+            t(f, 20 + k) = detail::derivative_norm(p, eff[k], f, 2, fps);
+            jerk += detail::derivative_norm(p, eff[k], f, 3, fps);
+            mean_speed[f] += v / 5.0;
         }
-        const auto peaks = detail::deceleration_peaks(mean_speed, fps);
-        for (std::size_t f = 0; f < F; ++f) t(f, 14) = peaks[f];
-        return t;
+        t(f, 25) = jerk / 5.0;
+        const auto axes = detail::body_axes(p, f, r, opt.up_axis);
+        t(f, 26) = detail::box_volume(p, f, five, axes);
+        t(f, 27) = detail::box_volume(p, f, all, axes);
+        t(f, 28) = dist(p, f, head, pel);
+        for (std::size_t hnd : {lh, rh}) {
+            const double y = p(f, hnd, up);
+            const std::size_t level = y < p(f, pel, up) ? 0 : y > p(f, head, up) ? 2 : 1;
+            t(f, 29 + level) += 0.5;
+        }
+        t(f, 32) = detail::box_volume(p, f, upper, axes);
+        t(f, 33) = detail::box_volume(p, f, lower, axes);
+        t(f, 34) = detail::box_volume(p, f, right, axes);
+        t(f, 35) = detail::box_volume(p, f, left, axes);
+        if (f > 0) {
+            const double dx = p(f, pel, h0) - p(f - 1, pel, h0), dz = p(f, pel, h1) - p(f - 1, pel, h1);
+            t(f, 36) = std::sqrt(dx * dx + dz * dz);
+        }
+        const std::size_t a = static_cast<std::size_t>(std::max(0L, static_cast<long>(f) - half));
+        const std::size_t b = std::min(F - 1, f + static_cast<std::size_t>(half));
+        double lo0 = p(a, pel, h0), hi0 = lo0, lo1 = p(a, pel, h1), hi1 = lo1;
+        for (std::size_t g = a; g <= b; ++g) {
+            lo0 = std::min(lo0, p(g, pel, h0)), hi0 = std::max(hi0, p(g, pel, h0));
+            lo1 = std::min(lo1, p(g, pel, h1)), hi1 = std::max(hi1, p(g, pel, h1));
+        }
+        const double seconds = static_cast<double>(b - a + 1) / fps;
+        t(f, 37) = (hi0 - lo0) * (hi1 - lo1) / seconds;
     }
-    // hand
+    const auto peaks = detail::deceleration_peaks(mean_speed, fps);
+    for (std::size_t f = 0; f < F; ++f) t(f, 14) = peaks[f];
+    return t;
+}
+
+/// @brief The hand's per-frame basic feature columns `[F, 27]`: h1..h27 (see basic_table(); positions and roles
+/// already checked).
+inline xt::xtensor<double, 2> hand_basic_table(const positions_type& p, double fps, const role_map& r)
+{
+    const std::size_t F = p.shape()[0];
+    using detail::dist;
+    auto R = [&](role x) { return r.at(x); };
     xt::xtensor<double, 2> t = xt::zeros<double>({F, detail::hand_columns});
     const std::size_t wrist = R(role::wrist), palm = R(role::palm);
     std::array<std::size_t, 5> tip{}, base{};
@@ -510,6 +523,17 @@ inline xt::xtensor<double, 2> basic_table(const positions_type& p, double fps, c
     const auto peaks = detail::deceleration_peaks(mean_speed, fps);
     for (std::size_t f = 0; f < F; ++f) t(f, 26) = peaks[f];
     return t;
+}
+
+/// @brief Per-frame basic feature columns `[F, C]` (C = 38 body: f1..f29, three f30 columns, f31..f36;
+/// C = 27 hand: h1..h27). Window-level features (f37, h28) have no column.
+/// @param p `[F, P, 3]` world positions (world_positions()), @param fps frame rate
+/// @throws value_error naming a role the feature set needs and the skeleton lacks; shape_error for bad shapes.
+inline xt::xtensor<double, 2> basic_table(const positions_type& p, double fps, const role_map& r, feature_set fs,
+                                          const lma_options& opt = {})
+{
+    detail::check_basic_table(p, fps, r, fs);
+    return fs == feature_set::body ? body_basic_table(p, fps, r, opt) : hand_basic_table(p, fps, r);
 }
 
 /// @brief First frame of each sliding window: 0, 1, ..., F - L (stride 1); one window of the whole clip

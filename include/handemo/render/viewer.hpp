@@ -16,6 +16,7 @@
 #include <handemo/core/error.hpp>
 #include <handemo/motion/clip.hpp>
 #include <handemo/render/figure.hpp>
+#include <handemo/render/viewer_page.hpp>  // generated from viewer_page.html at build time
 
 #include <algorithm>
 #include <cmath>
@@ -24,6 +25,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace handemo {
@@ -282,193 +284,32 @@ inline std::string render_viewer_html(std::span<const clip> clips, const viewer_
         else if (ch == '&') title += "&amp;";
         else title += ch;
     }
+    // the page, include/handemo/render/viewer_page.html, is embedded at build time (viewer_page.hpp); its
+    // @HANDEMO_...@ markers take the title, the data and the layout constants
+    const std::pair<std::string_view, std::string> fields[] = {{"@HANDEMO_TITLE@", title},
+                                                               {"@HANDEMO_DATA@", data},
+                                                               {"@HANDEMO_TITLE_HEIGHT@", std::to_string(viewer_title_height)},
+                                                               {"@HANDEMO_FILL@", std::to_string(viewer_fill)}};
     std::string h;
-    h.reserve(data.size() + 12000);
-    h += R"js(<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>)js" + title + R"js(</title>
-<style>
-body{font:14px sans-serif;margin:12px;color:#222;background:#fafafa}
-canvas{background:#fff;border:1px solid #ccc;cursor:grab;display:block}
-#bar{margin:8px 0;display:flex;gap:12px;align-items:center;flex-wrap:wrap}
-#scrub{width:360px}
-#check{display:none}
-</style></head><body>
-<div id="heading"></div>
-<canvas id="view"></canvas>
-<div id="bar"><button id="play">pause</button>
-<input id="scrub" type="range" min="0" max="1000" value="0">
-<span id="time"></span>
-<label>speed <select id="speed"><option>0.25</option><option>0.5</option><option selected>1</option><option>2</option></select></label>
-<label><input id="norm" type="checkbox"> normalised time</label>
-<button id="reset">reset view</button>
-<span style="color:#777">drag: orbit, wheel: zoom, space: play/pause, hover: joint names</span></div>
-<pre id="check" data-status="not run"></pre>
-<script type="application/json" id="data">
-)js";
-    h += data;
-    h += R"js(
-</script>
-<script>
-"use strict";
-(function () {
-const check = document.getElementById("check");
-const problems = [];  // script errors and console errors/warnings, reported by the check
-function fail(msg) { problems.push(String(msg)); check.textContent = "error: " + problems.join("; "); check.setAttribute("data-status", "error: " + msg); }
-window.onerror = function (msg) { fail(msg); };
-if (window.addEventListener) window.addEventListener("unhandledrejection", e => fail("unhandled rejection: " + e.reason));
-for (const level of ["error", "warn"]) {
-  const orig = console[level];
-  console[level] = function () { fail("console." + level + ": " + Array.prototype.join.call(arguments, " ")); return orig.apply(console, arguments); };
-}
-const D = JSON.parse(document.getElementById("data").textContent);
-const W = D.width, TITLE = )js" + std::to_string(viewer_title_height) + R"js(, FILL = )js" + std::to_string(viewer_fill) + R"js(;
-const n = D.clips.length, cols = D.columns, rows = Math.ceil(n / cols);
-const cw = W / cols, ch = D.height, H = rows * (TITLE + ch);  // cell size; canvas height
-function cell(i) {  // clip i's cell: row i / cols, column i % cols, below its row's title band
-  const r = Math.floor(i / cols), k = i % cols;
-  return {x: k * cw, y: (r + 1) * TITLE + r * ch, r: r, k: k};
-}
-const cv = document.getElementById("view"), ctx = cv.getContext("2d");
-const dpr = window.devicePixelRatio || 1;
-cv.width = Math.round(W * dpr); cv.height = Math.round(H * dpr);
-cv.style.width = W + "px"; cv.style.height = H + "px";
-const dur = D.clips.map(c => c.frames / c.fps), T = Math.max.apply(null, dur);
-let t = 0, playing = true, speed = 1, yaw = 0, pitch = 0, zoom = 1, mouse = null, drag = null, last = null;
-const norm = document.getElementById("norm"); norm.checked = D.normalised;
-document.getElementById("heading").textContent = n + " clip" + (n > 1 ? "s" : "") + ": " +
-  D.clips.map(c => c.title + " (" + c.frames + " frames, " + c.fps + " fps)").join(", ");
-function rot(v, k, a) {  // Rodrigues: v turned by a radians about the unit axis k
-  const c = Math.cos(a), s = Math.sin(a), d = k[0]*v[0] + k[1]*v[1] + k[2]*v[2];
-  const x = [k[1]*v[2] - k[2]*v[1], k[2]*v[0] - k[0]*v[2], k[0]*v[1] - k[1]*v[0]];
-  return [0, 1, 2].map(i => v[i]*c + x[i]*s + k[i]*d*(1 - c));
-}
-function camera() {  // the initial view turned by yaw about its up and pitch about the new right
-  const up0 = D.view.up;
-  const r = rot(D.view.right, up0, yaw), tw = rot(D.view.toward, up0, yaw);
-  return {right: r, up: rot(up0, r, pitch), toward: rot(tw, r, pitch)};
-}
-function frameOf(i) {
-  const c = D.clips[i];
-  if (norm.checked) return Math.min(c.frames - 1, Math.round(t / T * (c.frames - 1)));
-  return Math.min(c.frames - 1, Math.floor(t * c.fps + 1e-9));
-}
-function project(i, f, cam) {  // pixel positions of every point of clip i at frame f
-  const c = D.clips[i], P = c.positions, o = f * c.points * 3, s = zoom * FILL * Math.min(cw, ch) / (2 * D.radius);
-  const b = cell(i), out = [];
-  for (let p = 0; p < c.points; ++p) {
-    const q = [P[o + 3*p] - c.center[0], P[o + 3*p + 1] - c.center[1], P[o + 3*p + 2] - c.center[2]];
-    const dot = v => q[0]*v[0] + q[1]*v[1] + q[2]*v[2];
-    out.push({x: b.x + cw/2 + dot(cam.right)*s, y: b.y + ch/2 - dot(cam.up)*s, z: dot(cam.toward)});
-  }
-  return out;
-}
-let hover = null, trace = null;  // trace: when an array, draw() records [clip, frame, point, x, y] of every joint it draws
-function draw() {
-  const cam = camera();
-  ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-  ctx.clearRect(0, 0, W, H);
-  ctx.font = "14px sans-serif"; ctx.textAlign = "center"; ctx.fillStyle = "#222";
-  const base = Math.max(1.5, 0.02 * Math.min(cw, ch) * zoom);
-  let best = null;
-  for (let i = 0; i < n; ++i) {
-    const c = D.clips[i], f = frameOf(i), px = project(i, f, cam), b = cell(i);
-    ctx.fillStyle = "#222"; ctx.fillText(c.title, b.x + cw/2, b.y - TITLE + 17, cw - 4);
-    ctx.strokeStyle = "#ddd"; ctx.lineWidth = 1; ctx.beginPath();
-    if (b.k) { ctx.moveTo(b.x, b.y - TITLE); ctx.lineTo(b.x, b.y + ch); }  // between the columns of a row
-    if (b.r) { ctx.moveTo(b.x, b.y - TITLE); ctx.lineTo(b.x + cw, b.y - TITLE); }  // between rows
-    ctx.stroke();
-    ctx.save(); ctx.beginPath(); ctx.rect(b.x, b.y, cw, ch); ctx.clip();
-    const items = [];
-    for (let p = 0; p < c.points; ++p) {
-      const q = c.parents[p];
-      if (q >= 0 && (!c.hidden[q] || c.stub[p])) {
-        let a = px[q];
-        if (c.stub[p]) a = {x: px[p].x + 0.3*(a.x - px[p].x), y: px[p].y + 0.3*(a.y - px[p].y), z: px[p].z + 0.3*(a.z - px[p].z)};
-        items.push({z: (a.z + px[p].z)/2, bone: true, a: a, b: px[p], col: c.colors[p]});
-      }
-      if (!c.hidden[p]) items.push({z: px[p].z + 1e-6, bone: false, b: px[p], col: c.colors[p]});
+    h.reserve(detail::viewer_page.size() + data.size() + title.size());
+    std::size_t pos = 0;
+    while (pos < detail::viewer_page.size()) {
+        const std::size_t at = detail::viewer_page.find("@HANDEMO_", pos);
+        if (at == std::string_view::npos) {
+            h += detail::viewer_page.substr(pos);
+            break;
+        }
+        h += detail::viewer_page.substr(pos, at - pos);
+        bool replaced = false;
+        for (const auto& [marker, value] : fields)
+            if (detail::viewer_page.substr(at, marker.size()) == marker) {
+                h += value;
+                pos = at + marker.size();
+                replaced = true;
+                break;
+            }
+        if (!replaced) h += '@', pos = at + 1;  // not a marker: copied as it is
     }
-    items.sort((u, v) => u.z - v.z);  // painter: far first
-    ctx.lineCap = "round";
-    if (trace) for (let p = 0; p < c.points; ++p) if (!c.hidden[p]) trace.push([i, f, p, px[p].x, px[p].y]);
-    for (const it of items) {
-      if (it.bone) { ctx.strokeStyle = it.col; ctx.lineWidth = 2*base; ctx.beginPath(); ctx.moveTo(it.a.x, it.a.y); ctx.lineTo(it.b.x, it.b.y); ctx.stroke(); }
-      else { ctx.fillStyle = it.col; ctx.strokeStyle = "rgba(0,0,0,0.35)"; ctx.lineWidth = 1; ctx.beginPath(); ctx.arc(it.b.x, it.b.y, 1.15*base, 0, 2*Math.PI); ctx.fill(); ctx.stroke(); }
-    }
-    ctx.restore();
-    ctx.fillStyle = "#888"; ctx.font = "11px sans-serif"; ctx.textAlign = "left";
-    ctx.fillText("frame " + f + " / " + (c.frames - 1), b.x + 6, b.y + ch - 6);
-    ctx.font = "14px sans-serif"; ctx.textAlign = "center";
-    const inside = mouse && mouse.x >= b.x && mouse.x < b.x + cw && mouse.y >= b.y && mouse.y < b.y + ch;
-    if (inside) for (let p = 0; p < c.points; ++p) {  // hover: the joints of the cell under the mouse (drawing is clipped to it)
-      if (c.hidden[p]) continue;
-      const d = Math.hypot(px[p].x - mouse.x, px[p].y - mouse.y);
-      if (d < 10 && (!best || d < best.d)) best = {d: d, x: px[p].x, y: px[p].y, text: c.title + ": " + c.names[p]};
-    }
-  }
-  hover = best;
-  if (best) {
-    ctx.font = "12px sans-serif"; ctx.textAlign = "left";
-    const w = ctx.measureText(best.text).width + 10, x = Math.min(best.x + 10, W - w - 2), y = Math.max(best.y - 26, 2);
-    ctx.fillStyle = "rgba(255,255,224,0.95)"; ctx.fillRect(x, y, w, 20);
-    ctx.strokeStyle = "#999"; ctx.strokeRect(x, y, w, 20);
-    ctx.fillStyle = "#222"; ctx.fillText(best.text, x + 5, y + 14);
-  }
-  document.getElementById("scrub").value = Math.round(t / T * 1000);
-  document.getElementById("time").textContent = t.toFixed(2) + " / " + T.toFixed(2) + " s";
-}
-function tick(now) {
-  if (last !== null && playing) { t += (now - last) / 1000 * speed; if (t >= T) t = t % T; }
-  last = now; draw(); requestAnimationFrame(tick);
-}
-const playBtn = document.getElementById("play");
-function toggle() { playing = !playing; playBtn.textContent = playing ? "pause" : "play"; }
-playBtn.onclick = toggle;
-document.addEventListener("keydown", e => { if (e.code === "Space") { e.preventDefault(); toggle(); } });
-document.getElementById("scrub").oninput = e => { t = e.target.value / 1000 * T; if (t >= T) t = Math.max(0, T - 1e-6); draw(); };
-document.getElementById("speed").onchange = e => { speed = parseFloat(e.target.value); };
-norm.onchange = draw;
-document.getElementById("reset").onclick = () => { yaw = 0; pitch = 0; zoom = 1; draw(); };
-function pos(e) { const r = cv.getBoundingClientRect(); return {x: e.clientX - r.left, y: e.clientY - r.top}; }
-cv.addEventListener("mousedown", e => { drag = pos(e); cv.style.cursor = "grabbing"; });
-window.addEventListener("mouseup", () => { drag = null; cv.style.cursor = "grab"; });
-cv.addEventListener("mousemove", e => {
-  const p = pos(e); mouse = p;
-  if (drag) { yaw -= (p.x - drag.x) * 0.01; pitch = Math.max(-1.55, Math.min(1.55, pitch + (p.y - drag.y) * 0.01)); drag = p; }
-  if (!playing) draw();
-});
-cv.addEventListener("mouseleave", () => { mouse = null; if (!playing) draw(); });
-cv.addEventListener("wheel", e => { e.preventDefault(); zoom = Math.max(0.1, Math.min(20, zoom * Math.exp(-e.deltaY * 0.001))); if (!playing) draw(); }, {passive: false});
-// Headless check: draw once at time ?t= (default 0) at the initial camera, recording the joints drawn, then
-// read the canvas back at each joint centre. Lines "clip i frame f: p:x,y p:x,y ..." (CSS pixels), then
-// "ink k/m" (joint centres whose canvas pixel is opaque).
-const query = typeof location !== "undefined" ? new URLSearchParams(location.search) : null;
-if (query && query.has("t")) { t = Math.max(0, Math.min(parseFloat(query.get("t")) || 0, T)); playing = false; playBtn.textContent = "play"; }
-trace = [];
-draw();
-const lines = [];
-let inked = 0;
-for (let i = 0; i < n; ++i) {
-  const mine = trace.filter(r => r[0] === i);
-  lines.push("clip " + i + " frame " + (mine.length ? mine[0][1] : frameOf(i)) + ": " + mine.map(r => r[2] + ":" + r[3].toFixed(2) + "," + r[4].toFixed(2)).join(" "));
-}
-const img = ctx.getImageData(0, 0, cv.width, cv.height);  // one readback (several would warn on the console)
-for (const r of trace) {
-  const x = Math.floor(r[3] * dpr), y = Math.floor(r[4] * dpr);
-  if (img && img.data && x >= 0 && y >= 0 && x < cv.width && y < cv.height && img.data[4 * (y * cv.width + x) + 3] === 255) ++inked;
-}
-lines.push("ink " + inked + "/" + trace.length);
-const drawn = trace.length;
-trace = null;
-if (!problems.length) {
-  check.textContent = lines.join("\n");
-  check.setAttribute("data-status", inked === drawn ? "ok" : "error: " + (drawn - inked) + " of " + drawn + " joints drawn without ink");
-}
-requestAnimationFrame(tick);
-})();
-</script>
-</body></html>
-)js";
     return h;
 }
 

@@ -15,6 +15,7 @@
 #include <handemo/motion/clip.hpp>
 #include <handemo/motion/csv.hpp>
 #include <handemo/motion/hand.hpp>
+#include <handemo/motion/labelled.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -60,15 +61,6 @@ inline clip_name parse_clip_name(std::string_view stem)
     r.take = std::string(parts[n - 1]);
     return r;
 }
-
-/// @brief One labelled clip.
-struct labelled_clip {
-    std::filesystem::path path;
-    std::string content;
-    std::string emotion;
-    std::string take;
-    clip motion;
-};
 
 /// @brief Options of load_folder().
 struct load_options {

@@ -30,9 +30,9 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
-#include <handemo/eval/baselines.hpp>
-#include <handemo/eval/classifier.hpp>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/baselines.hpp>
+#include <handemo/metrics/classifier.hpp>
+#include <handemo/metrics/compare.hpp>
 #include <handemo/stargan/dataset.hpp>
 #include <handemo/stargan/train.hpp>
 #include <handemo/stargan/transfer.hpp>
@@ -44,7 +44,7 @@
 #include <memory>
 #include <optional>
 #include <utility>
-#include <set>
+#include <system_error>
 #include <string>
 #include <vector>
 
@@ -122,7 +122,7 @@ std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>&
         if (c.motion.skel.size() != J)
             throw shape_error("posture_prior: " + c.path.string() + " has " + std::to_string(c.motion.skel.size()) + " joints, " +
                               clips.front().path.string() + " has " + std::to_string(J));
-    const auto b = eval::mean_offset_baseline<K>::fit(clips, info.neutral);
+    const auto b = metrics::mean_offset_baseline<K>::fit(clips, info.neutral);
     std::vector<std::vector<double>> prior(info.domains, std::vector<double>(C, 0.0));
     for (std::size_t d = 0; d < info.domains; ++d) {
         const std::string& e = info.domain_names[d];
@@ -153,6 +153,266 @@ inline bool trained_same_g(const checkpoint_info& ck, const train_options& opt)
 
 }  // namespace detail
 
+/// @brief The settings fit_change_gate() chooses from: posture weight a, motion weight b (each from gate_grid)
+/// and prior weight c (gate_grid with train_options::gate_prior, else only 0), setting index (a * G + b) * P + c.
+struct gate_settings {
+    static constexpr std::size_t G = gate_grid.size();
+    bool prior = false;
+    std::size_t P() const noexcept { return prior ? G : 1; }
+    std::size_t size() const noexcept { return G * G * P(); }
+    std::size_t index(std::size_t a, std::size_t b, std::size_t c) const noexcept { return (a * G + b) * P() + c; }
+    double posture(std::size_t s) const noexcept { return gate_grid[s / (G * P())]; }
+    double motion(std::size_t s) const noexcept { return gate_grid[(s / P()) % G]; }
+    double prior_weight(std::size_t s) const noexcept { return prior ? gate_grid[s % P()] : 0.0; }
+    /// G's whole change without the prior, (1, 1, 0), and no change, (0, 0, 0): gate_grid runs from 1 down to 0
+    std::size_t full() const noexcept { return index(0, 0, P() - 1); }
+    std::size_t none() const noexcept { return index(G - 1, G - 1, P() - 1); }
+};
+
+/// @brief What the held-out pairs of one target gave, per setting: the summed keyframe RMSE, the outputs the
+/// classifier recognised as the target (hits) and what the rule scores recognition by (hits, or the
+/// classifier's posterior with gate_posterior); the pairs and the real clips' hits and score.
+struct gate_tally {
+    std::vector<double> rmse, hits, score;  ///< [settings]
+    double pairs = 0, real_hits = 0, real_score = 0;
+
+    static gate_tally zeros(std::size_t settings)
+    {
+        return {std::vector<double>(settings, 0.0), std::vector<double>(settings, 0.0), std::vector<double>(settings, 0.0)};
+    }
+    void add(const gate_tally& x)
+    {
+        pairs += x.pairs, real_hits += x.real_hits, real_score += x.real_score;
+        for (std::size_t s = 0; s < rmse.size(); ++s) rmse[s] += x.rmse[s], hits[s] += x.hits[s], score[s] += x.score[s];
+    }
+};
+
+/// @brief The gate's rule on one target's pooled pairs: with recognition (use_emotion), the lowest RMSE among
+/// the settings whose score share is at most `margin` below the real clips' (margins below 0 ask for more),
+/// else the most recognised setting, then the lowest RMSE; without it, the lowest RMSE. Ties go to the lower
+/// index (more of G's change). Returns the setting index, or rmse.size() when there are no pairs.
+inline std::size_t choose_gate_setting(const gate_tally& p, double margin, bool use_emotion)
+{
+    const std::size_t S = p.rmse.size();
+    const auto& rs = p.rmse;
+    const auto& os = p.score;
+    const double n = p.pairs;
+    std::size_t best = S;
+    if (n == 0) return best;
+    if (!use_emotion) {
+        best = 0;
+        for (std::size_t s = 0; s < S; ++s)
+            if (rs[s] < rs[best]) best = s;
+        return best;
+    }
+    for (std::size_t s = 0; s < S; ++s)
+        if (os[s] / n >= p.real_score / n - margin - 1e-12 && (best == S || rs[s] < rs[best])) best = s;
+    if (best == S)  // no setting is recognised well enough: the most recognised, then the lowest RMSE
+        for (std::size_t s = 0; s < S; ++s)
+            if (best == S || os[s] > os[best] || (os[s] == os[best] && rs[s] < rs[best])) best = s;
+    return best;
+}
+
+/// @brief The tallies of target t ([group][target]) pooled over the groups in `use`.
+inline gate_tally pool_gate_tallies(const std::vector<std::vector<gate_tally>>& tallies, std::size_t t, const std::vector<bool>& use)
+{
+    gate_tally p = gate_tally::zeros(tallies.front()[t].rmse.size());
+    for (std::size_t f = 0; f < tallies.size(); ++f)
+        if (use[f]) p.add(tallies[f][t]);
+    return p;
+}
+
+/// @brief The rule checked inside the training set for one target: pooled over the groups, what the setting
+/// chosen without group f (from the other groups' pairs) gave on group f's pairs.
+struct gate_cross {
+    double rmse = 0, hits = 0, real_hits = 0, pairs = 0;  ///< sums over the scored pairs
+    void add(const gate_cross& x) { rmse += x.rmse, hits += x.hits, real_hits += x.real_hits, pairs += x.pairs; }
+};
+
+/// @brief gate_cross of target t under `margin` (choose_gate_setting on the other groups, scored on each group).
+inline gate_cross cross_check_gate(const std::vector<std::vector<gate_tally>>& tallies, std::size_t t, double margin, bool use_emotion)
+{
+    gate_cross r;
+    const std::size_t F = tallies.size();
+    for (std::size_t f = 0; f < F; ++f) {
+        const gate_tally& x = tallies[f][t];
+        if (x.pairs == 0) continue;
+        std::vector<bool> others(F, true);
+        others[f] = false;
+        const std::size_t s = choose_gate_setting(pool_gate_tallies(tallies, t, others), margin, use_emotion);
+        if (s == x.rmse.size()) continue;
+        r.rmse += x.rmse[s], r.hits += x.hits[s], r.real_hits += x.real_hits, r.pairs += x.pairs;
+    }
+    return r;
+}
+
+/// @brief train_options::gate_auto_margin's choice among `candidates` (gate_margin_candidates()): the least
+/// strict margin whose cross-checked recognition, pooled over the targets, is at most `margin` below the real
+/// clips'; else the one with the most cross-checked recognised outputs (the first of equals).
+/// @param pooled receives each candidate's cross-check pooled over the targets
+/// @return the index into `candidates`
+inline std::size_t choose_gate_margin(const std::vector<std::vector<gate_tally>>& tallies, const std::vector<double>& candidates,
+                                      double margin, std::vector<gate_cross>& pooled)
+{
+    const std::size_t C = tallies.front().size();
+    pooled.assign(candidates.size(), gate_cross{});
+    std::size_t pick = candidates.size(), top = 0;
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        for (std::size_t t = 0; t < C; ++t) pooled[i].add(cross_check_gate(tallies, t, candidates[i], true));
+        const auto& p = pooled[i];
+        if (p.pairs > 0 && pick == candidates.size() && p.hits / p.pairs >= p.real_hits / p.pairs - margin - 1e-12) pick = i;
+        if (p.hits > pooled[top].hits) top = i;
+    }
+    return pick == candidates.size() ? top : pick;
+}
+
+namespace detail {
+
+/// The content groups of fit_change_gate(): content i (in sorted order) goes to group i mod F.
+struct content_groups {
+    std::vector<std::string> contents;
+    std::size_t F = 0;
+    std::size_t of(const std::string& content) const
+    {
+        return static_cast<std::size_t>(std::find(contents.begin(), contents.end(), content) - contents.begin()) % F;
+    }
+    std::string names(std::size_t f) const
+    {
+        std::string s;
+        for (const auto& c : contents)
+            if (of(c) == f) s += (s.empty() ? "" : ", ") + c;
+        return s;
+    }
+};
+
+/// The checkpoint of inner group f: trained on `train` with the inner options, or reused from dir when `reuse`
+/// and it holds the G those options train. `reused` tells which.
+template <stargan_config Config>
+std::pair<safetensors_file, checkpoint_info> inner_gate_model(const std::vector<labelled_clip>& train, const config_info& info,
+                                                             const train_options& inner, const std::filesystem::path& dir,
+                                                             bool reuse, const std::string& label, bool& reused)
+{
+    const auto ck_path = dir / "checkpoint.safetensors";
+    reused = false;
+    std::error_code ec;
+    if (reuse && std::filesystem::exists(ck_path, ec))
+        if (auto stored = read_checkpoint(ck_path); trained_same_g(stored.second, inner)) {
+            if (inner.progress_out)
+                std::fprintf(inner.progress_out, "%s: reusing the G trained without those contents (%s)\n", label.c_str(), ck_path.string().c_str());
+            reused = true;
+            return stored;
+        }
+    if (inner.progress_out)
+        std::fprintf(inner.progress_out, "%s: training G on the other %zu clips to choose the change gate\n", label.c_str(), train.size());
+    {
+        trainer<Config> tr(info, prepare_data<Config>(train, info, inner), inner);
+        tr.run(dir);
+    }
+    return read_checkpoint(ck_path);
+}
+
+/// Scores every gate setting on the held-out pairs of one inner group: for each held-out neutral take and each
+/// target with a real take of the same content and take, G's parts once, then every setting's output against
+/// the real take (RMSE) and through the classifier fitted on the group's training clips. tallies: [targets].
+template <stargan_config Config>
+void score_gate_group(const emotion_model& model, const std::vector<labelled_clip>& train, const std::vector<const labelled_clip*>& held,
+                      const config_info& info, const train_options& opt, const gate_settings& set, std::vector<gate_tally>& tallies)
+{
+    constexpr std::size_t K = Config::keyframes;
+    const bool use_emotion = opt.gate_margin > -1;
+    auto ws = model.make_workspace();  // the generator's scratch, reused by every transfer below
+    metrics::nearest_centroid_classifier clf;  // the evaluation's independent classifier, fitted on this inner training set only
+    if (use_emotion) {
+        std::vector<std::vector<double>> x;
+        std::vector<std::string> y;
+        for (const auto& c : train) x.push_back(metrics::motion_features(extract_keyframes<K>(c.motion), c.motion.duration())), y.push_back(c.emotion);
+        clf.fit(x, y);
+    }
+    // adds to `hits` whether the classifier recognises class `target` from x, and to `score` what the rule counts
+    const auto recognise = [&](const std::vector<double>& x, std::size_t target, double& hits, double& score) {
+        const auto d = clf.distances(x);
+        const bool hit = static_cast<std::size_t>(std::min_element(d.begin(), d.end()) - d.begin()) == target;
+        hits += hit;
+        score += opt.gate_posterior ? metrics::nearest_centroid_classifier::posterior_of(d, target) : static_cast<double>(hit);
+    };
+    for (const auto* in : held) {
+        if (in->emotion != info.neutral) continue;
+        for (std::size_t t = 0; t < info.domains; ++t) {
+            const std::string& target = info.domain_names[t];
+            if (target == info.neutral) continue;
+            const labelled_clip* real = nullptr;
+            for (const auto* r : held)
+                if (r->content == in->content && r->emotion == target && r->take == in->take) real = r;
+            if (!real) continue;
+            const auto real_kf = extract_keyframes<K>(real->motion);
+            gate_tally& ty = tallies[t];
+            const std::size_t label = use_emotion ? clf.index_of(target) : 0;
+            if (use_emotion) recognise(metrics::motion_features(real_kf, real->motion.duration()), label, ty.real_hits, ty.real_score);
+            const auto parts = model.parts(in->motion, target, {}, ws);
+            for (std::size_t s = 0; s < set.size(); ++s) {
+                const clip out = model.finish(in->motion, parts, set.posture(s), set.motion(s), set.prior_weight(s));
+                const auto kf = extract_keyframes<K>(out);
+                ty.rmse[s] += metrics::keyframe_rmse(kf, real_kf);
+                if (use_emotion) recognise(metrics::motion_features(kf, out.duration()), label, ty.hits[s], ty.score[s]);
+            }
+            ty.pairs += 1;
+        }
+    }
+}
+
+/// gate_margins.csv: every candidate margin's cross-check pooled over the targets, and which was chosen.
+inline std::string gate_margins_csv(const std::vector<double>& candidates, const std::vector<gate_cross>& pooled, std::size_t pick)
+{
+    std::string table = "margin,rmse_cross,emotion_cross,emotion_real,pairs,chosen\n";
+    char b[200];
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+        const auto& p = pooled[i];
+        const double n = p.pairs;
+        std::snprintf(b, sizeof b, "%.2f,%.6f,%.4f,%.4f,%.0f,%d\n", candidates[i], n > 0 ? p.rmse / n : std::nan(""),
+                      n > 0 ? p.hits / n : std::nan(""), n > 0 ? p.real_hits / n : std::nan(""), n, i == pick ? 1 : 0);
+        table += b;
+    }
+    return table;
+}
+
+}  // namespace detail
+
+/// @brief The gate of every target from the inner groups' tallies ([group][target]) under `margin`: the weights
+/// choose_gate_setting() picks on the pairs pooled over the groups, and a row per target with pairs (its RMSE
+/// and recognition at the chosen setting, G's whole change and no change, and the rule's cross-check).
+inline gate_fit gate_from_tallies(const std::vector<std::vector<gate_tally>>& tallies, const config_info& info, const gate_settings& set,
+                                  double margin, bool use_emotion)
+{
+    const std::size_t C = info.domains;
+    gate_fit g;
+    g.posture.assign(C, 1.0);
+    g.motion.assign(C, 1.0);
+    g.prior.assign(C, 0.0);
+    if (use_emotion) g.margin = margin;
+    g.folds = tallies.size();
+    if (tallies.empty()) return g;
+    for (std::size_t t = 0; t < C; ++t) {
+        const gate_tally all = pool_gate_tallies(tallies, t, std::vector<bool>(tallies.size(), true));
+        if (all.pairs == 0) continue;
+        const double n = all.pairs;
+        const std::size_t best = choose_gate_setting(all, margin, use_emotion);
+        const gate_cross cross = cross_check_gate(tallies, t, margin, use_emotion);
+        g.posture[t] = set.posture(best);
+        g.motion[t] = set.motion(best);
+        g.prior[t] = set.prior_weight(best);
+        gate_fit::row r{info.domain_names[t], g.posture[t], g.motion[t], g.prior[t], all.rmse[best] / n, all.rmse[set.full()] / n,
+                        all.rmse[set.none()] / n};
+        if (use_emotion) r.emotion_gated = all.hits[best] / n, r.emotion_full = all.hits[set.full()] / n, r.emotion_real = all.real_hits / n;
+        r.pairs = static_cast<std::size_t>(all.pairs);
+        if (cross.pairs > 0) {
+            r.rmse_cross = cross.rmse / cross.pairs;
+            if (use_emotion) r.emotion_cross = cross.hits / cross.pairs;
+        }
+        g.rows.push_back(r);
+    }
+    return g;
+}
+
 /// @brief Chooses the change gate of a residual G by leave-content-group-out inside `clips` (see the header
 /// comment). Inner models are written to work_dir/inner<i>/ and the table to work_dir/gate.csv.
 /// @param opt the options the final G is trained with (gate_folds inner trainings of them, each with its own seed)
@@ -166,241 +426,70 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                          const std::filesystem::path& work_dir, bool reuse = false)
 {
     constexpr std::size_t K = Config::keyframes;
-    const std::size_t C = info.domains;
     if (!opt.residual) throw value_error("train: the change gate needs a residual G (--residual true)");
-    gate_fit g;
-    g.posture.assign(C, 1.0);
-    g.motion.assign(C, 1.0);
-    g.prior.assign(C, 0.0);
-    const std::size_t F = static_cast<std::size_t>(std::max(opt.gate_folds, 2));
-    std::set<std::string> content_set;
-    for (const auto& c : clips) content_set.insert(c.content);
-    const std::vector<std::string> contents(content_set.begin(), content_set.end());
-    if (contents.size() < F) {
+    detail::content_groups groups;
+    groups.F = static_cast<std::size_t>(std::max(opt.gate_folds, 2));
+    for (const auto& c : clips)
+        if (std::find(groups.contents.begin(), groups.contents.end(), c.content) == groups.contents.end()) groups.contents.push_back(c.content);
+    std::sort(groups.contents.begin(), groups.contents.end());
+    const std::size_t F = groups.F;
+    if (groups.contents.size() < F) {
         if (opt.progress_out)
             std::fprintf(opt.progress_out, "gate: %zu contents, fewer than the %zu groups the gate needs: G's whole change is used\n",
-                         contents.size(), F);
-        return g;
+                         groups.contents.size(), F);
+        return gate_from_tallies({}, info, gate_settings{opt.gate_prior}, opt.gate_margin, false);
     }
-    const auto group_of = [&](const std::string& content) {
-        return static_cast<std::size_t>(std::find(contents.begin(), contents.end(), content) - contents.begin()) % F;
-    };
-    constexpr std::size_t G = gate_grid.size();
-    const std::size_t P = opt.gate_prior ? G : 1;  // prior weights tried: the grid, or only 0
-    const auto prior_weight = [&](std::size_t c) { return opt.gate_prior ? gate_grid[c] : 0.0; };
+    const gate_settings set{opt.gate_prior};
     const bool use_emotion = opt.gate_margin > -1;  // margins in (-1, 0) ask for more than the real rate
-    if (use_emotion) g.margin = opt.gate_margin;
-    const std::size_t S = G * G * P;  // settings, index (a * G + b) * P + c
-    // What the held-out pairs of a target gave, per inner group ([F][C]) or pooled over groups (pooled()): per
-    // setting the summed RMSE, the recognised outputs and what the rule scores recognition by (hits, or the
-    // classifier's posterior with gate_posterior); the pairs and the real clips' hits and score.
-    struct tally {
-        std::vector<double> rmse, hits, score;  // [S]
-        double pairs = 0, real_hits = 0, real_score = 0;
-    };
-    const tally empty{std::vector<double>(S, 0.0), std::vector<double>(S, 0.0), std::vector<double>(S, 0.0)};
-    std::vector<std::vector<tally>> tallies(F, std::vector<tally>(C, empty));
+    std::vector<std::vector<gate_tally>> tallies(F, std::vector<gate_tally>(info.domains, gate_tally::zeros(set.size())));
     make_directories(work_dir);
+    std::size_t reused_folds = 0;
     for (std::size_t f = 0; f < F; ++f) {
         std::vector<labelled_clip> train;
         std::vector<const labelled_clip*> held;
-        std::string names;
-        for (const auto& c : clips) {
-            if (group_of(c.content) == f) {
+        for (const auto& c : clips)
+            if (groups.of(c.content) == f)
                 held.push_back(&c);
-            } else {
+            else
                 train.push_back(c);
-            }
-        }
-        for (const auto& c : contents)
-            if (group_of(c) == f) names += (names.empty() ? "" : ", ") + c;
         auto inner = opt;
         inner.gate_folds = 0;
         inner.seed = opt.seed + 7919 * (f + 1);
         inner.checkpoint_every = inner.iters;
         inner.stop_at = -1;
-        const auto dir = work_dir / ("inner" + std::to_string(f + 1));
-        const auto ck_path = dir / "checkpoint.safetensors";
-        std::optional<std::pair<safetensors_file, checkpoint_info>> ck;
-        if (reuse && std::filesystem::exists(ck_path))
-            if (auto stored = read_checkpoint(ck_path); detail::trained_same_g(stored.second, inner)) ck = std::move(stored);
-        if (ck) {
-            if (opt.progress_out)
-                std::fprintf(opt.progress_out, "gate %zu/%zu: reusing the G trained without %s (%s)\n", f + 1, F, names.c_str(),
-                             ck_path.string().c_str());
-            ++g.reused_folds;
-        } else {
-            if (opt.progress_out)
-                std::fprintf(opt.progress_out, "gate %zu/%zu: training G without %s (%zu clips) to choose the change gate\n", f + 1, F,
-                             names.c_str(), train.size());
-            {
-                trainer<Config> tr(info, prepare_data<Config>(train, info, inner), inner);
-                tr.run(dir);
-            }
-            ck = read_checkpoint(ck_path);
-        }
-        detail::emotion_model_impl<Config> model(ck->first, ck->second);
+        bool reused = false;
+        const auto label = "gate " + std::to_string(f + 1) + "/" + std::to_string(F) + " (without " + groups.names(f) + ")";
+        const auto ck = detail::inner_gate_model<Config>(train, info, inner, work_dir / ("inner" + std::to_string(f + 1)), reuse, label, reused);
+        reused_folds += reused;
+        detail::emotion_model_impl<Config> model(ck.first, ck.second);
         if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
-        auto ws = model.make_workspace();  // the generator's scratch, reused by every transfer below
-        // the independent emotion classifier of the evaluation, fitted on this inner training set only
-        eval::nearest_centroid_classifier clf;
-        // adds to `hits` whether the classifier recognises `target` (class index) from x, and to `score` what
-        // the rule counts; the distances are computed once for both
-        const auto recognise = [&](const std::vector<double>& x, std::size_t target, double& hits, double& score) {
-            const auto d = clf.distances(x);
-            const bool hit = static_cast<std::size_t>(std::min_element(d.begin(), d.end()) - d.begin()) == target;
-            hits += hit;
-            score += opt.gate_posterior ? eval::nearest_centroid_classifier::posterior_of(d, target) : static_cast<double>(hit);
-        };
-        if (use_emotion) {
-            std::vector<std::vector<double>> x;
-            std::vector<std::string> y;
-            for (const auto& c : train) x.push_back(eval::motion_features(extract_keyframes<K>(c.motion), c.motion.duration())), y.push_back(c.emotion);
-            clf.fit(x, y);
-        }
-        for (const auto* in : held) {
-            if (in->emotion != info.neutral) continue;
-            for (std::size_t t = 0; t < C; ++t) {
-                const std::string& target = info.domain_names[t];
-                if (target == info.neutral) continue;
-                const labelled_clip* real = nullptr;
-                for (const auto* r : held)
-                    if (r->content == in->content && r->emotion == target && r->take == in->take) real = r;
-                if (!real) continue;
-                const auto real_kf = extract_keyframes<K>(real->motion);
-                tally& ty = tallies[f][t];
-                const std::size_t label = use_emotion ? clf.index_of(target) : 0;
-                if (use_emotion) recognise(eval::motion_features(real_kf, real->motion.duration()), label, ty.real_hits, ty.real_score);
-                const auto parts = model.parts(in->motion, target, {}, ws);
-                for (std::size_t a = 0; a < G; ++a)
-                    for (std::size_t b = 0; b < G; ++b)
-                        for (std::size_t c = 0; c < P; ++c) {
-                            const clip out = model.finish(in->motion, parts, gate_grid[a], gate_grid[b], prior_weight(c));
-                            const auto kf = extract_keyframes<K>(out);
-                            const std::size_t s = (a * G + b) * P + c;
-                            ty.rmse[s] += eval::keyframe_rmse(kf, real_kf);
-                            if (use_emotion) recognise(eval::motion_features(kf, out.duration()), label, ty.hits[s], ty.score[s]);
-                        }
-                ty.pairs += 1;
-            }
-        }
-        ++g.folds;
+        detail::score_gate_group<Config>(model, train, held, info, opt, set, tallies[f]);
     }
-    // G's whole change (1, 1, prior 0) and no change (0, 0, 0): gate_grid runs from 1 down to 0
-    const std::size_t full_s = (0 * G + 0) * P + (P - 1);
-    const std::size_t none_s = ((G - 1) * G + (G - 1)) * P + (P - 1);
-    // the tallies of target t pooled over the inner groups in `use`
-    const auto pooled = [&](std::size_t t, const std::vector<bool>& use) {
-        tally p = empty;
-        for (std::size_t f = 0; f < F; ++f)
-            if (use[f]) {
-                const tally& x = tallies[f][t];
-                p.pairs += x.pairs, p.real_hits += x.real_hits, p.real_score += x.real_score;
-                for (std::size_t s = 0; s < S; ++s) p.rmse[s] += x.rmse[s], p.hits[s] += x.hits[s], p.score[s] += x.score[s];
-            }
-        return p;
-    };
-    // the rule on pooled pairs: the chosen setting (S when there are none)
-    const auto choose = [&](const tally& p, double margin) {
-        const auto& rs = p.rmse;
-        const auto& os = p.score;
-        const double n = p.pairs;
-        std::size_t best = S;
-        if (n == 0) return best;
-        if (use_emotion) {
-            for (std::size_t s = 0; s < S; ++s)
-                if (os[s] / n >= p.real_score / n - margin - 1e-12 && (best == S || rs[s] < rs[best])) best = s;
-            if (best == S)  // no setting is recognised well enough: the most recognised, then the lowest RMSE
-                for (std::size_t s = 0; s < S; ++s)
-                    if (best == S || os[s] > os[best] || (os[s] == os[best] && rs[s] < rs[best])) best = s;
-        } else {
-            best = 0;
-            for (std::size_t s = 0; s < S; ++s)
-                if (rs[s] < rs[best]) best = s;
-        }
-        return best;
-    };
-    // the rule checked inside the training set for target t: chosen without group f, scored on group f, pooled
-    // over the groups: {summed RMSE, recognised outputs, recognised real clips, pairs}
-    const auto cross_check = [&](std::size_t t, double margin) {
-        std::array<double, 4> r{0, 0, 0, 0};
-        for (std::size_t f = 0; f < F; ++f) {
-            const tally& x = tallies[f][t];
-            std::vector<bool> others(F, true);
-            others[f] = false;
-            const std::size_t s = x.pairs > 0 ? choose(pooled(t, others), margin) : S;
-            if (s == S) continue;
-            r[0] += x.rmse[s], r[1] += x.hits[s], r[2] += x.real_hits, r[3] += x.pairs;
-        }
-        return r;
-    };
-    // train_options::gate_auto_margin: the least strict margin whose cross-checked recognition, pooled over
-    // the targets, is at most gate_margin below the real clips'; else the best cross-checked one
     double margin = opt.gate_margin;
     if (use_emotion && opt.gate_auto_margin) {
-        std::string table = "margin,rmse_cross,emotion_cross,emotion_real,pairs,chosen\n";
-        std::vector<std::array<double, 4>> pooled;
         const auto candidates = gate_margin_candidates(opt.gate_margin);
-        std::size_t pick = candidates.size(), top = 0;
-        for (std::size_t i = 0; i < candidates.size(); ++i) {
-            std::array<double, 4> p{0, 0, 0, 0};
-            for (std::size_t t = 0; t < C; ++t) {
-                const auto r = cross_check(t, candidates[i]);
-                for (std::size_t k = 0; k < 4; ++k) p[k] += r[k];
-            }
-            pooled.push_back(p);
-            if (p[3] > 0 && pick == candidates.size() && p[1] / p[3] >= p[2] / p[3] - opt.gate_margin - 1e-12) pick = i;
-            if (p[1] > pooled[top][1]) top = i;
-        }
-        if (pick == candidates.size()) pick = top;
+        std::vector<gate_cross> pooled;
+        const std::size_t pick = choose_gate_margin(tallies, candidates, opt.gate_margin, pooled);
         margin = candidates[pick];
-        g.margin = margin;
-        char b[200];
-        for (std::size_t i = 0; i < candidates.size(); ++i) {
-            const auto& p = pooled[i];
-            std::snprintf(b, sizeof b, "%.2f,%.6f,%.4f,%.4f,%.0f,%d\n", candidates[i], p[3] > 0 ? p[0] / p[3] : std::nan(""),
-                          p[3] > 0 ? p[1] / p[3] : std::nan(""), p[3] > 0 ? p[2] / p[3] : std::nan(""), p[3], i == pick ? 1 : 0);
-            table += b;
-        }
-        write_file_atomic(work_dir / "gate_margins.csv", table);
+        write_file_atomic(work_dir / "gate_margins.csv", detail::gate_margins_csv(candidates, pooled, pick));
         if (opt.progress_out) {
             const auto& p = pooled[pick];
+            const double n = std::max(1.0, p.pairs);
             std::fprintf(opt.progress_out,
                          "gate: margin %.2f chosen inside the training set (its choices, made on one group and scored on the other: "
                          "recognised %.0f%% against the real clips' %.0f%%, %.3f deg; %s)\n",
-                         margin, 100 * p[1] / std::max(1.0, p[3]), 100 * p[2] / std::max(1.0, p[3]), p[0] / std::max(1.0, p[3]),
-                         (work_dir / "gate_margins.csv").string().c_str());
+                         margin, 100 * p.hits / n, 100 * p.real_hits / n, p.rmse / n, (work_dir / "gate_margins.csv").string().c_str());
         }
     }
-    for (std::size_t t = 0; t < C; ++t) {
-        const tally all = pooled(t, std::vector<bool>(F, true));
-        if (all.pairs == 0) continue;
-        const double n = all.pairs;
-        const auto& rsum = all.rmse;
-        const auto& osum = all.hits;
-        const double real_rate = all.real_hits / n;
-        const std::size_t best = choose(all, margin);
-        const auto cross = cross_check(t, margin);
-        const double cross_r = cross[0], cross_o = cross[1], cross_n = cross[3];
-        const std::size_t a = best / (G * P), b = (best / P) % G, c = best % P;
-        g.posture[t] = gate_grid[a];
-        g.motion[t] = gate_grid[b];
-        g.prior[t] = prior_weight(c);
-        gate_fit::row r{info.domain_names[t], g.posture[t], g.motion[t], g.prior[t], rsum[best] / n, rsum[full_s] / n, rsum[none_s] / n};
-        if (use_emotion) r.emotion_gated = osum[best] / n, r.emotion_full = osum[full_s] / n, r.emotion_real = real_rate;
-        r.pairs = static_cast<std::size_t>(all.pairs);
-        if (cross_n > 0) {
-            r.rmse_cross = cross_r / cross_n;
-            if (use_emotion) r.emotion_cross = cross_o / cross_n;
-        }
-        g.rows.push_back(r);
-        if (opt.progress_out)
+    gate_fit g = gate_from_tallies(tallies, info, set, margin, use_emotion);
+    g.reused_folds = reused_folds;
+    if (opt.progress_out)
+        for (const auto& r : g.rows)
             std::fprintf(opt.progress_out,
                          "gate: %-10s posture %.2f motion %.2f prior %.2f (held-out contents: %.3f deg, G's whole change %.3f, no change %.3f; "
                          "recognised %.0f%%, G's whole change %.0f%%, real %.0f%%; %zu pairs)\n",
-                         info.domain_names[t].c_str(), r.posture, r.motion, r.prior, r.rmse_gated, r.rmse_full, r.rmse_none,
-                         100 * r.emotion_gated, 100 * r.emotion_full, 100 * r.emotion_real, r.pairs);
-    }
+                         r.target.c_str(), r.posture, r.motion, r.prior, r.rmse_gated, r.rmse_full, r.rmse_none, 100 * r.emotion_gated,
+                         100 * r.emotion_full, 100 * r.emotion_real, r.pairs);
     write_file_atomic(work_dir / "gate.csv", g.csv());
     return g;
 }

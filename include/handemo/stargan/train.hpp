@@ -91,7 +91,7 @@ struct train_options {
     /// none does, the most recognised one. <= -1: off (lowest RMSE only, the first gate)
     double gate_margin = -1.0;
     /// change gate: score recognition (for gate_margin) by the classifier's posterior probability of the
-    /// target (its linear-discriminant reading, eval::nearest_centroid_classifier::posterior) averaged over the
+    /// target (its linear-discriminant reading, metrics::nearest_centroid_classifier::posterior) averaged over the
     /// held-out pairs, for outputs and real clips alike, instead of the share recognised: a finer estimate on
     /// few pairs (7 per target on Bandai), where the share moves in steps of 14 points
     bool gate_posterior = false;

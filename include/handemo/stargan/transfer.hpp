@@ -27,6 +27,21 @@
 
 namespace handemo::stargan {
 
+/// @brief What transfer() combines, computed once: fit_change_gate() scores many gate settings on it
+/// without running G again.
+struct transfer_parts {
+    handemo::keyframes<dynamic_keyframes> base;  ///< the input's keyframes in the model's (amplitude-normalised) space; decoded G output when not residual
+    std::vector<double> change;         ///< [K*C] G's change in degrees (residual models; empty otherwise)
+    std::vector<double> change_mean;    ///< [C] its mean over the keyframes per channel (the posture part)
+    std::vector<double> prior;          ///< [C] the target's posture prior in degrees (empty when the model has none)
+    std::size_t target = 0;
+    double amplitude = 1, tempo = 1;    ///< the target's excursion scale (applied after the change) and tempo factor
+    std::size_t frames = 0;             ///< output frame count
+    double fps = 0;
+    keyframe_pixels<dynamic_keyframes> image;
+    std::size_t clamped_values = 0;
+};
+
 /// @brief The result of one transfer.
 struct transfer_result {
     clip motion;                      ///< the full-rate output clip
@@ -53,6 +68,13 @@ public:
     public:
         struct scratch {
             virtual ~scratch() = default;
+            /// what one transfer computes on the way, kept so that the next transfer of a clip as long
+            /// reuses the storage (transfer() with a workspace allocates nothing then)
+            std::vector<double> unwrapped;
+            keyframe_pixels<dynamic_keyframes> pixels;
+            network_image<dynamic_keyframes> net, gen;
+            handemo::keyframes<dynamic_keyframes> out_keys;
+            transfer_parts parts;
         };
         workspace() = default;
         explicit workspace(std::unique_ptr<scratch> s) : s_(std::move(s)) {}
@@ -71,7 +93,9 @@ public:
     /// @brief Index of an emotion. @throws value_error naming it and the known ones.
     std::size_t domain(std::string_view emotion) const
     {
-        return domain_index(info_.domains, emotion, "transfer: model " + info_.source + " (" + info_.config + ")");
+        for (std::size_t i = 0; i < info_.domains.size(); ++i)
+            if (info_.domains[i] == emotion) return i;
+        return domain_index(info_.domains, emotion, "transfer: model " + info_.source + " (" + info_.config + ")");  // throws
     }
 
     /// @brief Duration factor of a transfer from `source` (default: the neutral domain) to `target`:
@@ -180,34 +204,29 @@ public:
     /// @throws value_error also for a workspace made by another model.
     network_image<dynamic_keyframes> generate(const network_image<dynamic_keyframes>& net, std::size_t target, workspace& ws) const
     {
+        network_image<dynamic_keyframes> out;
+        generate_into(net, target, ws, out);
+        return out;
+    }
+
+    /// @brief generate() into `out` (its storage reused; `out` must not be `net`).
+    void generate_into(const network_image<dynamic_keyframes>& net, std::size_t target, workspace& ws, network_image<dynamic_keyframes>& out) const
+    {
         if (net.count() != keyframes() || net.joints != joints() || net.data.size() != 3 * keyframes() * joints())
             throw shape_error("transfer: model " + info_.source + ": network image is " + std::to_string(net.count()) + "x" + std::to_string(net.joints) +
                               ", the model expects " + std::to_string(keyframes()) + "x" + std::to_string(joints()));
         if (target >= info_.domains.size())
             throw value_error("transfer: model " + info_.source + ": target domain " + std::to_string(target) + " out of range (" +
                               std::to_string(info_.domains.size()) + " domains)");
-        network_image<dynamic_keyframes> out = net;
         if (!ws.get()) ws = make_workspace();
+        out.count_ = net.count_;
+        out.joints = net.joints;
+        out.data.resize(net.data.size());
         run_generator(net.data.data(), target, out.data.data(), *ws.get());
         for (float v : out.data)
             if (!std::isfinite(v)) throw value_error("transfer: model " + info_.source + ": the generator produced a non-finite value (corrupted weights?)");
-        return out;
     }
 
-    /// @brief What transfer() combines, computed once: fit_change_gate() scores many gate settings on it
-    /// without running G again.
-    struct transfer_parts {
-        handemo::keyframes<dynamic_keyframes> base;  ///< the input's keyframes in the model's (amplitude-normalised) space; decoded G output when not residual
-        std::vector<double> change;         ///< [K*C] G's change in degrees (residual models; empty otherwise)
-        std::vector<double> change_mean;    ///< [C] its mean over the keyframes per channel (the posture part)
-        std::vector<double> prior;          ///< [C] the target's posture prior in degrees (empty when the model has none)
-        std::size_t target = 0;
-        double amplitude = 1, tempo = 1;    ///< the target's excursion scale (applied after the change) and tempo factor
-        std::size_t frames = 0;             ///< output frame count
-        double fps = 0;
-        keyframe_pixels<dynamic_keyframes> image;
-        std::size_t clamped_values = 0;
-    };
 
     /// @brief The parts of a transfer (see transfer()).
     /// @throws shape_error when the clip's skeleton is not the model's (joint count or names).
@@ -220,20 +239,36 @@ public:
     /// @brief parts() with the caller's workspace.
     transfer_parts parts(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws) const
     {
+        transfer_parts r;
+        parts_into(in, target, source, ws, r);
+        return r;
+    }
+
+    /// @brief parts() into `r`, its storage reused (as the workspace's): no allocation when both already
+    /// hold a clip as long.
+    void parts_into(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws, transfer_parts& r) const
+    {
         check_skeleton(in.skel);
-        in.validate("transfer: input " + in.skel.name);
-        auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
+        in.validate("transfer: input");
+        if (!ws.get()) ws = make_workspace();
+        workspace::scratch& s = *ws.get();
+        auto& kf = r.base;
+        extract_keyframes_into<dynamic_keyframes>(in, kf, s.unwrapped, keyframes());
         const bool amp = amplitude_stage();
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
         const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
         if (amp) scale_keyframe_excursions(kf, 1.0 / a_src);
-        transfer_parts r;
         const std::size_t C = joints() * 3;
+        r.clamped_values = 0;
         for (std::size_t i = 0; i < kf.angles.size(); ++i) r.clamped_values += info_.range.contains(kf.angles[i], i % C) ? 0 : 1;
-        const auto net = to_network(encode(kf, info_.range));
+        encode_into(kf, info_.range, s.pixels);
+        to_network_into(s.pixels, s.net);
         r.target = domain(target);
-        const auto gen = generate(net, r.target, ws);
-        r.image = from_network(gen);
+        generate_into(s.net, r.target, ws, s.gen);
+        from_network_into(s.gen, r.image);
+        r.change.clear();
+        r.change_mean.clear();
+        r.prior.clear();
         if (residual()) {
             // angle-space residual: input angles + G's change (network units x degrees per unit of the channel)
             const std::size_t plane = keyframes() * joints();
@@ -241,31 +276,37 @@ public:
             for (std::size_t p = 0; p < plane; ++p)
                 for (std::size_t c = 0; c < 3; ++c) {
                     const std::size_t ch = (p % joints()) * 3 + c;
-                    r.change[p * 3 + c] = double(gen.data[c * plane + p] - net.data[c * plane + p]) * info_.range.half_span(ch);
+                    r.change[p * 3 + c] = double(s.gen.data[c * plane + p] - s.net.data[c * plane + p]) * info_.range.half_span(ch);
                 }
             r.change_mean.assign(C, 0.0);
             for (std::size_t ch = 0; ch < C; ++ch) {
                 for (std::size_t k = 0; k < keyframes(); ++k) r.change_mean[ch] += r.change[k * C + ch];
                 r.change_mean[ch] /= static_cast<double>(keyframes());
             }
-            if (!info_.prior_posture.empty()) r.prior = info_.prior_posture[r.target];
-            r.base = std::move(kf);
+            if (!info_.prior_posture.empty()) r.prior.assign(info_.prior_posture[r.target].begin(), info_.prior_posture[r.target].end());
         } else {
-            r.base = decode(r.image, info_.range);
+            decode_into(r.image, info_.range, kf);
         }
         // back from the normalised space: the target's excursions (net: amplitude[target] / amplitude[source])
         r.amplitude = amp ? info_.amplitude[r.target] : 1.0;
         r.tempo = tempo(target, source);
         r.frames = output_frames(in.frames, r.tempo);
         r.fps = in.fps;
-        return r;
     }
 
     /// @brief The output keyframes of `p` with a change gate (posture, motion, prior weights; see set_gate()).
     /// (1, 1, 0) is G's whole change, (0, 0, 0) the input with the amplitude stage. Not residual: G's output.
     handemo::keyframes<dynamic_keyframes> combine(const transfer_parts& p, double posture, double motion, double prior) const
     {
-        auto out = p.base;
+        handemo::keyframes<dynamic_keyframes> out;
+        combine_into(p, posture, motion, prior, out);
+        return out;
+    }
+
+    /// @brief combine() into `out`, its storage reused.
+    void combine_into(const transfer_parts& p, double posture, double motion, double prior, handemo::keyframes<dynamic_keyframes>& out) const
+    {
+        out = p.base;
         if (!p.change.empty()) {
             const std::size_t C = joints() * 3;
             if (posture == 1.0 && motion == 1.0) {
@@ -283,7 +324,6 @@ public:
                     for (std::size_t ch = 0; ch < C; ++ch) out.angles[k * C + ch] += prior * p.prior[ch];
         }
         if (p.amplitude != 1.0) scale_keyframe_excursions(out, p.amplitude);
-        return out;
     }
 
     /// @brief The full-rate output clip of `p` (the parts of `in`) with a change gate: combine(), then the
@@ -304,16 +344,28 @@ public:
     /// @brief transfer() with the caller's workspace (one per thread, reused across calls).
     transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws) const
     {
-        auto p = parts(in, target, source, ws);
-        const std::size_t t = p.target;
         transfer_result r;
-        r.motion = finish(in, p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t]);
-        r.clamped_values = p.clamped_values;
-        r.image = std::move(p.image);
-        r.amplitude = amplitude_stage() ? amplitude(target, source) : 1.0;
-        r.tempo = p.tempo;
-        r.motion.positions = stretch_positions(in, p.frames);
+        transfer(in, target, source, ws, r);
         return r;
+    }
+
+    /// @brief transfer() into `out` with the caller's workspace: after the first call for a given clip length
+    /// (and skeleton), with the same workspace and `out`, a transfer allocates nothing. `out` is valid only
+    /// when the call returns normally.
+    void transfer(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws, transfer_result& out) const
+    {
+        if (!ws.get()) ws = make_workspace();
+        workspace::scratch& s = *ws.get();
+        transfer_parts& p = s.parts;
+        parts_into(in, target, source, ws, p);
+        const std::size_t t = p.target;
+        combine_into(p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], s.out_keys);
+        reconstruct_into(s.out_keys, in.skel, p.frames, in.fps, out.motion);
+        out.clamped_values = p.clamped_values;
+        out.image = p.image;
+        out.amplitude = amplitude_stage() ? amplitude(target, source) : 1.0;
+        out.tempo = p.tempo;
+        stretch_positions_into(in, p.frames, out.motion.positions);
     }
 
     /// @brief Whether the checkpoint carries the detail layer (checkpoints written before it existed do not).

@@ -10,9 +10,9 @@
 #pragma once
 
 #include <handemo/core/error.hpp>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/compare.hpp>
 #include <handemo/motion/keyframes.hpp>
-#include <handemo/stargan/dataset.hpp>
+#include <handemo/motion/labelled.hpp>
 
 #include <cmath>
 #include <limits>
@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace handemo::eval {
+namespace handemo::metrics {
 
 /// @brief Identity baseline: the input, unchanged.
 inline clip identity_baseline(const clip& in) { return in; }
@@ -32,7 +32,7 @@ public:
     /// @brief Fits delta_e for every non-neutral emotion of `train` (see the header comment).
     /// A clip whose content has no neutral take is skipped.
     /// @throws value_error when no clip of `train` is `neutral`.
-    static mean_offset_baseline fit(const std::vector<stargan::labelled_clip>& train, const std::string& neutral)
+    static mean_offset_baseline fit(const std::vector<labelled_clip>& train, const std::string& neutral)
     {
         mean_offset_baseline b;
         std::map<std::pair<std::string, std::string>, keyframes<K>> by_take;  // (content, take) -> neutral keyframes
@@ -103,7 +103,7 @@ private:
 /// are closest (keyframe_rmse) to the input's.
 /// @throws value_error when `train` has no clip of `target`.
 template <std::size_t K = 9>
-std::size_t nearest_neighbour(const clip& in, const std::vector<stargan::labelled_clip>& train, const std::string& target)
+std::size_t nearest_neighbour(const clip& in, const std::vector<labelled_clip>& train, const std::string& target)
 {
     const auto kin = extract_keyframes<K>(in);
     std::size_t best = train.size();
@@ -117,4 +117,4 @@ std::size_t nearest_neighbour(const clip& in, const std::vector<stargan::labelle
     return best;
 }
 
-}  // namespace handemo::eval
+}  // namespace handemo::metrics

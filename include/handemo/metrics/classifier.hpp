@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-namespace handemo::eval {
+namespace handemo::metrics {
 
 /// @brief Motion features of keyframes [K, J, 3] of a clip lasting `duration` seconds: J values
 /// log(1 + range of joint j), 3J wrapped mean angles, then log(1 + mean range), log(1 + mean keyframe
@@ -207,4 +207,4 @@ private:
     std::vector<std::vector<double>> centroids_;
 };
 
-}  // namespace handemo::eval
+}  // namespace handemo::metrics

@@ -1,17 +1,17 @@
 #include "helpers.hpp"
 
 #include <doctest/doctest.h>
-#include <handemo/eval/baselines.hpp>
+#include <handemo/metrics/baselines.hpp>
 
 using namespace handemo;
-using namespace handemo::eval;
-using handemo::eval::test::sine_clip;
+using namespace handemo::metrics;
+using handemo::metrics::test::sine_clip;
 
 namespace {
 
-stargan::labelled_clip item(std::string content, std::string emotion, std::string take, clip c)
+handemo::labelled_clip item(std::string content, std::string emotion, std::string take, clip c)
 {
-    stargan::labelled_clip l;
+    handemo::labelled_clip l;
     l.path = "x_" + content + "_" + emotion + "_" + take + ".bvh";
     l.content = std::move(content), l.emotion = std::move(emotion), l.take = std::move(take), l.motion = std::move(c);
     return l;
@@ -19,9 +19,9 @@ stargan::labelled_clip item(std::string content, std::string emotion, std::strin
 
 /// Two contents (amplitudes 10 and 30), neutral and angry takes; angry = neutral + 10 deg (content a) and
 /// + 20 deg (content b) on every channel.
-std::vector<stargan::labelled_clip> tiny_set()
+std::vector<handemo::labelled_clip> tiny_set()
 {
-    std::vector<stargan::labelled_clip> d;
+    std::vector<handemo::labelled_clip> d;
     for (int take = 0; take < 2; ++take) {
         const double jitter = take;  // takes differ a little
         d.push_back(item("a", "neutral", std::to_string(take), sine_clip(61, 30, 10 + jitter)));

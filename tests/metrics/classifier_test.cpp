@@ -1,7 +1,7 @@
 #include "helpers.hpp"
 
 #include <doctest/doctest.h>
-#include <handemo/eval/classifier.hpp>
+#include <handemo/metrics/classifier.hpp>
 #include <handemo/motion/keyframes.hpp>
 
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <vector>
 
 using namespace handemo;
-using namespace handemo::eval;
+using namespace handemo::metrics;
 
 namespace {
 
@@ -107,7 +107,7 @@ TEST_CASE("nearest centroid: bad input is refused")
 
 TEST_CASE("motion features of keyframes")
 {
-    const clip a = handemo::eval::test::sine_clip(81, 40, 10);
+    const clip a = handemo::metrics::test::sine_clip(81, 40, 10);
     const auto kf = extract_keyframes<9>(a);
     const auto f = motion_features(kf, a.duration());
     REQUIRE(f.size() == 4 * 23 + 3);

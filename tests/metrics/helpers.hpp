@@ -1,4 +1,4 @@
-// Hand-made clips with known answers for the evaluation tests.
+// Hand-made clips with known answers for the metrics tests.
 #pragma once
 
 #include <handemo/motion/clip.hpp>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace handemo::eval::test {
+namespace handemo::metrics::test {
 
 /// A clip on the hand skeleton whose every channel k is offset + amp * sin(2 pi cycles f / (n - 1) + k / 7).
 inline clip sine_clip(std::size_t n, double fps, double amp, double offset = 0.0, double cycles = 1.0)
@@ -22,4 +22,4 @@ inline clip sine_clip(std::size_t n, double fps, double amp, double offset = 0.0
     return c;
 }
 
-}  // namespace handemo::eval::test
+}  // namespace handemo::metrics::test

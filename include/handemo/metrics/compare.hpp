@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-namespace handemo::eval {
+namespace handemo::metrics {
 
 using ::handemo::wrap_degrees;  // motion/keyframes.hpp: an angle difference wrapped into (-180, 180]
 
@@ -123,4 +123,4 @@ inline double log_ratio_error(double a, double b)
     return std::abs(std::log(a / b));
 }
 
-}  // namespace handemo::eval
+}  // namespace handemo::metrics

@@ -1,13 +1,13 @@
 #include "helpers.hpp"
 
 #include <doctest/doctest.h>
-#include <handemo/eval/metrics.hpp>
+#include <handemo/metrics/compare.hpp>
 
 #include <cmath>
 
 using namespace handemo;
-using namespace handemo::eval;
-using handemo::eval::test::sine_clip;
+using namespace handemo::metrics;
+using handemo::metrics::test::sine_clip;
 
 TEST_CASE("keyframe_rmse of a constant offset is the offset; differences are wrapped")
 {

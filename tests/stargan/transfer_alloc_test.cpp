@@ -1,0 +1,65 @@
+// transfer() with a workspace and a result to reuse allocates nothing after its first call for a clip length:
+// the allocation counter of tests/alloc_hook.hpp (this program's operator new) around repeated transfers of the
+// shipped model, which has every stage (amplitude, residual change, gate, posture prior, tempo). The results
+// equal the allocating calls' bit for bit.
+#include <doctest/doctest.h>
+#include <handemo/motion/synth.hpp>
+#include <handemo/stargan/configs.hpp>
+#include <handemo/stargan/transfer.hpp>
+
+#include "../alloc_hook.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+using namespace handemo;
+using namespace handemo::stargan;
+
+TEST_CASE("transfer with a workspace: no allocation after the first call for a clip length, same bits")
+{
+    const auto ck = read_checkpoint(std::filesystem::path(HANDEMO_SOURCE_DIR) / "data" / "models" / "hand-embedded" / "checkpoint.safetensors");
+    const stargan::detail::emotion_model_impl<hand_embedded> model(ck.first, ck.second);
+    REQUIRE(model.amplitude_stage());
+    REQUIRE(model.residual());
+    const clip a = synthesize(hand_motion::gripping, emotion::neutral, 0, 3, 30.0);
+    clip b = a;  // as long as a, other angles
+    for (std::size_t i = 0; i < b.angles.size(); ++i) b.angles[i] += 3.0 * std::sin(0.37 * static_cast<double>(i));
+    const clip longer = reconstruct(extract_keyframes<9>(a), a.skel, a.frames + 17, a.fps);
+
+    auto ws = model.make_workspace();
+    transfer_result out;
+    model.transfer(a, "sad", {}, ws, out);  // the first call for this length sizes every buffer
+    const std::vector<std::string> targets = {"angry", "happy", "sad", "fearful", "neutral"};
+    const long before = handemo_test::alloc_count.load();
+    for (int round = 0; round < 3; ++round)
+        for (const auto& t : targets) {
+            model.transfer(a, t, {}, ws, out);
+            model.transfer(b, t, "neutral", ws, out);
+        }
+    CHECK(handemo_test::alloc_count.load() - before == 0);
+
+    // the same numbers as the allocating call
+    for (const auto& t : targets) {
+        model.transfer(b, t, {}, ws, out);
+        const auto fresh = model.transfer(b, t);
+        CHECK(out.motion.frames == fresh.motion.frames);
+        CHECK(std::memcmp(out.motion.angles.data(), fresh.motion.angles.data(), out.motion.angles.size() * sizeof(double)) == 0);
+        CHECK(std::memcmp(out.motion.positions.data(), fresh.motion.positions.data(), out.motion.positions.size() * sizeof(double)) == 0);
+        CHECK(out.image.values == fresh.image.values);
+        CHECK(out.tempo == fresh.tempo);
+        CHECK(out.clamped_values == fresh.clamped_values);
+    }
+
+    // a longer clip grows the buffers once; then no allocation again
+    model.transfer(longer, "angry", {}, ws, out);
+    const long grown = handemo_test::alloc_count.load();
+    model.transfer(longer, "happy", {}, ws, out);
+    CHECK(handemo_test::alloc_count.load() - grown == 0);
+    // and the shorter clip fits in what is there
+    const long again = handemo_test::alloc_count.load();
+    model.transfer(a, "sad", {}, ws, out);
+    CHECK(handemo_test::alloc_count.load() - again == 0);
+}
