@@ -95,6 +95,20 @@ run_ok(send_force glove send --glove opengloves --device /dev/ptmx --force-feedb
 expect_output("glove send: A0B500C1000D0E250 -> serial port /dev/ptmx")
 run_ok(send_haptics glove send --glove opengloves --device /dev/ptmx --haptics 180,0.5,0.75)
 expect_output("glove send: F180.00G0.50H0.75 -> serial port /dev/ptmx")
+# Senso: the address comes from the glove's first position packet (a stand-in server, when Python is there)
+find_program(PYTHON3 python3)
+if(PYTHON3)
+  execute_process(COMMAND ${PYTHON3} ${CMAKE_CURRENT_LIST_DIR}/senso_server.py ${W}/vibration.txt
+                  COMMAND sh -c "read port && exec \"$0\" glove send --glove senso --device 127.0.0.1:$port --vibrate index,500,7" ${HANDEMO_CLI}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 30)
+  file(READ ${W}/vibration.txt sent)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "glove send: .*\"dst\":\"aa:bb:cc:dd:ee:ff\".* -> TCP 127.0.0.1:[0-9]+"
+     OR NOT sent STREQUAL "{\"data\":{\"dur\":500,\"str\":7,\"type\":\"index\"},\"dst\":\"aa:bb:cc:dd:ee:ff\",\"type\":\"vibration\"}\n")
+    message(FATAL_ERROR "send_senso: exit ${rc}\n${out}\n${err}\nthe server got: ${sent}")
+  endif()
+else()
+  message(STATUS "send_senso: no python3 for the stand-in server: not run")
+endif()
 run_fail(send_bad_lock glove send --glove opengloves --device /dev/ptmx --force-feedback 0,2,0,0,0)
 expect_error_matches("force feedback: index 2.000000 is not in \\[0, 1\\]")
 run_fail(send_bad_finger glove send --glove senso --device 127.0.0.1:1 --vibrate elbow,500,7)
