@@ -1,13 +1,17 @@
-// Consumer smoke test: builds a clip, round-trips it through BVH text, writes and reads back a BMP, and
-// (when handemo::gif exists) writes the clip as an animated GIF.
-#include <handemo.hpp>
+// Consumer smoke test: builds a clip, round-trips it through BVH text, writes and reads back a BMP, makes the
+// offline viewer page (whose page text is the header CMake generates at build time and installs), and (when
+// handemo::gif exists) writes the clip as an animated GIF. It includes the modules it uses, as a program that
+// does not train should (the umbrella <handemo.hpp> is compiled by the project's own tests).
 #include <handemo/image.hpp>
+#include <handemo/motion.hpp>
+#include <handemo/render.hpp>
 #ifdef HANDEMO_CONSUMER_GIF
 #include <handemo/gif.hpp>
 #endif
 
 #include <cstdio>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 int main(int argc, char** argv)
@@ -33,6 +37,12 @@ int main(int argc, char** argv)
     handemo::write_bmp(p, im);
     if (!(handemo::read_image(p, 23, 9) == im)) {
         std::puts("consumer: BMP round trip failed");
+        return 1;
+    }
+    const std::vector<handemo::clip> one{c};
+    const std::string page = handemo::render_viewer_html(one);
+    if (page.find("<!DOCTYPE html>") != 0 || page.find("handemo-view/2") == std::string::npos || page.find("@HANDEMO_") != std::string::npos) {
+        std::puts("consumer: viewer page incomplete");
         return 1;
     }
 #ifdef HANDEMO_CONSUMER_GIF
