@@ -14,6 +14,7 @@ METHODS = [
     ("stargan-ungated", "stargan-ungated (G's whole change, no gate)"),
     ("stargan-g", "stargan-g (G and gate, without the amplitude stage)"),
     ("amplitude-only", "amplitude-only (no G)"),
+    ("statistics", "statistics (every learned part but G: the bar G must clear)"),
     ("identity", "identity"),
     ("mean-offset", "mean-offset"),
     ("nearest-neighbour", "nearest-neighbour"),

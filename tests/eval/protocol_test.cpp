@@ -42,8 +42,9 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(r.options_text.find("shards " + std::to_string(o.train.shards) + " ") != std::string::npos);
     CHECK(r.folds[0].train_clips == 10);
     CHECK(r.folds[0].test_inputs == 1);
-    // 2 folds x 4 targets x 1 take x 8 methods (the handemo preset's amplitude stage adds stargan-g and
-    // amplitude-only; the detail layer adds stargan+detail), and stargan-ungated in each fold whose change gate is not all 1
+    // 2 folds x 4 targets x 1 take x 9 methods (the handemo preset's amplitude stage adds stargan-g and
+    // amplitude-only; the detail layer adds stargan+detail; statistics is in every report), and stargan-ungated in
+    // each fold whose change gate is not all 1
     std::size_t gated_folds = 0;
     for (const char* f : {"patting", "gripping"}) {
         const auto ck = read_checkpoint(dir / "folds" / f / "checkpoint.safetensors").second;
@@ -95,14 +96,18 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         write_file_atomic(bad / "folds" / "patting" / "gate" / "gate.csv", good + "angry,1,1\n");
         CHECK_THROWS_WITH_AS(gate_check_section(r, bad), doctest::Contains("gate.csv: line"), format_error);
     }
-    const std::size_t n_samples = 64 + 4 * gated_folds;
+    const std::size_t n_samples = 72 + 4 * gated_folds;
     CHECK(r.samples.size() == n_samples);
     std::set<std::string> methods;
     for (const auto& s : r.samples) {
         methods.insert(s.method);
         CHECK(std::isfinite(s.rmse_real));
         CHECK(s.target != "neutral");
+        // the duration ratio error of every method: |log(out / real)| of the ratios to the input
+        CHECK(s.duration_error == doctest::Approx(std::abs(std::log(s.duration_ratio / s.real_duration_ratio))));
         if (s.method == "identity") {
+            CHECK(s.duration_ratio == 1.0);  // identity keeps the input's duration: its error is |log(d_in / d_real)|
+            CHECK(s.duration_error == doctest::Approx(std::abs(std::log(1.0 / s.real_duration_ratio))));
             CHECK(s.rom_ratio_full == doctest::Approx(1.0));
             CHECK(s.speed_ratio_full == doctest::Approx(1.0));
             CHECK(s.rmse_input == doctest::Approx(0.0));
@@ -115,6 +120,7 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
             CHECK(s.rom_ratio == doctest::Approx(s.real_rom_ratio));
             CHECK(s.rom_error == doctest::Approx(0.0));
             CHECK(s.rom_error_full == doctest::Approx(0.0));
+            CHECK(s.duration_error == 0.0);
             CHECK(s.speed_error_full == doctest::Approx(0.0));
         }
         if (s.method == "stargan+detail") {
@@ -129,8 +135,17 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
             CHECK(s.speed_ratio_full != doctest::Approx(g->speed_ratio_full).epsilon(1e-7));  // the input's detail is added
         }
         if (s.method == "nearest-neighbour") CHECK(s.predicted_content != s.fold);  // a clip of another content
+        if (s.method == "statistics") {
+            // the same learned tempo as stargan's, no G
+            const auto g = std::find_if(r.samples.begin(), r.samples.end(), [&](const sample_record& x) {
+                return x.method == "stargan" && x.fold == s.fold && x.target == s.target && x.take == s.take;
+            });
+            REQUIRE(g != r.samples.end());
+            CHECK(s.duration_ratio == g->duration_ratio);
+            CHECK(s.duration_error == g->duration_error);
+        }
     }
-    CHECK(methods.size() == (gated_folds ? 9u : 8u));
+    CHECK(methods.size() == (gated_folds ? 10u : 9u));
     for (const char* f : {"report.md", "results.csv", "summary.csv", "summary.svg", "folds.svg", "folds/patting/checkpoint.safetensors",
                           "folds/patting/losses.svg", "folds/gripping/log.csv"})
         CHECK_MESSAGE(fs::exists(dir / f), f);
@@ -144,8 +159,17 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')) == n_samples + 1);  // header + samples
     // comparisons exist for each baseline and metric with a direction, pooled and per target
     const auto cmp = compare_with_baselines(r);
-    CHECK(cmp.size() == 4 * 7 * 5);  // identity, mean-offset, amplitude-only, nearest-neighbour x 7 metrics x (pooled + 4 targets)
+    // identity, mean-offset, amplitude-only, statistics, nearest-neighbour x 8 metrics x (pooled + 4 targets)
+    CHECK(cmp.size() == 5 * 8 * 5);
+    CHECK(md.find("**vs statistics**") != std::string::npos);
+    CHECK(md.find("duration ratio error (abs log out/real)") != std::string::npos);
+    CHECK(csv.find(",duration_ratio,real_duration_ratio,duration_error\n") != std::string::npos);
     for (const auto& f : r.folds) {
+        // the tempo's check on the fold's training contents is reported; the preset does not apply its weight
+        CHECK(f.tempo_estimator != "");
+        CHECK(std::find(tempo_shrink_grid.begin(), tempo_shrink_grid.end(), f.tempo_shrink_weight) != tempo_shrink_grid.end());
+        CHECK(f.tempo_shrink_error <= f.tempo_unshrunk_error);
+        CHECK(!f.tempo_shrink_applied);
         CHECK(std::isfinite(f.seen_rmse_stargan));
         CHECK(f.seen_rmse_identity > 0);
         CHECK(!f.reused_model);
@@ -184,6 +208,20 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     want["seed"] = o.train.seed + 1;  // patting's seed
     CHECK(ck2.options == want);
     CHECK(ck2.gate_prior == std::vector<double>(5, 0.0));
+    // the tempo shrink does not change G either: the stored models take it, their tempo refitted
+    o.train.tempo_shrink = true;
+    const auto shrunk = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(shrunk.folds[0].reused_model);
+    CHECK(shrunk.folds[0].tempo_shrink_applied);
+    {
+        std::vector<labelled_clip> train;
+        for (const auto& c : clips)
+            if (c.content != "patting") train.push_back(c);
+        const auto ck3 = read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second;
+        CHECK(ck3.tempo == tempo_factors(train, info.domain_names, info.neutral, true));
+        CHECK(ck3.options.value("tempo_shrink", false));
+    }
+    o.train.tempo_shrink = false;
     // ... but not when the options differ
     o.train.iters = 13;
     CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("--reuse-models"), value_error);
@@ -236,10 +274,10 @@ TEST_CASE("eval with the synthetic set's seed adds the oracle row; a wrong seed 
     const fs::path dir = fs::temp_directory_path() / ("handemo_eval_oracle_test_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     const auto r = run_eval<hand_tiny>(clips, info, o, dir);
-    // 1 fold x 4 targets x 1 take x 9 methods (+ stargan-ungated when the fold's change gate is not all 1)
+    // 1 fold x 4 targets x 1 take x 10 methods (+ stargan-ungated when the fold's change gate is not all 1)
     const auto n_ungated = std::count_if(r.samples.begin(), r.samples.end(), [](const sample_record& s) { return s.method == "stargan-ungated"; });
     CHECK((n_ungated == 0 || n_ungated == 4));
-    REQUIRE(r.samples.size() == 36 + static_cast<std::size_t>(n_ungated));
+    REQUIRE(r.samples.size() == 40 + static_cast<std::size_t>(n_ungated));
     double oracle = 0, identity = 0;
     for (const auto& s : r.samples) {
         if (s.method == "oracle") {
@@ -316,5 +354,130 @@ TEST_CASE("report: the circumplex metric of an extension is optional")
     const fs::path dir = fs::temp_directory_path() / ("handemo_eval_section_test_" + std::to_string(::getpid()));
     write_report(r, dir);
     CHECK(read_file(dir / "extra.csv") == "a,b\n");
+    fs::remove_all(dir);
+}
+
+TEST_CASE("report: the bar that says the network is worth having (stargan against statistics)")
+{
+    eval_result r;
+    r.config = "hand-tiny", r.data = "toy", r.neutral = "neutral", r.domains = {"neutral", "angry", "sad"};
+    // 5 folds x 2 targets = 10 (fold, target) pairs; stargan lower in exactly 7 of them
+    int pair = 0;
+    for (const char* f : {"a", "b", "c", "d", "e"}) {
+        r.folds.push_back({});
+        r.folds.back().held_out = f;
+        for (const char* t : {"angry", "sad"}) {
+            const bool lower = pair++ < 7;
+            for (const char* m : {"stargan", "statistics"}) {
+                sample_record s;
+                s.fold = f, s.target = t, s.take = "0", s.method = m;
+                s.rmse_real = std::string(m) == "stargan" ? (lower ? 2.0 : 3.5) : 3.0;
+                s.emotion_ok = std::string(t) == "angry";  // both recognise angry only: 50% each
+                s.rom_ratio = s.speed_ratio = s.real_rom_ratio = s.real_speed_ratio = 1;
+                r.samples.push_back(s);
+            }
+        }
+    }
+    auto bar = network_bar_of(r);
+    REQUIRE(bar.present);
+    CHECK(bar.pairs == 10);
+    CHECK(bar.pairs_lower == 7);
+    CHECK(bar.rmse_stargan == doctest::Approx((7 * 2.0 + 3 * 3.5) / 10));
+    CHECK(bar.rmse_statistics == doctest::Approx(3.0));
+    CHECK(bar.emotion_stargan == doctest::Approx(50.0));
+    CHECK(bar.emotion_statistics == doctest::Approx(50.0));
+    CHECK(bar.pairs_enough());  // 70% is enough
+    CHECK(bar.emotion_kept());  // as high is enough
+    CHECK(bar.cleared());
+    CHECK(markdown_report(r).find("(7 of 10): yes; recognised at least as often (50.0% vs 50.0%): yes. **Cleared: yes.**") != std::string::npos);
+    CHECK(!network_bar_of(r, 0.75).cleared());  // 7 of 10 is not 75%
+    // statistics recognised once more: stargan no longer clears the bar
+    for (auto& s : r.samples)
+        if (s.method == "statistics" && s.fold == "a" && s.target == "sad") s.emotion_ok = true;
+    bar = network_bar_of(r);
+    CHECK(!bar.emotion_kept());
+    CHECK(!bar.cleared());
+    CHECK(markdown_report(r).find("**Cleared: no.**") != std::string::npos);
+    // without a statistics row there is no bar and no statement
+    std::erase_if(r.samples, [](const sample_record& s) { return s.method == "statistics"; });
+    CHECK(!network_bar_of(r).present);
+    CHECK(markdown_report(r).find("Cleared") == std::string::npos);
+}
+
+TEST_CASE("end to end: an emotion effect that depends on the content, which the statistics row cannot express")
+{
+    // 4 contents of the synthetic hand set; on three finger channels each content holds a posture of its own (+60
+    // degrees, or -60 for crawling and patting), and every emotion moves those channels a further 0.75 x that
+    // posture: the change depends on the input. Held out: patting, whose emotions move by -45 where the training
+    // contents' mean change (the posture prior) is +15.
+    std::vector<labelled_clip> clips;
+    for (auto& it : synthesize_dataset(1, 3)) {
+        if (it.motion != hand_motion::gripping && it.motion != hand_motion::patting && it.motion != hand_motion::pointing &&
+            it.motion != hand_motion::crawling)
+            continue;
+        labelled_clip c;
+        c.path = it.file_stem + ".bvh";
+        const auto n = parse_clip_name(it.file_stem);
+        c.content = n.content, c.emotion = n.emotion, c.take = n.take;
+        c.motion = it.c;
+        const double base = (c.content == "crawling" || c.content == "patting") ? -60.0 : 60.0;
+        const double offset = base + (c.emotion == "neutral" ? 0.0 : 0.75 * base);
+        for (std::size_t f = 0; f < c.motion.frames; ++f)
+            for (std::size_t j : {5u, 9u, 13u}) c.motion.angle(f, j, 0) += offset;
+        clips.push_back(std::move(c));
+    }
+    REQUIRE(clips.size() == 20);
+    const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
+    eval_options o = {};
+    o.train = default_train_options();
+    o.train.iters = 12;
+    o.train.threads = 2;
+    o.folds = {"patting"};
+    o.progress_out = nullptr;
+    o.write_partial = false;
+    const fs::path dir = fs::temp_directory_path() / ("handemo_eval_statistics_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    const auto r = run_eval<hand_tiny>(clips, info, o, dir);
+    write_report(r, dir);
+
+    // the statistics row is there for every target, and is the fold model's statistics() scored against the real take
+    const auto model = load_model(dir / "folds" / "patting");
+    const auto clip_of = [&](const std::string& emotion) -> const clip& {
+        return std::find_if(clips.begin(), clips.end(), [&](const labelled_clip& c) { return c.content == "patting" && c.emotion == emotion; })->motion;
+    };
+    const clip& input = clip_of("neutral");
+    std::size_t n = 0;
+    double stat = 0, g = 0;
+    for (const auto& s : r.samples) {
+        if (s.method != "statistics") continue;
+        ++n;
+        CAPTURE(s.target);
+        const clip& real = clip_of(s.target);
+        const auto out = model->statistics(input, s.target).motion;
+        CHECK(s.rmse_real == doctest::Approx(metrics::keyframe_rmse(out, real)).epsilon(1e-12));
+        CHECK(s.duration_error == doctest::Approx(metrics::duration_error(out, real)).epsilon(1e-12));
+        const auto same = [&](const char* method) {
+            return *std::find_if(r.samples.begin(), r.samples.end(), [&](const sample_record& x) { return x.method == method && x.target == s.target; });
+        };
+        // the prior carries the training contents' mean change (+15 on those channels) to a content that moves by
+        // -45: further from the real take than doing nothing, and further than the amplitude stage alone
+        CHECK(s.rmse_real > same("identity").rmse_real);
+        CHECK(s.rmse_real > same("amplitude-only").rmse_real);
+        stat += s.rmse_real, g += same("stargan").rmse_real;
+    }
+    CHECK(n == 4);
+    MESSAGE("held-out patting: statistics " << stat / 4 << " deg, stargan " << g / 4 << " deg (12 steps: no claim on which is lower)");
+    const auto bar = network_bar_of(r);
+    CHECK(bar.present);
+    CHECK(bar.pairs == 4);
+    CHECK(bar.rmse_statistics == doctest::Approx(stat / 4));
+    const std::string md = read_file(dir / "report.md");
+    CHECK(md.find("| all | statistics |") != std::string::npos);
+    CHECK(md.find("**vs statistics**") != std::string::npos);
+    CHECK(md.find("**Cleared: ") != std::string::npos);
+    const std::string sum = read_file(dir / "summary.csv");
+    CHECK(sum.find("all,statistics,rmse_real,") != std::string::npos);
+    CHECK(sum.find("all,statistics,duration_error,") != std::string::npos);
+    CHECK(sum.find("all,identity,duration_error,") != std::string::npos);
     fs::remove_all(dir);
 }

@@ -88,3 +88,17 @@ TEST_CASE("keyframe view keeps the keyframes; ratios to a still input are refuse
     clip one = clip::make(hand_skeleton(), 1, 30);
     CHECK_THROWS_AS(mean_speed(one), value_error);
 }
+
+TEST_CASE("duration ratio error is |log(duration out / duration real)|, whatever the frame rates")
+{
+    const clip real = sine_clip(61, 30, 20);  // 61 frames at 30 fps
+    CHECK(duration_error(real, real) == 0.0);
+    // twice as long at another frame rate: 244 frames at 60 fps
+    CHECK(duration_error(sine_clip(244, 60, 20), real) == doctest::Approx(std::log(2.0)));
+    // half as long: the same error, over- and undershoot alike
+    CHECK(duration_error(sine_clip(61, 60, 20), real) == doctest::Approx(std::log(2.0)));
+    CHECK(duration_error(sine_clip(91, 30, 20), real) == doctest::Approx(std::abs(std::log(91.0 / 61.0))));
+    // identity keeps the input's duration: its error is |log(d_in / d_real)|
+    const clip in = sine_clip(40, 30, 20);
+    CHECK(duration_error(in, real) == doctest::Approx(std::abs(std::log(in.duration() / real.duration()))));
+}

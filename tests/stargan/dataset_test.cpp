@@ -172,3 +172,86 @@ TEST_CASE("tempo_fit without a second content uses the duration-weighted ratio a
     CHECK(r.factors[1] == doctest::Approx(12.0 / 6.0));
     for (const auto& c : r.candidates) CHECK(std::isnan(c.cv_error));
 }
+
+TEST_CASE("tempo shrink: factors no left-out content follows are shrunk to 1, factors every content follows are kept")
+{
+    const std::vector<std::string> domains{"neutral", "sad", "fast"};
+    const auto half = stargan::shrink_tempo({1.0, 4.0, 0.25}, 0.5);  // half-way in log space: the square root
+    CHECK(half[0] == 1.0);
+    CHECK(half[1] == doctest::Approx(2.0));
+    CHECK(half[2] == doctest::Approx(0.5));
+    CHECK(stargan::shrink_tempo({1.0, 4.0, 0.25}, 1.0) == std::vector<double>{1.0, 1.0, 1.0});
+    CHECK(stargan::shrink_tempo({1.0, 4.0, 0.25}, 0.0) == std::vector<double>{1.0, 4.0, 0.25});
+    const auto& grid = stargan::tempo_shrink_grid;
+    REQUIRE(grid.size() == 5);
+    SUBCASE("contents disagree: each left-out content goes the other way, so full shrinkage wins")
+    {
+        // sad lasts 2x neutral on content a and 0.5x on b: fitted on one, the other is predicted the wrong way
+        std::vector<handemo::labelled_clip> d{timed_clip("a", "neutral", 2.0), timed_clip("a", "sad", 4.0),
+                                              timed_clip("b", "neutral", 2.0), timed_clip("b", "sad", 1.0)};
+        const auto c = stargan::tempo_shrink_fit(d, domains, "neutral", stargan::tempo_estimator::weighted);
+        CHECK(c.contents == 2);
+        REQUIRE(c.errors.size() == grid.size());
+        // left-out error |(1 - w) log 0.5 - log 2| = (2 - w) log 2 on either content
+        for (std::size_t w = 0; w < grid.size(); ++w) CHECK(c.errors[w] == doctest::Approx((2.0 - grid[w]) * std::log(2.0)));
+        CHECK(c.weight == 1.0);
+    }
+    SUBCASE("contents agree: the factors predict every left-out content exactly, so no shrinkage")
+    {
+        std::vector<handemo::labelled_clip> d;
+        for (const char* content : {"a", "b", "c"})
+            for (double n : {2.0, 3.0}) {
+                const std::string take = n == 2.0 ? "0" : "1";
+                d.push_back(timed_clip(content, "neutral", n, take));
+                d.push_back(timed_clip(content, "sad", 2.0 * n, take));
+                d.push_back(timed_clip(content, "fast", 0.5 * n, take));
+            }
+        const auto c = stargan::tempo_shrink_fit(d, domains, "neutral", stargan::tempo_estimator::median);
+        CHECK(c.contents == 3);
+        // left-out error over the sad and fast pairs: (w log 2 + w log 2) / 2
+        for (std::size_t w = 0; w < grid.size(); ++w) CHECK(c.errors[w] == doctest::Approx(grid[w] * std::log(2.0)).epsilon(1e-9));
+        CHECK(c.weight == 0.0);
+        // tempo_fit with shrinking: the check's weight is recorded, the factors are unchanged
+        const auto r = stargan::tempo_fit(d, domains, "neutral", true);
+        CHECK(r.shrink_weight == 0.0);
+        CHECK(r.shrink_errors == c.errors);
+        CHECK(r.factors == stargan::tempo_fit(d, domains, "neutral").factors);
+    }
+    SUBCASE("no change to shrink: every weight scores the same and the tie goes to no shrinkage")
+    {
+        std::vector<handemo::labelled_clip> d{timed_clip("a", "neutral", 2.0), timed_clip("a", "sad", 2.0),
+                                              timed_clip("b", "neutral", 3.0), timed_clip("b", "sad", 3.0)};
+        const auto c = stargan::tempo_shrink_fit(d, domains, "neutral", stargan::tempo_estimator::weighted);
+        for (double e : c.errors) CHECK(e == doctest::Approx(0.0));
+        CHECK(c.weight == 0.0);
+    }
+    SUBCASE("one content: no check, no shrinkage")
+    {
+        std::vector<handemo::labelled_clip> d{timed_clip("a", "neutral", 2.0), timed_clip("a", "sad", 4.0)};
+        const auto c = stargan::tempo_shrink_fit(d, domains, "neutral", stargan::tempo_estimator::weighted);
+        CHECK(c.contents == 0);
+        CHECK(c.weight == 0.0);
+        CHECK(std::isnan(c.errors[0]));
+        CHECK(stargan::tempo_factors(d, domains, "neutral", true) == stargan::tempo_factors(d, domains, "neutral"));
+    }
+}
+
+TEST_CASE("tempo shrink through tempo_fit: a partly consistent set gets the weight its check chose, applied in log space")
+{
+    // sad: 3x on a, 3x on b, 1x on c (three contents, one of which does not slow down)
+    const std::vector<std::string> domains{"neutral", "sad"};
+    std::vector<handemo::labelled_clip> d{timed_clip("a", "neutral", 2.0), timed_clip("a", "sad", 6.0), timed_clip("b", "neutral", 2.0),
+                                          timed_clip("b", "sad", 6.0),     timed_clip("c", "neutral", 2.0), timed_clip("c", "sad", 2.0)};
+    const auto plain = stargan::tempo_fit(d, domains, "neutral");
+    const auto r = stargan::tempo_fit(d, domains, "neutral", true);
+    const auto c = stargan::tempo_shrink_fit(d, domains, "neutral", plain.estimator);
+    CHECK(r.estimator == plain.estimator);
+    CHECK(r.shrink_weight == c.weight);
+    CHECK(r.factors == stargan::shrink_tempo(plain.factors, c.weight));
+    CHECK(stargan::tempo_factors(d, domains, "neutral", true) == r.factors);
+    std::size_t best = 0;
+    for (std::size_t w = 0; w < c.errors.size(); ++w)
+        if (c.errors[w] < c.errors[best] - 1e-12) best = w;
+    CHECK(c.weight == stargan::tempo_shrink_grid[best]);
+    MESSAGE("estimator " << stargan::to_string(plain.estimator) << ", factor " << plain.factors[1] << ", shrink weight " << c.weight);
+}

@@ -450,3 +450,53 @@ TEST_CASE("resume names a checkpoint path whose status cannot be read (io_error,
     CHECK_THROWS_WITH_AS(read_checkpoint(checkpoint_file(ck)), doctest::Contains(ck.string().c_str()), io_error);
     fs::remove_all(dir);
 }
+
+TEST_CASE("statistics(): every learned part but G is the transfer with G's change weighted 0 and the prior 1")
+{
+    auto clips = toy_set();
+    const fs::path d = fresh_dir("handemo_train_statistics");
+    auto o = handemo_options();
+    o.iters = 3;
+    o.threads = 1;
+    o.progress_out = nullptr;
+    o.gate_folds = 0;
+    trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(clips, tiny_info(), o), o);
+    tr.run(d);
+    auto [f, info] = read_checkpoint(d / "checkpoint.safetensors");
+    // every part away from its neutral value, so leaving one out (or applying it twice) shows
+    info.amplitude = {1.3, 0.8, 0.9, 1.1, 1.2};
+    info.tempo = {0.7, 1.2, 1.0, 1.6, 0.9};
+    const auto model = load_model(f, info);
+    REQUIRE(model->residual());
+    REQUIRE(model->amplitude_stage());
+    std::vector<std::vector<double>> prior(5, std::vector<double>(model->joints() * 3));
+    for (std::size_t e = 0; e < prior.size(); ++e)
+        for (std::size_t ch = 0; ch < prior[e].size(); ++ch) prior[e][ch] = 6.0 * std::sin(double(e * 31 + ch));
+    model->set_prior_posture(prior);
+    const clip& in = clips[2].motion;
+    for (const char* source : {"neutral", "happy"})
+        for (const char* target : {"angry", "sad", "fearful", "neutral"}) {
+            CAPTURE(source);
+            CAPTURE(target);
+            const auto s = model->statistics(in, target, source);
+            const auto p = model->parts(in, target, source);
+            const clip expect = model->finish(in, p, 0, 0, 1);
+            REQUIRE(s.motion.frames == expect.frames);
+            CHECK(s.motion.frames == emotion_model::output_frames(in.frames, model->tempo(target, source)));
+            CHECK(s.tempo == model->tempo(target, source));
+            CHECK(s.amplitude == model->amplitude(target, source));
+            CHECK(s.motion.angles == expect.angles);  // bit for bit: the same operations in the same order
+            CHECK(s.motion.positions.size() == in.positions.size() / in.frames * s.motion.frames);
+        }
+    // a model without a prior: the amplitude stage and the tempo alone
+    auto [f2, info2] = read_checkpoint(d / "checkpoint.safetensors");
+    const auto plain = load_model(f2, info2);
+    const auto s = plain->statistics(in, "angry");
+    auto k = extract_keyframes<dynamic_keyframes>(in, 9);
+    scale_keyframe_excursions(k, plain->amplitude("angry"));
+    const clip expect = reconstruct(k, in.skel, s.motion.frames, in.fps);
+    double worst = 0;
+    for (std::size_t i = 0; i < expect.angles.size(); ++i) worst = std::max(worst, std::abs(expect.angles[i] - s.motion.angles[i]));
+    CHECK(worst < 1e-9);
+    CHECK_THROWS_AS(plain->statistics(in, "bored"), value_error);
+}

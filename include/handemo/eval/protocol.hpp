@@ -285,7 +285,7 @@ void reuse_fold_model(const std::vector<labelled_clip>& train, const stargan::co
     const bool regate = ck.config == info.name && ck.options != to.to_json() && stargan::detail::trained_same_g(ck, to);
     if (regate) {
         if (opt.progress_out)
-            std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate options: refitting the gate\n",
+            std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate or tempo options: refitting the gate and the tempo\n",
                          ck_path.string().c_str());
         stargan::refit_gate<Config>(train, info, to, fold_dir);  // rewrites the checkpoint's options to `to`
     }
@@ -406,7 +406,7 @@ const prepared_clip<K>* real_target(const std::vector<const prepared_clip<K>*>& 
 /// clips that are not outputs (identity, nearest neighbour, real), in the order of the report.
 struct method_outputs {
     stargan::transfer_result stargan;
-    clip detailed, g_only, ungated, amp_only, mean_offset, oracle;
+    clip detailed, g_only, ungated, amp_only, statistics, mean_offset, oracle;
     const clip* input = nullptr;
     const clip* nearest = nullptr;
     const clip* real = nullptr;
@@ -419,6 +419,7 @@ struct method_outputs {
                                                                  {"identity", input},          {"mean-offset", &mean_offset},
                                                                  {"nearest-neighbour", nearest}, {"real", real}};
         if (has_amp) outs.push_back({"stargan-g", &g_only}), outs.push_back({"amplitude-only", &amp_only});
+        outs.push_back({"statistics", &statistics});
         if (gated) outs.push_back({"stargan-ungated", &ungated});
         if (has_oracle) outs.push_back({"oracle", &oracle});
         for (const auto& [name, c] : extra) outs.push_back({name.c_str(), &c});
@@ -514,6 +515,9 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
     s.real_speed_ratio_full = metrics::ratio(real.full.speed, in.full.speed, "speed (full rate)");
     s.rom_error_full = metrics::log_ratio_error(s.rom_ratio_full, s.real_rom_ratio_full);
     s.speed_error_full = metrics::log_ratio_error(s.speed_ratio_full, s.real_speed_ratio_full);
+    s.duration_ratio = metrics::ratio(out.duration(), in.src->motion.duration(), "duration");
+    s.real_duration_ratio = metrics::ratio(real.src->motion.duration(), in.src->motion.duration(), "duration");
+    s.duration_error = metrics::duration_error(out, real.src->motion);
     for (const auto& x : extensions) x->score(s, out);
     return s;
 }
@@ -666,6 +670,16 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
         for (const auto& c : train) detail_data.push_back({&c.motion, c.emotion, c.content, c.take});
         const auto fold_detail = detail_layer::fit_checked(detail_data, info.neutral, K);  // the detail layer, from training clips only
         fsum.detail_strength = fold_detail.strength;
+        {  // the tempo's check on the training clips, reported whether or not the model applies its weight
+            const auto tf = stargan::tempo_fit(train, info.domain_names, info.neutral, true);
+            fsum.tempo_estimator = std::string(stargan::to_string(tf.estimator));
+            fsum.tempo_shrink_weight = tf.shrink_weight;
+            fsum.tempo_shrink_applied = to.tempo_shrink;
+            for (std::size_t w = 0; w < tf.shrink_errors.size(); ++w) {
+                if (stargan::tempo_shrink_grid[w] == tf.shrink_weight) fsum.tempo_shrink_error = tf.shrink_errors[w];
+                if (stargan::tempo_shrink_grid[w] == 0.0) fsum.tempo_unshrunk_error = tf.shrink_errors[w];
+            }
+        }
         const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
         detail::seen_content_rmse<K>(models.model, split.train_p, info.neutral, fsum);
 
@@ -699,6 +713,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                 if (o.has_amp) o.g_only = models.g_only.transfer(input, target, {}, ws_g_only).motion;
                 if (o.gated) o.ungated = models.ungated.transfer(input, target, {}, ws_ungated).motion;
                 if (o.has_amp) o.amp_only = detail::amplitude_only<K>(input, o.stargan);
+                o.statistics = models.model.statistics(input, target).motion;  // every learned part but G
                 o.nearest = &train[metrics::nearest_neighbour<K>(input, train, target)].motion;
                 o.mean_offset = offset.transfer(input, target, o.stargan.tempo);
                 o.input = &input, o.real = &real->src->motion;

@@ -21,14 +21,15 @@
 
 namespace handemo::eval {
 
-/// @brief Method names in report order; "real" is the captured target clip (the reference row), "oracle" the
-/// synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed), "rcm"
+/// @brief Method names in report order; "real" is the captured target clip (the reference row), "statistics" every
+/// learned part of the model but G (amplitude, tempo, posture prior at full weight; emotion_model::statistics()),
+/// "oracle" the synthetic set's input take re-synthesised in the target's style (only with eval_options::synth_seed), "rcm"
 /// the circumplex synthesis of Aristidou et al. 2017 (only with the extension of eval/rcm.hpp), "stargan-retargeted"
 /// the transfer from a foreign rig of a body skeleton (eval/retargeted.hpp).
 inline const std::vector<std::string>& method_names()
 {
     static const std::vector<std::string> m{"stargan", "stargan+detail", "stargan-g", "stargan-ungated", "stargan-retargeted", "identity", "mean-offset", "amplitude-only",
-                                            "nearest-neighbour", "rcm", "real", "oracle"};
+                                            "statistics", "nearest-neighbour", "rcm", "real", "oracle"};
     return m;
 }
 
@@ -43,6 +44,8 @@ struct sample_record {
     double rom_ratio = 0, speed_ratio = 0;            ///< output / input
     double real_rom_ratio = 0, real_speed_ratio = 0;  ///< real target / input
     double rom_error = 0, speed_error = 0;            ///< |log(ratio / real ratio)|
+    double duration_ratio = 0, real_duration_ratio = 0;  ///< duration output / input, real target / input
+    double duration_error = 0;                        ///< |log(duration output / duration real)| (metrics::duration_error())
     /// The same three on the full-rate clips as they are (a capture's tremor and noise included; the detail layer's
     /// measure), not on their 9-keyframe reconstructions.
     double rom_ratio_full = 0, speed_ratio_full = 0, real_rom_ratio_full = 0, real_speed_ratio_full = 0;
@@ -66,6 +69,12 @@ struct fold_summary {
     double seen_rmse_stargan = 0, seen_rmse_identity = 0;
     bool reused_model = false;  ///< the fold's model was loaded (--reuse-models), not trained in this run
     double detail_strength = std::nan("");  ///< the detail layer's strength chosen on the fold's training clips
+    /// The tempo's check on the fold's training clips (stargan::tempo_fit(), tempo_shrink_fit()): the estimator
+    /// chosen, the shrink weight the check chooses, its error and the unshrunk factors' error (mean |log| over
+    /// left-out contents), and whether the model applies the weight (train_options::tempo_shrink)
+    std::string tempo_estimator;
+    double tempo_shrink_weight = std::nan(""), tempo_shrink_error = std::nan(""), tempo_unshrunk_error = std::nan("");
+    bool tempo_shrink_applied = false;
 };
 
 /// @brief A report section written by an extension (eval/extension.hpp): Markdown placed after the summary, and
@@ -116,6 +125,8 @@ inline const std::vector<metric_def>& metric_defs()
         {"speed_ratio", "speed ratio out/in", 0, [](const sample_record& r) { return r.speed_ratio; }},
         {"rom_error", "ROM ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.rom_error; }},
         {"speed_error", "speed ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.speed_error; }},
+        {"duration_ratio", "duration ratio out/in", 0, [](const sample_record& r) { return r.duration_ratio; }},
+        {"duration_error", "duration ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.duration_error; }},
         {"rom_error_full", "full-rate ROM ratio error", -1, [](const sample_record& r) { return r.rom_error_full; }},
         {"speed_error_full", "full-rate speed ratio error", -1, [](const sample_record& r) { return r.speed_error_full; }},
         {"circumplex_quadrant", "circumplex quadrant reached (%)", +1,
@@ -224,7 +235,8 @@ inline std::string samples_csv(const eval_result& r)
     const bool circ = std::any_of(r.samples.begin(), r.samples.end(), [](const sample_record& x) { return !std::isnan(x.circumplex_quadrant_ok); });
     std::string s = "fold,target,take,method,rmse_real,rmse_input,emotion_ok,predicted_emotion,content_ok,predicted_content,"
                     "rom_ratio,speed_ratio,real_rom_ratio,real_speed_ratio,rom_error,speed_error,rom_ratio_full,speed_ratio_full,"
-                    "real_rom_ratio_full,real_speed_ratio_full,rom_error_full,speed_error_full";
+                    "real_rom_ratio_full,real_speed_ratio_full,rom_error_full,speed_error_full,duration_ratio,real_duration_ratio,"
+                    "duration_error";
     s += circ ? ",circumplex_valence,circumplex_arousal,circumplex_quadrant_ok\n" : "\n";
     for (const auto& x : r.samples) {
         s += x.fold + "," + x.target + "," + x.take + "," + x.method + "," + detail::csv_num(x.rmse_real) + "," +
@@ -233,7 +245,8 @@ inline std::string samples_csv(const eval_result& r)
              detail::csv_num(x.speed_ratio) + "," + detail::csv_num(x.real_rom_ratio) + "," + detail::csv_num(x.real_speed_ratio) +
              "," + detail::csv_num(x.rom_error) + "," + detail::csv_num(x.speed_error) + "," + detail::csv_num(x.rom_ratio_full) + "," +
              detail::csv_num(x.speed_ratio_full) + "," + detail::csv_num(x.real_rom_ratio_full) + "," +
-             detail::csv_num(x.real_speed_ratio_full) + "," + detail::csv_num(x.rom_error_full) + "," + detail::csv_num(x.speed_error_full);
+             detail::csv_num(x.real_speed_ratio_full) + "," + detail::csv_num(x.rom_error_full) + "," + detail::csv_num(x.speed_error_full) +
+             "," + detail::csv_num(x.duration_ratio) + "," + detail::csv_num(x.real_duration_ratio) + "," + detail::csv_num(x.duration_error);
         if (circ)
             s += "," + detail::csv_num(x.circumplex_valence) + "," + detail::csv_num(x.circumplex_arousal) + "," +
                  (std::isnan(x.circumplex_quadrant_ok) ? std::string("nan") : x.circumplex_quadrant_ok > 0.5 ? "1" : "0");
@@ -267,13 +280,20 @@ struct comparison {
     bool better = false;  ///< StarGAN's mean over folds is strictly better
 };
 
+/// @brief The methods StarGAN is compared with, in the order of the report's statements.
+inline const std::vector<std::string>& baseline_names()
+{
+    static const std::vector<std::string> b{"identity", "mean-offset", "amplitude-only", "statistics", "nearest-neighbour", "rcm"};
+    return b;
+}
+
 /// @brief StarGAN vs every baseline on every metric with a direction, per target emotion and pooled ("all").
 inline std::vector<comparison> compare_with_baselines(const eval_result& r)
 {
     std::vector<comparison> out;
     auto targets = targets_of(r);
     targets.insert(targets.begin(), "all");
-    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour", "rcm"})
+    for (const std::string b : baseline_names())
         for (const auto& m : metrics_of(r)) {
             if (m.better == 0) continue;
             for (const auto& t : targets) {
@@ -291,6 +311,47 @@ inline std::vector<comparison> compare_with_baselines(const eval_result& r)
             }
         }
     return out;
+}
+
+/// @brief The bar that says the network is worth having: StarGAN against `statistics` (every learned part of the
+/// model but G). Cleared when StarGAN's RMSE to the real clip is lower on the mean over folds, lower in at least
+/// `min_share` of the (fold, target emotion) pairs, and its recognition is at least as high on the mean.
+struct network_bar {
+    bool present = false;             ///< the report has both rows
+    double rmse_stargan = 0, rmse_statistics = 0;
+    std::size_t pairs_lower = 0, pairs = 0;  ///< (fold, target) pairs where StarGAN's mean RMSE is lower, and all pairs
+    double emotion_stargan = 0, emotion_statistics = 0;  ///< recognised (%), mean over folds
+    double min_share = 0.7;
+    bool rmse_lower() const { return rmse_stargan < rmse_statistics; }
+    bool pairs_enough() const { return pairs > 0 && static_cast<double>(pairs_lower) >= min_share * static_cast<double>(pairs); }
+    bool emotion_kept() const { return emotion_stargan >= emotion_statistics; }
+    bool cleared() const { return present && rmse_lower() && pairs_enough() && emotion_kept(); }
+};
+
+/// @brief network_bar of a report (present is false when it lacks the stargan or the statistics row).
+inline network_bar network_bar_of(const eval_result& r, double min_share = 0.7)
+{
+    network_bar b;
+    b.min_share = min_share;
+    if (!has_method(r, "stargan") || !has_method(r, "statistics")) return b;
+    const auto& defs = metric_defs();
+    const auto def = [&](const char* key) -> const metric_def& {
+        return *std::find_if(defs.begin(), defs.end(), [&](const metric_def& m) { return m.key == key; });
+    };
+    const metric_def &rmse = def("rmse_real"), &emo = def("emotion_acc");
+    b.rmse_stargan = over_folds(r, rmse, "all", "stargan").mean;
+    b.rmse_statistics = over_folds(r, rmse, "all", "statistics").mean;
+    b.emotion_stargan = over_folds(r, emo, "all", "stargan").mean;
+    b.emotion_statistics = over_folds(r, emo, "all", "statistics").mean;
+    for (const auto& f : r.folds)
+        for (const auto& t : targets_of(r)) {
+            const double s = fold_mean(r, rmse, f.held_out, t, "stargan"), o = fold_mean(r, rmse, f.held_out, t, "statistics");
+            if (!std::isfinite(s) || !std::isfinite(o)) continue;
+            ++b.pairs;
+            b.pairs_lower += s < o;
+        }
+    b.present = b.pairs > 0;
+    return b;
 }
 
 /// @brief The summary bar chart: pooled mean +- std over folds per metric with a direction and per method.
@@ -355,6 +416,10 @@ inline std::string report_introduction(const eval_result& r, const std::vector<m
     if (has_method(r, "stargan-g"))
         s += "; **stargan-g** (the same trained G without the learned amplitude stage: what G alone does); "
              "**amplitude-only** (the input with the learned amplitude and tempo, no G: what the amplitude stage alone does)";
+    if (has_method(r, "statistics"))
+        s += "; **statistics** (every learned part of the model but G, at its learned setting: the amplitude stage, the tempo "
+             "and the posture prior at full weight, no G and no detail layer; emotion_model::statistics(): what a user gets "
+             "without a network, so StarGAN's margin over it is what G is worth)";
     if (has_method(r, "stargan-ungated"))
         s += "; **stargan-ungated** (the same model with G's whole change, without the change gate chosen on held-out "
              "training contents: what the gate buys)";
@@ -372,6 +437,7 @@ inline std::string report_introduction(const eval_result& r, const std::vector<m
          "real training clips of the fold, never on the discriminator; content kept: the nearest `" + r.neutral +
          "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "
          "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio); "
+         "duration ratio error: |log(duration out / duration real)| (identity keeps the input's duration); "
          "full-rate ratio errors: the same on the clips as they are (a capture's tremor and noise, and the detail layer's, "
          "included; a keyframe-spline output has none, identity keeps the input's). "
          "Caveat: nearest-neighbour outputs are clips the emotion classifier was trained on, so its emotion score is "
@@ -420,7 +486,7 @@ inline std::string report_versus_baselines(const eval_result& r, const std::vect
     std::string s;
     s += "## Where StarGAN beats each baseline and where it does not\n\n";
     const auto cmp = compare_with_baselines(r);
-    for (const std::string b : {"identity", "mean-offset", "amplitude-only", "nearest-neighbour", "rcm"}) {
+    for (const std::string& b : baseline_names()) {
         if (!has_method(r, b)) continue;
         s += "**vs " + b + "**\n\n";
         {  // keyframe RMSE pair by pair: (fold, target emotion) pairs where StarGAN's mean is lower
@@ -430,6 +496,17 @@ inline std::string report_versus_baselines(const eval_result& r, const std::vect
             if (n) s += "- RMSE to real, (fold, target emotion) pairs: StarGAN lower in " + std::to_string(better) + " of " + std::to_string(n) +
                         " (" + detail::fmt(100.0 * better / n, 0) + "%).\n";
         }
+        if (b == "statistics")
+            if (const auto bar = network_bar_of(r); bar.present) {
+                const auto yes = [](bool v) { return std::string(v ? "yes" : "no"); };
+                s += "- The bar that says the network is worth having (StarGAN against every learned part but G): mean RMSE lower (" +
+                     detail::fmt(bar.rmse_stargan) + " vs " + detail::fmt(bar.rmse_statistics) + "): " + yes(bar.rmse_lower()) +
+                     "; lower in at least " + detail::fmt(100 * bar.min_share, 0) + "% of the (fold, target emotion) pairs (" +
+                     std::to_string(bar.pairs_lower) + " of " + std::to_string(bar.pairs) + "): " + yes(bar.pairs_enough()) +
+                     "; recognised at least as often (" + detail::fmt(bar.emotion_stargan, 1) + "% vs " +
+                     detail::fmt(bar.emotion_statistics, 1) + "%): " + yes(bar.emotion_kept()) + ". **Cleared: " + yes(bar.cleared()) +
+                     ".**\n";
+            }
         for (const auto& m : ms) {
             if (m.better == 0) continue;
             std::string win, lose;
@@ -463,6 +540,11 @@ inline std::string report_folds(const eval_result& r, const std::vector<metric_d
              ", emotion classifier on its training clips " + detail::fmt(100 * f.classifier_train_acc, 0) +
              "%; seen-content transfer (training contents' neutral takes to their real targets) RMSE " +
              detail::fmt(f.seen_rmse_stargan) + " deg for StarGAN vs " + detail::fmt(f.seen_rmse_identity) + " for identity" +
+             (f.tempo_estimator.empty() ? std::string()
+                                        : "; tempo " + f.tempo_estimator + ", shrink weight " + detail::fmt(f.tempo_shrink_weight) +
+                                              " by the check on the training contents (duration error " + detail::fmt(f.tempo_shrink_error, 3) +
+                                              " against " + detail::fmt(f.tempo_unshrunk_error, 3) + " unshrunk), " +
+                                              (f.tempo_shrink_applied ? "applied" : "not applied (--tempo-shrink false)")) +
              (f.reused_model ? "; model reused from an earlier run" : "") + ". Loss curves: `folds/" +
              f.held_out + "/losses.svg`.\n\n| target | method |";
         for (const auto& m : ms) s += " " + m.title + " |";

@@ -123,4 +123,10 @@ inline double log_ratio_error(double a, double b)
     return std::abs(std::log(a / b));
 }
 
+/// @brief Duration-ratio error of an output against the real clip of its target: |log(duration out / duration
+/// real)|. Both ratios to the input share the input's duration, so this is |log(out ratio / real ratio)| of
+/// Table 1's "fast" and "slow"; an output that keeps the input's duration (identity) scores
+/// |log(duration in / duration real)|. Infinite when a clip has no duration.
+inline double duration_error(const clip& out, const clip& real) { return log_ratio_error(out.duration(), real.duration()); }
+
 }  // namespace handemo::metrics

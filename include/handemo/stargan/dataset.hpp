@@ -6,7 +6,10 @@
 // duration, estimated from its clips' durations relative to the neutral take of the same content. The
 // estimator (median ratio, duration-weighted ratio, geometric mean, a robust two-way fit, or no change) is
 // chosen per data set by leave-one-content-out cross-validation on the training clips (tempo_fit()): on
-// Bandai, truncated neutral captures (20-31 frames) make per-take ratios of 3-13x.
+// Bandai, truncated neutral captures (20-31 frames) make per-take ratios of 3-13x. Optionally
+// (train_options::tempo_shrink) the chosen factors are shrunk toward 1 in log space by a weight chosen by the
+// same leave-one-content-out check (tempo_shrink_fit()): factors that do not carry over to a left-out content are
+// pulled toward keeping the duration.
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -18,6 +21,7 @@
 #include <handemo/motion/labelled.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -252,6 +256,28 @@ struct tempo_fit_result {
     std::vector<tempo_candidate> candidates;  ///< every estimator, in tempo_estimator order
     std::size_t cv_contents = 0;            ///< contents scored by leave-one-content-out (0: no CV, fallback)
     std::size_t pairs = 0;                  ///< (emotion clip, neutral) pairs in the given clips
+    /// with shrinking (tempo_fit(..., true)): the weight applied (shrink_tempo()) and the check's error of every
+    /// weight of tempo_shrink_grid; without: 0 and empty
+    double shrink_weight = 0;
+    std::vector<double> shrink_errors;
+};
+
+/// @brief The weights tempo_shrink_fit() chooses from: 0 keeps the fitted factors, 1 keeps the input's duration.
+inline constexpr std::array<double, 5> tempo_shrink_grid{0.0, 0.25, 0.5, 0.75, 1.0};
+
+/// @brief Tempo factors shrunk toward 1 in log space: exp((1 - w) log f) for each factor (w = 0: unchanged, w = 1:
+/// all 1).
+inline std::vector<double> shrink_tempo(std::vector<double> factors, double w)
+{
+    for (auto& f : factors) f = w == 0.0 ? f : std::exp((1.0 - w) * std::log(f));
+    return factors;
+}
+
+/// @brief The leave-one-content-out check of the shrink weight: its error per weight and the weight chosen.
+struct tempo_shrink_check {
+    std::vector<double> errors;  ///< [tempo_shrink_grid] mean over contents of the mean |log(predicted / real ratio)|; NaN without CV
+    double weight = 0;           ///< the lowest error's weight (ties to less shrinkage); 0 without CV
+    std::size_t contents = 0;    ///< contents scored (0: fewer than two contents hold pairs, no check)
 };
 
 namespace detail {
@@ -446,12 +472,71 @@ inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std
     return r;
 }
 
-/// @brief Tempo factor per domain: tempo_fit()'s choice (used by prepare_data() and stored in checkpoints).
+/// @brief The shrink weight of one estimator's factors, chosen inside `d` by leave-one-content-out: for each weight
+/// w of tempo_shrink_grid and each content holding (emotion, neutral) pairs, the estimator is fitted on the other
+/// contents, its factors shrunk by w (shrink_tempo()), and the error is the mean over that content's pairs of
+/// |log(predicted factor / real duration ratio)|; a weight's score is the mean of these errors over the contents
+/// (tempo_fit()'s score for the estimator at w = 0). The lowest score wins, ties (within 1e-12) going to less
+/// shrinkage. Factors that hold on every content keep weight 0; factors that no left-out content follows are
+/// shrunk. Only the given clips are used: pass the training set.
+/// @param domains domain names in label order; @param neutral name of the neutral domain
+inline tempo_shrink_check tempo_shrink_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
+                                           const std::string& neutral, tempo_estimator e)
+{
+    std::vector<const labelled_clip*> all;
+    for (const auto& c : d) all.push_back(&c);
+    const auto pairs = detail::tempo_pairs(all, domains, neutral);
+    std::set<std::string> scored;
+    for (const auto& p : pairs) scored.insert(p.content);
+    tempo_shrink_check r;
+    r.errors.assign(tempo_shrink_grid.size(), std::nan(""));
+    if (scored.size() < 2) return r;
+    r.contents = scored.size();
+    std::vector<double> total(tempo_shrink_grid.size(), 0.0);
+    for (const auto& held : scored) {
+        std::vector<const labelled_clip*> train;
+        for (const auto* c : all)
+            if (c->content != held) train.push_back(c);
+        const auto fitted = detail::tempo_estimate(e, train, domains, neutral);
+        for (std::size_t w = 0; w < tempo_shrink_grid.size(); ++w) {
+            const auto f = shrink_tempo(fitted, tempo_shrink_grid[w]);
+            double err = 0;
+            std::size_t n = 0;
+            for (const auto& p : pairs)
+                if (p.content == held) err += std::abs(std::log(f[p.domain] / p.ratio())), ++n;
+            total[w] += err / static_cast<double>(n);
+        }
+    }
+    std::size_t best = 0;
+    for (std::size_t w = 0; w < tempo_shrink_grid.size(); ++w) {
+        r.errors[w] = total[w] / static_cast<double>(scored.size());
+        if (r.errors[w] < r.errors[best] - 1e-12) best = w;
+    }
+    r.weight = tempo_shrink_grid[best];
+    return r;
+}
+
+/// @brief tempo_fit(), then with `shrink` its factors shrunk toward 1 by the weight tempo_shrink_fit() chooses for
+/// the chosen estimator (train_options::tempo_shrink).
+inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
+                                  const std::string& neutral, bool shrink)
+{
+    auto r = tempo_fit(d, domains, neutral);
+    if (!shrink) return r;
+    const auto check = tempo_shrink_fit(d, domains, neutral, r.estimator);
+    r.shrink_weight = check.weight;
+    r.shrink_errors = check.errors;
+    r.factors = shrink_tempo(std::move(r.factors), check.weight);
+    return r;
+}
+
+/// @brief Tempo factor per domain: tempo_fit()'s choice (used by prepare_data() and stored in checkpoints), shrunk
+/// by the checked weight when `shrink` (train_options::tempo_shrink).
 /// @param domains domain names in label order; @param neutral name of the neutral domain
 inline std::vector<double> tempo_factors(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
-                                         const std::string& neutral)
+                                         const std::string& neutral, bool shrink = false)
 {
-    return tempo_fit(d, domains, neutral).factors;
+    return tempo_fit(d, domains, neutral, shrink).factors;
 }
 
 }  // namespace handemo::stargan

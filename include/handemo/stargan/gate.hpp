@@ -136,16 +136,18 @@ std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>&
 
 namespace detail {
 
-/// The training options without the gate's own (gate_folds, gate_prior, gate_margin): two checkpoints whose
-/// options agree on these trained the same G, whatever gate was fitted around it.
+/// The training options without the gate's own (gate_folds, gate_prior, gate_margin, ...) and tempo_shrink (the
+/// images are time-normalised: the tempo never reaches G): two checkpoints whose options agree on these trained
+/// the same G, whatever gate and tempo were fitted around it.
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "tempo_shrink"}) o.erase(k);
     return o;
 }
 
-/// Whether a checkpoint holds the G that `opt` trains: the same options (the gate's aside) and opt.iters steps.
+/// Whether a checkpoint holds the G that `opt` trains: the same options (the gate's and the tempo's aside) and
+/// opt.iters steps.
 inline bool trained_same_g(const checkpoint_info& ck, const train_options& opt)
 {
     return ck.step == opt.iters && options_without_gate(ck.options) == options_without_gate(opt.to_json());
@@ -461,7 +463,10 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         const auto label = "gate " + std::to_string(f + 1) + "/" + std::to_string(F) + " (without " + groups.names(f) + ")";
         const auto ck = detail::inner_gate_model<Config>(train, info, inner, work_dir / ("inner" + std::to_string(f + 1)), reuse, label, reused);
         reused_folds += reused;
-        detail::emotion_model_impl<Config> model(ck.first, ck.second);
+        auto ck_info = ck.second;
+        // a reused inner model may have been fitted with another tempo option: the tempo training would store now
+        ck_info.tempo = tempo_factors(train, info.domain_names, info.neutral, opt.tempo_shrink);
+        detail::emotion_model_impl<Config> model(ck.first, ck_info);
         if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
         detail::score_gate_group<Config>(model, train, held, info, opt, set, tallies[f]);
     }
@@ -495,8 +500,8 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
 }
 
 /// @brief Fits the change gate again around a model already trained into `out_dir` (its inner models reused
-/// when they match, see fit_change_gate()) and rewrites the checkpoint's gate, prior and options in place
-/// (atomically, new checksum); G's weights are untouched. `handemo eval --reuse-models` uses it when only
+/// when they match, see fit_change_gate()) and rewrites the checkpoint's gate, prior, tempo factors
+/// (train_options::tempo_shrink) and options in place (atomically, new checksum); G's weights are untouched. `handemo eval --reuse-models` uses it when only
 /// the gate options changed since the model was trained.
 /// @throws value_error when the checkpoint was trained with other options (the gate's aside) or steps.
 template <stargan_config Config>
@@ -517,6 +522,7 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
                  {"prior", g.prior.empty() ? std::vector<double>(C, 0.0) : g.prior},
                  {"prior_posture", opt.gate_prior && opt.gate_folds > 0 ? posture_prior<Config::keyframes>(clips, info)
                                                                         : std::vector<std::vector<double>>{}}};
+    j["tempo"] = tempo_factors(clips, info.domain_names, info.neutral, opt.tempo_shrink);
     j["options"] = opt.to_json();
     f.metadata["handemo"] = j.dump();
     f.metadata["checksum"] = detail::checkpoint_checksum(f);

@@ -101,6 +101,10 @@ struct train_options {
     /// most gate_margin below the real clips' rate is used; when none is, the best checked one. No effect
     /// when the rule is off (gate_margin <= -1)
     bool gate_auto_margin = false;
+    /// tempo: shrink the learned duration factors toward 1 in log space by the weight in {0, 0.25, ..., 1} that
+    /// predicts left-out training contents' durations best (tempo_fit(..., true), tempo_shrink_fit()); G is the
+    /// same with or without it (the images are time-normalised), so a stored model takes it by refit_gate()
+    bool tempo_shrink = false;
 
     /// @throws value_error naming the option.
     void validate() const
@@ -132,6 +136,7 @@ struct train_options {
                 {"augment", augment}, {"gate_folds", gate_folds}, {"gate_prior", gate_prior}, {"gate_margin", gate_margin}};
         if (gate_posterior) j["gate_posterior"] = true;
         if (gate_auto_margin) j["gate_auto_margin"] = true;  // written only when on: older checkpoints' options stay equal
+        if (tempo_shrink) j["tempo_shrink"] = true;
         return j;
     }
 };
@@ -356,6 +361,7 @@ inline void crop_image(const float* src, std::size_t H, std::size_t W, float* ds
 /// @param range the Eq. 3 range to use (a resumed run keeps its own); default: computed over `clips`.
 /// @param range_mode "global" (the paper's one p_min/p_max) or "channel" (compute_channel_range()), when
 ///        `range` is not given.
+/// @param tempo_shrink the tempo factors shrunk by the checked weight (train_options::tempo_shrink)
 /// @param amplitude_normalise train in the amplitude-normalised space of the amplitude stage
 ///        (train_options::amplitude): every image's excursions about its per-channel keyframe mean are divided
 ///        by its emotion's amplitude factor, so G learns what the emotions change besides amplitude and
@@ -366,7 +372,7 @@ inline void crop_image(const float* src, std::size_t H, std::size_t W, float* ds
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
                            std::optional<angle_range> range = {}, std::string_view range_mode = "global",
-                           bool amplitude_normalise = false)
+                           bool amplitude_normalise = false, bool tempo_shrink = false)
 {
     constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
     if (clips.empty()) throw value_error("train: no clips to train on");
@@ -415,7 +421,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
             if (rank(static_cast<int>(q)) > rank(slot)) slot = static_cast<int>(q);
         }
     }
-    p.tempo = tempo_factors(clips, info.domain_names, info.neutral);
+    p.tempo = tempo_factors(clips, info.domain_names, info.neutral, tempo_shrink);
     p.amplitude = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
     p.amplitude_check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
     {
@@ -434,12 +440,12 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     return p;
 }
 
-/// @brief prepare_data() with the range mode and amplitude normalisation of `opt`.
+/// @brief prepare_data() with the range mode, amplitude normalisation and tempo shrinking of `opt`.
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
                            std::optional<angle_range> range = {})
 {
-    return prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude);
+    return prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink);
 }
 
 namespace detail {

@@ -333,6 +333,36 @@ public:
         return reconstruct(combine(p, posture, motion, prior), in.skel, p.frames, in.fps);
     }
 
+    /// @brief Every learned part of the model but G, each at its learned setting: the input's keyframes with the
+    /// amplitude stage (when the model was trained with it), the posture prior at full weight (when the model has
+    /// one) and the target's tempo; no G, no detail layer. For a residual model this is finish(in, parts(in,
+    /// target), 0, 0, 1) (G's change weighted 0, the prior 1) without running G: what a user gets without a
+    /// network, the bar G has to clear (the evaluation's `statistics` row).
+    /// @throws shape_error when the clip's skeleton is not the model's; value_error for an unknown emotion.
+    transfer_result statistics(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
+    {
+        check_skeleton(in.skel);
+        in.validate("transfer: input");
+        const std::size_t t = domain(target);
+        const bool amp = amplitude_stage();
+        auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
+        // the order of parts() and combine(): into the amplitude-normalised space, the prior, back out at the target's
+        if (amp) scale_keyframe_excursions(kf, 1.0 / info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))]);
+        if (!info_.prior_posture.empty()) {
+            const std::size_t C = joints() * 3;
+            for (std::size_t k = 0; k < keyframes(); ++k)
+                for (std::size_t ch = 0; ch < C; ++ch) kf.angles[k * C + ch] += 1.0 * info_.prior_posture[t][ch];
+        }
+        if (amp && info_.amplitude[t] != 1.0) scale_keyframe_excursions(kf, info_.amplitude[t]);
+        transfer_result r;
+        r.tempo = tempo(target, source);
+        r.amplitude = amp ? amplitude(target, source) : 1.0;
+        const std::size_t frames = output_frames(in.frames, r.tempo);
+        r.motion = reconstruct(kf, in.skel, frames, in.fps);
+        r.motion.positions = stretch_positions(in, frames);
+        return r;
+    }
+
     /// @brief Transfers a clip to `target` emotion (source emotion defaults to the neutral domain).
     /// @throws shape_error when the clip's skeleton is not the model's (joint count or names).
     transfer_result transfer(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
