@@ -1,6 +1,8 @@
-// `handemo transfer --model MODEL --in IN.bvh|IN.bmp --emotion E --out OUT.bvh|OUT.bmp`: turns a motion into
-// the target emotion with a trained model (Section 3.4 of the hand paper: keyframes -> Eq. 3 image -> G ->
-// Eq. 6 -> interpolation, with the learned tempo factor).
+// `handemo transfer --model MODEL --in IN.bvh|IN.bmp|DIR --emotion E --out OUT.bvh|OUT.bmp|DIR`: turns a motion
+// into the target emotion with a trained model (Section 3.4 of the hand paper: keyframes -> Eq. 3 image -> G ->
+// Eq. 6 -> interpolation, with the learned tempo factor). A folder in: every .bvh in it, on --threads threads
+// sharing the one loaded model, into the --out folder under the same names, with a progress bar; a file that
+// fails is named and skipped, and the command fails at the end when any did.
 #pragma once
 
 #include "../registry.hpp"
@@ -12,11 +14,17 @@
 #include <handemo/stargan.hpp>
 #include "../retarget_common.hpp"
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <thread>
+#include <vector>
 
 // Where the shipped model is looked for (the build sets both: this source tree's copy and the installed one).
 #ifndef HANDEMO_SHIPPED_MODEL
@@ -40,7 +48,7 @@ inline std::filesystem::path default_model()
 
 struct transfer_cli {
     std::string model, in, emotion, out, from, like, hand, map;
-    std::size_t frames = 0;
+    std::size_t frames = 0, threads = 0;
     bool detail = false;
     kernels::weight_storage weights = kernels::weight_storage::native;
 };
@@ -49,6 +57,80 @@ inline bool has_ext(const std::string& p, const char* a, const char* b = nullptr
 {
     const auto e = std::filesystem::path(p).extension().string();
     return e == a || (b && e == b);
+}
+
+/// The capture options of a BVH transfer (hand, map, detail) for the clip `in`.
+inline stargan::capture_options capture_options_of(const transfer_cli& o, const clip& in)
+{
+    stargan::capture_options co;
+    co.hand = hand_side(o.hand);
+    co.detail = o.detail;
+    if (!o.map.empty()) co.slots = retarget::read_map(o.map, in.skel);
+    return co;
+}
+
+/// --in DIR: every .bvh of the folder (not its subfolders), sorted by name, to --out DIR under the same name.
+/// Threads take files in turn; each output is written atomically; a failure is printed with the file's name and
+/// the rest go on; at the end, the files per second, and an error when any failed.
+inline void run_folder(const transfer_cli& o, const stargan::emotion_model& model)
+{
+    namespace fs = std::filesystem;
+    if (has_ext(o.out, ".bvh", ".bmp") || has_ext(o.out, ".png"))
+        throw value_error("transfer: --in " + o.in + " is a folder: --out must be a folder too, not " + o.out);
+    if (!o.like.empty() || o.frames) throw value_error("transfer: --like and --frames are for a motion image input, not a folder");
+    if (o.detail && !model.has_detail())
+        throw value_error("transfer: --detail: model " + model.info().source + " has no detail layer (trained before it existed): train it again");
+    model.domain(o.emotion);  // an unknown emotion stops here, before any file is read
+    if (!o.from.empty()) model.domain(o.from);
+    std::vector<fs::path> files;
+    for (const auto& e : regular_files_in(o.in))
+        if (e.extension() == ".bvh") files.push_back(e);
+    std::sort(files.begin(), files.end());
+    if (files.empty()) throw value_error("transfer: --in " + o.in + " holds no .bvh file");
+    if (path_exists(o.out) && !is_folder(o.out)) throw value_error("transfer: --out " + o.out + " exists and is not a folder");
+    make_directories(o.out);
+    const std::size_t threads = std::clamp<std::size_t>(o.threads ? o.threads : std::thread::hardware_concurrency(), 1, files.size());
+    std::atomic<std::size_t> next{0};
+    std::mutex m;  // guards the progress bar, the failure list and std::cout
+    std::vector<std::string> failed;
+    std::size_t done = 0;
+    // the run's report (progress, skipped files) goes to stdout: stderr keeps the one error line of a failure
+    progress bar("transfer " + std::to_string(files.size()) + " files", static_cast<long>(files.size()), stdout);
+    const auto start = std::chrono::steady_clock::now();
+    const auto work = [&] {
+        for (std::size_t i = next++; i < files.size(); i = next++) {
+            std::string error;
+            try {
+                const clip in = read_bvh(files[i]);
+                const auto co = capture_options_of(o, in);
+                const auto cr = o.from.empty() ? stargan::transfer_capture(model, in, o.emotion, {}, co)
+                                               : stargan::transfer_capture(model, in, o.emotion, o.from, co);
+                write_bvh(fs::path(o.out) / files[i].filename(), cr.motion, cr.retargeted ? -1 : 6);
+            } catch (const std::exception& e) {
+                error = e.what();
+            }
+            const std::lock_guard lock(m);
+            if (!error.empty()) {
+                failed.push_back(files[i].filename().string());
+                std::cout << "transfer: " << files[i].string() << ": " << error << " (skipped)" << std::endl;
+            }
+            bar.update(static_cast<long>(++done));
+        }
+    };
+    std::vector<std::thread> pool;
+    for (std::size_t k = 1; k < threads; ++k) pool.emplace_back(work);
+    work();
+    for (auto& th : pool) th.join();
+    bar.finish();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::cout << "transfer: " << files.size() - failed.size() << " of " << files.size() << " files of " << o.in << " -> " << o.emotion << " -> "
+              << o.out << " (" << threads << " threads, " << static_cast<double>(files.size()) / std::max(seconds, 1e-9) << " files/s)\n";
+    if (!failed.empty()) {
+        std::string names;
+        for (std::size_t i = 0; i < failed.size() && i < 5; ++i) names += (i ? ", " : "") + failed[i];
+        throw value_error("transfer: " + std::to_string(failed.size()) + " of " + std::to_string(files.size()) + " files failed (" + names +
+                          (failed.size() > 5 ? ", ..." : "") + "); the others were written to " + o.out);
+    }
 }
 
 inline void run_transfer(const transfer_cli& o)
@@ -62,6 +144,11 @@ inline void run_transfer(const transfer_cli& o)
                   << " (trained on handemo's synthetic hand emotions, not on real captures)\n";
     const auto model = load_model(model_path, o.weights);
     const auto& info = model->info();
+    if (is_folder(o.in)) {
+        run_folder(o, *model);
+        return;
+    }
+    if (o.threads) throw value_error("transfer: --threads is for a folder --in (" + o.in + " is a file)");
     const bool in_image = has_ext(o.in, ".bmp", ".png"), out_image = has_ext(o.out, ".bmp", ".png");
     if (!in_image && !has_ext(o.in, ".bvh"))
         throw value_error("transfer: --in " + o.in + ": expected a .bvh, .bmp or .png file");
@@ -88,10 +175,7 @@ inline void run_transfer(const transfer_cli& o)
     if (o.detail && out_image) throw value_error("transfer: --detail adds full-rate motion; a motion image output (" + o.out + ") has none");
     if (o.detail && !model->has_detail())
         throw value_error("transfer: --detail: model " + model_path + " has no detail layer (trained before it existed): train it again");
-    capture_options co;
-    co.hand = hand_side(o.hand);
-    co.detail = o.detail;
-    if (!o.map.empty()) co.slots = retarget::read_map(o.map, in.skel);
+    const auto co = capture_options_of(o, in);
     const auto cr = o.from.empty() ? transfer_capture(*model, in, o.emotion, {}, co) : transfer_capture(*model, in, o.emotion, o.from, co);
     if (cr.map) print_map_summary("transfer", o.in, *cr.map);
     const auto& r = cr.on_model;
@@ -114,9 +198,10 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     sub->add_option("--model", o->model,
                     "Model folder or checkpoint.safetensors written by 'handemo train' (default: the shipped hand model, trained on "
                     "handemo's synthetic hand emotions)");
-    sub->add_option("--in", o->in, "Input motion: .bvh, or a K x J motion image .bmp/.png")->required();
+    sub->add_option("--in", o->in, "Input motion: .bvh, a K x J motion image .bmp/.png, or a folder (its .bvh files)")->required();
     sub->add_option("--emotion", o->emotion, "Target emotion (a domain of the model, e.g. angry)")->required();
-    sub->add_option("--out", o->out, "Output: .bvh (full-rate motion) or .bmp/.png (motion image)")->required();
+    sub->add_option("--out", o->out, "Output: .bvh (full-rate motion), .bmp/.png (motion image), or a folder for a folder --in")->required();
+    sub->add_option("--threads", o->threads, "Threads for a folder --in, sharing the one loaded model (default: the machine's cores)");
     sub->add_option("--hand", o->hand, "Which hand of the capture to transfer with a hand model: left or right (needed when it has two)")
         ->check(CLI::IsMember({"left", "right"}));
     sub->add_option("--map", o->map, "JSON map file naming the capture's joints by slot, for a rig no built-in convention knows (docs/retargeting.md)");
