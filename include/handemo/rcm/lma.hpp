@@ -373,6 +373,23 @@ inline std::size_t derived_count(feature_set fs) { return derived_features(fs).s
 
 namespace detail {
 
+/// Columns first..first+4 of frame f: the speed of each of five points; first+5..first+9 their acceleration;
+/// first+10 their mean jerk. Returns their mean speed.
+inline double five_point_derivatives(xt::xtensor<double, 2>& t, const positions_type& p, const std::array<std::size_t, 5>& points,
+                                     std::size_t f, double fps, std::size_t first)
+{
+    double jerk = 0, speed = 0;
+    for (std::size_t k = 0; k < 5; ++k) {
+        const double v = derivative_norm(p, points[k], f, 1, fps);
+        t(f, first + k) = v;
+        t(f, first + 5 + k) = derivative_norm(p, points[k], f, 2, fps);
+        jerk += derivative_norm(p, points[k], f, 3, fps);
+        speed += v / 5.0;
+    }
+    t(f, first + 10) = jerk / 5.0;
+    return speed;
+}
+
 /// Checks the positions and the roles basic_table() reads.
 inline void check_basic_table(const positions_type& p, double fps, const role_map& r, feature_set fs)
 {
@@ -428,15 +445,7 @@ inline xt::xtensor<double, 2> body_basic_table(const positions_type& p, double f
         t(f, 11) = dist(p, f, lf, rf);
         t(f, 12) = dist(p, f, lh, chest);
         t(f, 13) = dist(p, f, rh, chest);
-        double jerk = 0;
-        for (std::size_t k = 0; k < 5; ++k) {
-            const double v = detail::derivative_norm(p, eff[k], f, 1, fps);
-            t(f, 15 + k) = v;
-            t(f, 20 + k) = detail::derivative_norm(p, eff[k], f, 2, fps);
-            jerk += detail::derivative_norm(p, eff[k], f, 3, fps);
-            mean_speed[f] += v / 5.0;
-        }
-        t(f, 25) = jerk / 5.0;
+        mean_speed[f] = detail::five_point_derivatives(t, p, eff, f, fps, 15);
         const auto axes = detail::body_axes(p, f, r, opt.up_axis);
         t(f, 26) = detail::box_volume(p, f, five, axes);
         t(f, 27) = detail::box_volume(p, f, all, axes);
@@ -503,15 +512,7 @@ inline xt::xtensor<double, 2> hand_basic_table(const positions_type& p, double f
         x = detail::unit_or({x[0] - xy * y[0], x[1] - xy * y[1], x[2] - xy * y[2]}, vec3{1, 0, 0});
         const vec3 z = detail::unit_or(detail::cross(x, y), vec3{0, 0, 1});
         t(f, 11) = detail::box_volume(p, f, hand_pts, {x, y, z});
-        double jerk = 0;
-        for (std::size_t k = 0; k < 5; ++k) {
-            const double v = detail::derivative_norm(p, tip[k], f, 1, fps);
-            t(f, 12 + k) = v;
-            t(f, 17 + k) = detail::derivative_norm(p, tip[k], f, 2, fps);
-            jerk += detail::derivative_norm(p, tip[k], f, 3, fps);
-            mean_speed[f] += v / 5.0;
-        }
-        t(f, 22) = jerk / 5.0;
+        mean_speed[f] = detail::five_point_derivatives(t, p, tip, f, fps, 12);
         t(f, 23) = detail::derivative_norm(p, wrist, f, 1, fps);
         t(f, 24) = detail::derivative_norm(p, wrist, f, 2, fps);
         if (f > 0) {
