@@ -293,7 +293,7 @@ inline std::vector<comparison> compare_with_baselines(const eval_result& r)
     std::vector<comparison> out;
     auto targets = targets_of(r);
     targets.insert(targets.begin(), "all");
-    for (const std::string b : baseline_names())
+    for (const auto& b : baseline_names())
         for (const auto& m : metrics_of(r)) {
             if (m.better == 0) continue;
             for (const auto& t : targets) {
