@@ -2,7 +2,7 @@
 // nothing of training, evaluation, rendering or the circumplex. It declares transfer_model; its definitions are
 // in <handemo/transfer_impl.hpp>, which exactly one source file of the program includes (the way single-header
 // libraries split declaration and implementation), so every other file that includes this header compiles in a
-// few seconds instead of compiling the generator's kernels for every model configuration again.
+// few seconds instead of compiling the kernels, checkpoint parsing and retargeting again.
 //
 //   // main.cpp                                   // handemo_impl.cpp, compiled once
 //   #include <handemo/transfer.hpp>               #include <handemo/transfer_impl.hpp>

@@ -1,6 +1,6 @@
 // The definitions of <handemo/transfer.hpp>: include this in exactly one source file of a program that uses
 // transfer_model (a second one fails to link with duplicate symbols; none, with undefined ones). It compiles the
-// generator for every model configuration, which is the slow part the light header keeps out of other files.
+// generator's kernels, checkpoint parsing and retargeting: the slow part the light header keeps out of other files.
 #pragma once
 
 #include <handemo/retarget/map_file.hpp>
