@@ -44,7 +44,6 @@
 #include <memory>
 #include <optional>
 #include <utility>
-#include <system_error>
 #include <string>
 #include <vector>
 
@@ -296,8 +295,7 @@ std::pair<safetensors_file, checkpoint_info> inner_gate_model(const std::vector<
 {
     const auto ck_path = dir / "checkpoint.safetensors";
     reused = false;
-    std::error_code ec;
-    if (reuse && std::filesystem::exists(ck_path, ec))
+    if (reuse && path_exists(ck_path))
         if (auto stored = read_checkpoint(ck_path); trained_same_g(stored.second, inner)) {
             if (inner.progress_out)
                 std::fprintf(inner.progress_out, "%s: reusing the G trained without those contents (%s)\n", label.c_str(), ck_path.string().c_str());
