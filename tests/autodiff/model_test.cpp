@@ -1,5 +1,6 @@
 // StarGAN generator/discriminator on the autodiff tape: parameter names and layouts (official StarGAN),
-// output shapes, tape-free inference equal to the tape forward, batch split over a thread pool equal to
+// output shapes, tape-free inference equal to the tape forward, the frozen generator's batches of any size
+// equal to its calls on one image, batch split over a thread pool equal to
 // single-threaded, and finite-difference gradient checks (double) of a residual block, a small G, a
 // small D and the WGAN-GP penalty through a small D.
 #include "gradcheck.hpp"
@@ -142,6 +143,29 @@ TEST_CASE("stargan: infer equals the tape forward; thread-pool batch split equal
         CHECK(fo2 == fo);
         g.set_residual(false);
         randomise(g, 1, 0.1);  // restore
+    }
+
+    {  // a batch of any size through one frozen generator: each image gets the bits of a call on it alone
+        const auto f = g.freeze();
+        constexpr std::size_t B = 7, per = 3 * 12 * 24;
+        frozen_generator<float, cfg>::workspace big(f, B), one(f);
+        CHECK(big.capacity() == B);
+        CHECK(one.capacity() == 3);  // never fewer than the configuration's batch
+        std::vector<float> xb(B * per), lb(B * 5, 0.f), yb(xb.size()), y1(per);
+        for (auto& v : xb) v = u(rng);
+        for (std::size_t n = 0; n < B; ++n) lb[n * 5 + (n * 3) % 5] = 1;  // every target, in no order
+        f.infer_batch(xb.data(), lb.data(), yb.data(), B, big);
+        for (std::size_t n = 0; n < B; ++n) {
+            f.infer_batch(xb.data() + n * per, lb.data() + n * 5, y1.data(), 1, one);
+            CAPTURE(n);
+            CHECK(std::equal(y1.begin(), y1.end(), yb.begin() + std::ptrdiff_t(n * per)));
+        }
+        std::vector<float> y3(3 * per);  // infer() is the batch of N = 3
+        f.infer(xb.data(), lb.data(), y3.data(), one);
+        CHECK(std::equal(y3.begin(), y3.end(), yb.begin()));
+        CHECK_THROWS_WITH_AS(f.infer_batch(xb.data(), lb.data(), yb.data(), 4, one), doctest::Contains("4 images, the workspace holds 1 to 3"),
+                             value_error);
+        CHECK_THROWS_AS(f.infer_batch(xb.data(), lb.data(), yb.data(), 0, big), value_error);
     }
 
     thread_pool pool(2);

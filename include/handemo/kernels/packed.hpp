@@ -75,13 +75,22 @@ public:
     /// channel, or nullptr. y is overwritten.
     void forward(const T* x, const T* bias_or_null, T* y, T* scratch) const noexcept
     {
-        if (!ws_) return fallback(x, bias_or_null, y, scratch);
+        forward(x, bias_or_null, y, scratch, std::size_t(g_.batch));
+    }
+
+    /// @brief forward() on `images` images instead of the geometry's batch (any count, more or fewer): x
+    /// [images, ...], y [images, ...]. The images are computed one after the other with the same scratch
+    /// (scratch_size() does not depend on the count), so image n of a batch gets the bits a call on that
+    /// image alone gets.
+    void forward(const T* x, const T* bias_or_null, T* y, T* scratch, std::size_t images) const noexcept
+    {
+        if (!ws_) return fallback(x, bias_or_null, y, scratch, int(images));
         T* acc = align(scratch);
         T* xp = acc + acc_elements_;
         const std::size_t x_per = std::size_t(in_c_) * in_h_ * in_w_, y_per = std::size_t(out_c_) * out_h_ * out_w_;
         const std::size_t HWp = std::size_t(Hp_) * Wp_;
         std::memset(xp, 0, std::size_t(in_c_) * HWp * sizeof(T));
-        for (int n = 0; n < g_.batch; ++n) {
+        for (std::size_t n = 0; n < images; ++n) {
             const T* xn = x + n * x_per;
             for (int c = 0; c < in_c_; ++c)
                 for (int r = 0; r < in_h_; ++r)
@@ -239,17 +248,25 @@ private:
             }
     }
 
-    void fallback(const T* x, const T* bias, T* y, T* scratch) const noexcept
+    // One image at a time (a batch-1 geometry), as the weight-stationary path: the bits of an image do not
+    // depend on the images computed with it.
+    void fallback(const T* x, const T* bias, T* y, T* scratch, int images) const noexcept
     {
-        if (!transposed_) return conv2d_forward<T>(g_, x, w_.data(), bias, y, scratch);
-        conv_transpose2d_forward<T>(g_, x, w_.data(), y, scratch);
-        if (bias) {
-            const std::size_t hw = std::size_t(g_.in_h) * g_.in_w;
-            for (int n = 0; n < g_.batch; ++n)
-                for (int c = 0; c < g_.in_channels; ++c) {
-                    T* yc = y + (std::size_t(n) * g_.in_channels + c) * hw;
-                    for (std::size_t i = 0; i < hw; ++i) yc[i] += bias[c];
-                }
+        conv_geometry g = g_;
+        g.batch = 1;
+        const std::size_t in = g.x_size(), out = g.y_size();
+        for (int n = 0; n < images; ++n) {
+            if (!transposed_) {
+                conv2d_forward<T>(g, x + n * in, w_.data(), bias, y + n * out, scratch);
+                continue;
+            }
+            T* yn = y + n * in;  // the transposed conv maps g's y-sized input to its x-sized output
+            conv_transpose2d_forward<T>(g, x + n * out, w_.data(), yn, scratch);
+            if (bias) {
+                const std::size_t hw = std::size_t(g.in_h) * g.in_w;
+                for (int c = 0; c < g.in_channels; ++c)
+                    for (std::size_t i = 0; i < hw; ++i) yn[std::size_t(c) * hw + i] += bias[c];
+            }
         }
     }
 

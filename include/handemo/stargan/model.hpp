@@ -359,68 +359,68 @@ public:
         const auto g = geometries();
         T* s = ws.scratch_.data();
         std::size_t k = 0;
-        auto conv = [&](std::size_t i, const T* in, T* o) {
+        auto conv = [&](std::size_t i, const T* in, T* o, std::size_t) {
             kernels::conv2d_forward<T>(g[i], in, p_.value(k++), static_cast<const T*>(nullptr), o, s);
         };
-        auto convt = [&](std::size_t i, const T* in, T* o) {
+        auto convt = [&](std::size_t i, const T* in, T* o, std::size_t) {
             std::memset(o, 0, g[i].x_size() * sizeof(T));
             kernels::conv2d_backward_data<T>(g[i], in, p_.value(k++), o, s);
         };
-        auto norm = [&](T* v, int ch, int m, bool with_relu) {
-            detail::instance_norm_relu_inplace(v, p_.value(k), p_.value(k + 1), int(N), ch, m, with_relu);
+        auto norm = [&](T* v, int images, int ch, int m, bool with_relu) {
+            detail::instance_norm_relu_inplace(v, p_.value(k), p_.value(k + 1), images, ch, m, with_relu);
             k += 2;
         };
-        run_layers(x, label, out, ws.buf_, conv, convt, norm, residual_);
+        run_layers(x, label, out, N, ws.buf_, conv, convt, norm, residual_);
     }
 
     /// @brief The four activation buffers run_layers() needs, each the size of the largest activation
-    /// (max(conv_dim, 3 + domains) channels of the H x W image, the batch).
-    static std::array<aligned_buffer<T>, 4> activation_buffers()
+    /// (max(conv_dim, 3 + domains) channels of the H x W image) of `images` images.
+    static std::array<aligned_buffer<T>, 4> activation_buffers(std::size_t images = N)
     {
-        const std::size_t act = N * std::max<std::size_t>(cd, 3 + C) * H * W;
+        const std::size_t act = std::max<std::size_t>(images, 1) * std::max<std::size_t>(cd, 3 + C) * H * W;
         return {aligned_buffer<T>(act), aligned_buffer<T>(act), aligned_buffer<T>(act), aligned_buffer<T>(act)};
     }
 
-    /// @brief The layer sequence of infer() with the convolutions and norms given as callables:
-    /// conv(i, in, out) and convt(i, in, out) for geometries()[i], norm(v, channels, pixels, relu), each
-    /// called in parameter order. buf: four activation buffers of workspace size.
+    /// @brief The layer sequence of infer() on `n` images with the convolutions and norms given as callables:
+    /// conv(i, in, out, n) and convt(i, in, out, n) for geometries()[i] on n images, norm(v, n, channels,
+    /// pixels, relu), each called in parameter order. buf: four activation buffers of at least n images.
     template <class Conv, class ConvT, class Norm>
-    static void run_layers(const T* x, const T* label, T* out, std::array<aligned_buffer<T>, 4>& buf, Conv&& conv,
-                           ConvT&& convt, Norm&& norm, bool residual)
+    static void run_layers(const T* x, const T* label, T* out, std::size_t n_images, std::array<aligned_buffer<T>, 4>& buf,
+                           Conv&& conv, ConvT&& convt, Norm&& norm, bool residual)
     {
         T* a = buf[0].data();
         T* b = buf[1].data();
         T* c = buf[2].data();
         T* d = buf[3].data();
         const std::size_t HW = H * W;
-        for (std::size_t n = 0; n < N; ++n) {
+        for (std::size_t n = 0; n < n_images; ++n) {
             std::memcpy(a + n * (3 + C) * HW, x + n * 3 * HW, 3 * HW * sizeof(T));
             for (std::size_t k = 0; k < C; ++k)
                 std::fill_n(a + (n * (3 + C) + 3 + k) * HW, HW, label[n * C + k]);
         }
-        conv(0, a, b);
-        norm(b, int(cd), int(HW), true);
-        conv(1, b, a);
-        norm(a, int(2 * cd), int(HW / 4), true);
-        conv(2, a, b);
-        norm(b, int(4 * cd), int(HW / 16), true);
-        const std::size_t m16 = N * 4 * cd * HW / 16;
+        conv(0, a, b, n_images);
+        norm(b, int(n_images), int(cd), int(HW), true);
+        conv(1, b, a, n_images);
+        norm(a, int(n_images), int(2 * cd), int(HW / 4), true);
+        conv(2, a, b, n_images);
+        norm(b, int(n_images), int(4 * cd), int(HW / 16), true);
+        const std::size_t m16 = n_images * 4 * cd * HW / 16;
         for (std::size_t r = 0; r < R; ++r) {
-            conv(3, b, c);
-            norm(c, int(4 * cd), int(HW / 16), true);
-            conv(3, c, d);
-            norm(d, int(4 * cd), int(HW / 16), false);
+            conv(3, b, c, n_images);
+            norm(c, int(n_images), int(4 * cd), int(HW / 16), true);
+            conv(3, c, d, n_images);
+            norm(d, int(n_images), int(4 * cd), int(HW / 16), false);
             for (std::size_t i = 0; i < m16; ++i) b[i] += d[i];
         }
-        convt(4, b, a);
-        norm(a, int(2 * cd), int(HW / 4), true);
-        convt(5, a, c);
-        norm(c, int(cd), int(HW), true);
-        conv(6, c, out);
+        convt(4, b, a, n_images);
+        norm(a, int(n_images), int(2 * cd), int(HW / 4), true);
+        convt(5, a, c, n_images);
+        norm(c, int(n_images), int(cd), int(HW), true);
+        conv(6, c, out, n_images);
         if (residual)
-            for (std::size_t i = 0; i < N * 3 * HW; ++i) out[i] = x[i] + std::tanh(out[i]);
+            for (std::size_t i = 0; i < n_images * 3 * HW; ++i) out[i] = x[i] + std::tanh(out[i]);
         else
-            for (std::size_t i = 0; i < N * 3 * HW; ++i) out[i] = std::tanh(out[i]);
+            for (std::size_t i = 0; i < n_images * 3 * HW; ++i) out[i] = std::tanh(out[i]);
     }
 
     /// @brief A snapshot of the weights packed for fast repeated inference (see frozen_generator).
@@ -497,33 +497,41 @@ public:
         conv(4, true), norm(), conv(5, true), norm(), conv(6, false);
     }
 
-    /// @brief Buffers for infer() of one frozen generator: sized at construction, reused by every call.
+    /// @brief Buffers for infer() and infer_batch() of one frozen generator: sized at construction for
+    /// `images` images at most (at least N, the configuration's batch), reused by every call.
     class workspace {
     public:
-        explicit workspace(const frozen_generator& f) : buf_(generator_type::activation_buffers())
+        explicit workspace(const frozen_generator& f, std::size_t images = N)
+            : images_(std::max<std::size_t>(images, N)), buf_(generator_type::activation_buffers(images_))
         {
             std::size_t s = 1;
             for (const auto& c : f.convs_) s = std::max(s, c.scratch_size());
             scratch_ = aligned_buffer<T>(s);
         }
+        /// @brief The most images one infer_batch() call with this workspace takes.
+        std::size_t capacity() const noexcept { return images_; }
 
     private:
         friend class frozen_generator;
+        std::size_t images_;
         std::array<aligned_buffer<T>, 4> buf_;
         aligned_buffer<T> scratch_;
     };
 
     /// @brief G(x, label): x [N, 3, H, W], label [N, C], out [N, 3, H, W] (written). No allocation.
-    void infer(const T* x, const T* label, T* out, workspace& ws) const
+    void infer(const T* x, const T* label, T* out, workspace& ws) const { run(x, label, out, N, ws); }
+
+    /// @brief G on a batch of `images` images whatever the configuration's N: x [images, 3, H, W], label
+    /// [images, C], out [images, 3, H, W] (written). No allocation. Each layer runs over the whole batch
+    /// before the next one starts, so a layer's packed weights stay in cache from one image to the next;
+    /// every image gets the bits infer() gives it alone (each convolution and InstanceNorm works image by image).
+    /// @throws value_error when images is 0 or more than ws.capacity() (a workspace made for fewer images).
+    void infer_batch(const T* x, const T* label, T* out, std::size_t images, workspace& ws) const
     {
-        T* s = ws.scratch_.data();
-        std::size_t kc = 0, kn = 0;
-        auto conv = [&](std::size_t, const T* in, T* o) { convs_[kc++].forward(in, nullptr, o, s); };
-        auto norm = [&](T* v, int ch, int m, bool with_relu) {
-            const auto& [gamma, beta] = norms_[kn++];
-            detail::instance_norm_relu_inplace(v, gamma.data(), beta.data(), int(N), ch, m, with_relu);
-        };
-        generator_type::run_layers(x, label, out, ws.buf_, conv, conv, norm, residual_);
+        if (images == 0 || images > ws.capacity())
+            throw value_error("frozen_generator::infer_batch: " + std::to_string(images) + " images, the workspace holds 1 to " +
+                              std::to_string(ws.capacity()) + " (workspace(generator, images))");
+        run(x, label, out, images, ws);
     }
 
     /// @brief The packed convolutions in network order (conv7, down1, down2, 2R residual convs, up1, up2, conv7).
@@ -539,6 +547,18 @@ public:
     }
 
 private:
+    void run(const T* x, const T* label, T* out, std::size_t images, workspace& ws) const
+    {
+        T* s = ws.scratch_.data();
+        std::size_t kc = 0, kn = 0;
+        auto conv = [&](std::size_t, const T* in, T* o, std::size_t n) { convs_[kc++].forward(in, nullptr, o, s, n); };
+        auto norm = [&](T* v, int n, int ch, int m, bool with_relu) {
+            const auto& [gamma, beta] = norms_[kn++];
+            detail::instance_norm_relu_inplace(v, gamma.data(), beta.data(), n, ch, m, with_relu);
+        };
+        generator_type::run_layers(x, label, out, images, ws.buf_, conv, conv, norm, residual_);
+    }
+
     bool residual_;
     std::vector<kernels::packed_conv<T>> convs_;
     std::vector<std::pair<std::vector<T>, std::vector<T>>> norms_;
