@@ -1,10 +1,11 @@
 // StarGAN generator/discriminator on the autodiff tape: parameter names and layouts (official StarGAN),
 // output shapes, tape-free inference equal to the tape forward, the frozen generator's batches of any size
 // equal to its calls on one image, batch split over a thread pool equal to
-// single-threaded, and finite-difference gradient checks (double) of a residual block, a small G, a
+// single-threaded, the FLOP counts of inference and of a training step against a hand count, and finite-difference gradient checks (double) of a residual block, a small G, a
 // small D and the WGAN-GP penalty through a small D.
 #include "gradcheck.hpp"
 
+#include <handemo/stargan/flops.hpp>
 #include <handemo/stargan/model.hpp>
 
 #include <map>
@@ -186,6 +187,40 @@ TEST_CASE("stargan: infer equals the tape forward; thread-pool batch split equal
     grads(t2, y2, g2);
     REQUIRE(g1.size() == g2.size());
     for (std::size_t i = 0; i < g1.size(); ++i) REQUIRE(g2[i] == doctest::Approx(g1[i]).epsilon(1e-4).scale(1e-3));
+}
+
+TEST_CASE("stargan: FLOPs of G and of a training step equal a hand count of the tiny net")
+{
+    // Multiply-adds per image of each convolution, by hand (H x W = 4 x 8, 3 domains, conv_dim 2, 1 block):
+    // G: conv7 (3 + 3 -> 2, 32 pixels, 49 taps) 2*32*6*49 = 18816; down1 (2 -> 4, 8 px, 16) 4*8*2*16 = 1024;
+    //    down2 (4 -> 8, 2 px) 8*2*4*16 = 1024; two residual conv3 (8 -> 8, 2 px, 9) 8*2*8*9 = 1152 each;
+    //    up1 (8 -> 4 at 2 x 4: the adjoint of 4 -> 8 at 1 x 2) 1024; up2 (4 -> 2 at 4 x 8) 1024;
+    //    conv7 (2 -> 3, 32 px) 3*32*2*49 = 9408.                                        G = 34624
+    // D (2 stride-2 layers): 3 -> 2 at 2 x 4: 2*8*3*16 = 768; 2 -> 4 at 1 x 2: 4*2*2*16 = 256;
+    //    src head conv3 4 -> 1 at 1 x 2: 72; cls head 4 -> 3 with a 1 x 2 kernel: 24.    D = 1120
+    constexpr double G = 34624, G0 = 18816, D = 1120, D0 = 768, src = 72, cls = 24, images = 2, per_flop = 2;
+    CHECK(generator_flops<tiny>() == G * images * per_flop);
+    // D step: D(x) forward, weights, inputs but the first layer's;  G(x, c) forward;
+    //         D(fake) forward, weights and inputs without the cls head, no input gradient of the first layer;
+    //         D(x_hat) forward; its penalty: d sum(src) / d x_hat (no cls head) and the backward of that graph
+    // G step: G(x, c_trg) forward, weights, inputs but the first layer's; D(fake) forward and inputs (no weights);
+    //         G(fake, c_org) forward, weights, inputs
+    const double forward = D + G + D + D + G + D + G;
+    const double data = (D - D0) + (D - cls - D0) + (G - G0) + D + G;
+    const double weight = D + (D - cls) + G + G;
+    const double penalty = (D - cls) + (D - cls) + (D - cls - src);
+    CHECK(forward == 108352);
+    CHECK(forward + data + weight + penalty == 235264);
+    const auto c = train_step_flops<tiny>();
+    CHECK(c.forward == forward * images * per_flop);
+    CHECK(c.backward_data == data * images * per_flop);
+    CHECK(c.backward_weight == weight * images * per_flop);
+    CHECK(c.penalty == penalty * images * per_flop);
+    CHECK(c.total() == 235264 * images * per_flop);
+    // the identity term adds a G with weight gradients and every input gradient but its first layer's
+    CHECK(train_step_flops<tiny>(true).total() == (235264 + G + G + (G - G0)) * images * per_flop);
+    // a larger batch scales every count
+    CHECK(train_step_flops<with_batch<tiny, 8>>().total() == c.total() * 4);
 }
 
 TEST_CASE("stargan: gradient check of a residual block (conv3 IN ReLU conv3 IN + skip)")
