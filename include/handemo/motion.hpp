@@ -1,5 +1,6 @@
 // Motion module: skeletons, clips, forward kinematics, formats (BVH, CSV), keyframes and the
-// image codec of the hand paper (Eq. 3 and Eq. 6), and the synthetic hand dataset.
+// image codec of the hand paper (Eq. 3 and Eq. 6), the synthetic hand dataset, and the circumplex coordinates of
+// emotion labels with the interpolation between them.
 #pragma once
 
 #include <handemo/motion/skeleton.hpp>
@@ -12,3 +13,4 @@
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/synth.hpp>
 #include <handemo/motion/detail_layer.hpp>
+#include <handemo/motion/circumplex.hpp>

@@ -285,6 +285,45 @@ inline std::vector<double> natural_spline_m(const std::vector<double>& y)
     return m;
 }
 
+/// Every angle track of `kf` sampled with `method` at keyframe positions u(f) in [0, K-1], f < frames, into `out`
+/// (already sized): the interpolation of reconstruct() and reconstruct_at().
+template <std::size_t K, class Position>
+void interpolate_tracks(const keyframes<K>& kf, std::size_t frames, clip& out, interpolation method, Position position)
+{
+    const std::size_t k = kf.count(), J = kf.joints;
+    std::vector<double> track, m2;  // only the natural spline needs the track as a vector
+    for (std::size_t j = 0; j < J; ++j)
+        for (std::size_t a = 0; a < 3; ++a) {
+            const auto y = [&](std::size_t i) { return kf.at(i, j, a); };
+            if (method == interpolation::natural_spline) {
+                track.resize(k);
+                for (std::size_t i = 0; i < k; ++i) track[i] = y(i);
+                m2 = natural_spline_m(track);
+            }
+            for (std::size_t f = 0; f < frames; ++f) {
+                const double u = position(f);
+                const std::size_t i = std::min(static_cast<std::size_t>(std::floor(u)), k - 2);
+                const double t = u - static_cast<double>(i);
+                const double p0 = y(i), p1 = y(i + 1);
+                double v = 0;
+                if (method == interpolation::linear) {
+                    v = p0 + t * (p1 - p0);
+                } else if (method == interpolation::natural_spline) {
+                    // S(t) = (1-t) p0 + t p1 + ((1-t)^3 - (1-t)) M_i / 6 + (t^3 - t) M_{i+1} / 6
+                    const double s = 1.0 - t;
+                    v = s * p0 + t * p1 + ((s * s * s - s) * m2[i] + (t * t * t - t) * m2[i + 1]) / 6.0;
+                } else {
+                    // Cubic Hermite with tangents m_i = (p_{i+1} - p_{i-1}) / 2, one-sided at the ends.
+                    const double m0 = i > 0 ? 0.5 * (p1 - y(i - 1)) : p1 - p0;
+                    const double m1 = i + 2 < k ? 0.5 * (y(i + 2) - p0) : p1 - p0;
+                    const double t2 = t * t, t3 = t2 * t;
+                    v = (2 * t3 - 3 * t2 + 1) * p0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * p1 + (t3 - t2) * m1;
+                }
+                out.angle(f, j, a) = v;
+            }
+        }
+}
+
 }  // namespace detail
 
 /// @brief Full-rate clip from keyframes (Section 3.4): keyframe i sits at frame position i (N-1)/(K-1),
@@ -313,37 +352,8 @@ void reconstruct_into(const keyframes<K>& kf, const skeleton& skel, std::size_t 
         throw shape_error("reconstruct: root translation holds " + std::to_string(root_translation.size()) +
                           " values, expected frames*3 = " + std::to_string(frames * 3));
     out.reset(skel, frames, fps);
-    std::vector<double> track, m2;  // only the natural spline needs the track as a vector
-    for (std::size_t j = 0; j < J; ++j)
-        for (std::size_t a = 0; a < 3; ++a) {
-            const auto y = [&](std::size_t i) { return kf.at(i, j, a); };
-            if (method == interpolation::natural_spline) {
-                track.resize(k);
-                for (std::size_t i = 0; i < k; ++i) track[i] = y(i);
-                m2 = detail::natural_spline_m(track);
-            }
-            for (std::size_t f = 0; f < frames; ++f) {
-                const double u = static_cast<double>(f) * static_cast<double>(k - 1) / static_cast<double>(frames - 1);
-                const std::size_t i = std::min(static_cast<std::size_t>(std::floor(u)), k - 2);
-                const double t = u - static_cast<double>(i);
-                const double p0 = y(i), p1 = y(i + 1);
-                double v = 0;
-                if (method == interpolation::linear) {
-                    v = p0 + t * (p1 - p0);
-                } else if (method == interpolation::natural_spline) {
-                    // S(t) = (1-t) p0 + t p1 + ((1-t)^3 - (1-t)) M_i / 6 + (t^3 - t) M_{i+1} / 6
-                    const double s = 1.0 - t;
-                    v = s * p0 + t * p1 + ((s * s * s - s) * m2[i] + (t * t * t - t) * m2[i + 1]) / 6.0;
-                } else {
-                    // Cubic Hermite with tangents m_i = (p_{i+1} - p_{i-1}) / 2, one-sided at the ends.
-                    const double m0 = i > 0 ? 0.5 * (p1 - y(i - 1)) : p1 - p0;
-                    const double m1 = i + 2 < k ? 0.5 * (y(i + 2) - p0) : p1 - p0;
-                    const double t2 = t * t, t3 = t2 * t;
-                    v = (2 * t3 - 3 * t2 + 1) * p0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * p1 + (t3 - t2) * m1;
-                }
-                out.angle(f, j, a) = v;
-            }
-        }
+    detail::interpolate_tracks(kf, frames, out, method,
+                               [&](std::size_t f) { return static_cast<double>(f) * static_cast<double>(k - 1) / static_cast<double>(frames - 1); });
     if (!root_translation.empty())
         for (std::size_t j = 0; j < J; ++j)
             if (skel.joints[j].parent < 0 && skel.joints[j].has_position())
@@ -359,6 +369,32 @@ clip reconstruct(const keyframes<K>& kf, const skeleton& skel, std::size_t frame
     clip out;
     reconstruct_into(kf, skel, frames, fps, out, root_translation, method);
     return out;
+}
+
+/// @brief A full-rate clip from keyframes at keyframe positions of one's own choosing: frame f of the output is the
+/// interpolant of reconstruct() at keyframe position positions[f] in [0, K-1] (reconstruct() takes f (K-1)/(N-1)),
+/// so a time warp (an emotion whose tempo changes over the clip) moves along the same curves.
+/// @throws shape_error when J does not match; value_error for fewer than 2 positions, a position outside
+/// [0, K-1] or a non-positive fps.
+template <std::size_t K>
+void reconstruct_at(const keyframes<K>& kf, const skeleton& skel, std::span<const double> positions, double fps, clip& out,
+                    interpolation method = interpolation::catmull_rom)
+{
+    const std::size_t k = kf.count(), J = skel.size(), frames = positions.size();
+    if (kf.joints != J)
+        throw shape_error("reconstruct_at: keyframes have " + std::to_string(kf.joints) + " joints, skeleton '" + skel.name + "' has " +
+                          std::to_string(J));
+    if (kf.angles.size() != k * J * 3 || k < 2)
+        throw shape_error("reconstruct_at: keyframes hold " + std::to_string(kf.angles.size()) + " angles, expected " + std::to_string(k * J * 3) +
+                          " of at least 2 keyframes");
+    if (frames < 2) throw value_error("reconstruct_at: " + std::to_string(frames) + " frames, expected at least 2");
+    if (!(fps > 0) || !std::isfinite(fps)) throw value_error("reconstruct_at: fps " + std::to_string(fps) + " is not positive");
+    for (std::size_t f = 0; f < frames; ++f)
+        if (!(positions[f] >= 0 && positions[f] <= static_cast<double>(k - 1)))
+            throw value_error("reconstruct_at: frame " + std::to_string(f) + ": keyframe position " + std::to_string(positions[f]) +
+                              " is outside [0, " + std::to_string(k - 1) + "]");
+    out.reset(skel, frames, fps);
+    detail::interpolate_tracks(kf, frames, out, method, [&](std::size_t f) { return positions[f]; });
 }
 
 /// @brief Resamples every position channel of `c` to `frames` frames (linear in time), into `out`.

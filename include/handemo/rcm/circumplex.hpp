@@ -1,12 +1,13 @@
 // Russell's circumplex (valence x arousal, both in [-1, 1]) as used by Aristidou et al. 2017: the
-// coordinates of the emotion labels of the data sets, read from a JSON data file with its citation
-// (data/rcm/circumplex.json: Warriner, Kuperman & Brysbaert 2013 word norms rescaled from 1..9 to
+// coordinates of the emotion labels of the data sets (motion/circumplex.hpp reads them from
+// data/rcm/circumplex.json: Warriner, Kuperman & Brysbaert 2013 word norms rescaled from 1..9 to
 // [-1, 1]), the quadrant of a point, and an SVG picture of the circumplex with the training labels, an
 // analysed motion and an optional target.
 #pragma once
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
+#include <handemo/motion/circumplex.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -20,90 +21,13 @@
 
 namespace handemo::rcm {
 
-/// @brief A named point of the circumplex.
-struct label_point {
-    std::string name;
-    double valence = 0, arousal = 0;  ///< both in [-1, 1]
-};
-
-/// @brief Quadrant of a point: 1 (valence >= 0, arousal >= 0, e.g. happy), 2 (negative valence, high
-/// arousal: angry), 3 (negative, low: sad), 4 (positive valence, low arousal: relaxed).
-constexpr int quadrant(double valence, double arousal) noexcept
-{
-    return valence >= 0 ? (arousal >= 0 ? 1 : 4) : (arousal >= 0 ? 2 : 3);
-}
-
-/// @brief Label coordinates of a circumplex file, plus its citation.
-struct circumplex_table {
-    std::string source;
-    std::vector<label_point> labels;
-
-    /// @brief The point of a label.
-    /// @throws value_error naming the label, the file and the known labels.
-    const label_point& at(const std::string& name, const std::string& what = "circumplex table") const
-    {
-        for (const auto& l : labels)
-            if (l.name == name) return l;
-        std::string known;
-        for (const auto& l : labels) known += (known.empty() ? "" : ", ") + l.name;
-        throw value_error("rcm: label '" + name + "' has no circumplex coordinates in " + what + " (known: " + known + ")");
-    }
-};
-
-/// @brief Parses a circumplex file: `{"format": "handemo-rcm-circumplex", "version": 1, "source": "...",
-/// "labels": {"happy": {"valence_1_9": 8.47, "arousal_1_9": 6.05}, ...}}` (or `valence`/`arousal` in [-1, 1]).
-/// @throws format_error naming `what` and the field.
-inline circumplex_table parse_circumplex(const std::string& text, const std::string& what)
-{
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw format_error("rcm circumplex: " + what + ": not JSON: " + e.what());
-    }
-    auto need = [&](const nlohmann::json& o, const char* key, const std::string& where) -> const nlohmann::json& {
-        if (!o.is_object() || !o.contains(key)) throw format_error("rcm circumplex: " + what + ": missing field '" + where + key + "'");
-        return o.at(key);
-    };
-    if (need(j, "format", "") != "handemo-rcm-circumplex")
-        throw format_error("rcm circumplex: " + what + ": field 'format' is not \"handemo-rcm-circumplex\"");
-    if (need(j, "version", "") != 1) throw format_error("rcm circumplex: " + what + ": field 'version' is not 1");
-    circumplex_table t;
-    const auto& src = need(j, "source", "");
-    if (!src.is_string() || src.get<std::string>().empty()) throw format_error("rcm circumplex: " + what + ": field 'source' (the citation) is empty");
-    t.source = src.get<std::string>();
-    const auto& labels = need(j, "labels", "");
-    if (!labels.is_object() || labels.empty()) throw format_error("rcm circumplex: " + what + ": field 'labels' is not a non-empty object");
-    for (const auto& item : labels.items()) {
-        // not a structured binding: clang 14 cannot capture one in the lambda below
-        const std::string& name = item.key();
-        const nlohmann::json& v = item.value();
-        label_point p;
-        p.name = name;
-        const std::string w = "labels." + name + ".";
-        auto num = [&](const char* key) {
-            const auto& x = need(v, key, w);
-            if (!x.is_number()) throw format_error("rcm circumplex: " + what + ": field '" + w + key + "' is not a number");
-            return x.get<double>();
-        };
-        if (v.is_object() && v.contains("valence_1_9")) {
-            const double va = num("valence_1_9"), ar = num("arousal_1_9");
-            if (va < 1 || va > 9 || ar < 1 || ar > 9) throw format_error("rcm circumplex: " + what + ": field '" + w + "' rating outside 1..9");
-            p.valence = (va - 5) / 4;
-            p.arousal = (ar - 5) / 4;
-        } else {
-            p.valence = num("valence");
-            p.arousal = num("arousal");
-            if (std::abs(p.valence) > 1 || std::abs(p.arousal) > 1)
-                throw format_error("rcm circumplex: " + what + ": field '" + w + "' outside [-1, 1]");
-        }
-        t.labels.push_back(p);
-    }
-    return t;
-}
-
-/// @brief Reads a circumplex file (parse_circumplex()).
-inline circumplex_table load_circumplex(const std::filesystem::path& path) { return parse_circumplex(read_file(path), path.string()); }
+// The label table and its file (motion/circumplex.hpp, below both this module and stargan/, whose continuous
+// control reads the same coordinates), under the names this module has always used.
+using handemo::circumplex_table;
+using handemo::label_point;
+using handemo::load_circumplex;
+using handemo::parse_circumplex;
+using handemo::quadrant;
 
 /// @brief Options of circumplex_svg().
 struct circumplex_svg_options {

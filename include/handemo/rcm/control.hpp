@@ -125,113 +125,20 @@ inline point_result stylise_to_point(const rcm_model& m, const clip& c, double v
     return out;
 }
 
-/// @brief One point of a circumplex path.
-struct path_point {
-    std::string name;  ///< the label, `V:A` for an explicit point, or empty for a point between waypoints
-    double valence = 0, arousal = 0;
-    bool waypoint = false;  ///< one of the points the path was given (not one sampled between them)
-};
+// Paths of waypoints (motion/circumplex.hpp), their messages starting "rcm path".
+using handemo::path_point;
+using handemo::path_title;
 
-/// @brief Parses a path `sad,neutral,happy` or `-0.7:-0.4,(0.1,-0.4),happy`: waypoints separated by commas,
-/// each a label of `labels` or an explicit point `V:A` or `(V,A)` with V and A in [-1, 1].
-/// @throws value_error naming the bad waypoint (an unknown label lists the known ones).
+/// @brief handemo::parse_path() for `handemo rcm path`.
 inline std::vector<path_point> parse_path(const std::string& text, const std::vector<label_point>& labels)
 {
-    std::vector<std::string> tokens;
-    std::string cur;
-    int depth = 0;
-    for (char ch : text) {
-        if (ch == '(') ++depth;
-        if (ch == ')') --depth;
-        if (ch == ',' && depth == 0) {
-            tokens.push_back(cur);
-            cur.clear();
-        } else {
-            cur += ch;
-        }
-        if (depth < 0) throw value_error("rcm path: '" + text + "': ')' without '('");
-    }
-    if (depth != 0) throw value_error("rcm path: '" + text + "': '(' without ')'");
-    tokens.push_back(cur);
-    auto trim = [](std::string s) {
-        const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
-        return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-    };
-    auto number = [&](const std::string& s, const std::string& tok) {
-        const std::string t = trim(s);
-        char* end = nullptr;
-        const double v = std::strtod(t.c_str(), &end);
-        if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v))
-            throw value_error("rcm path: waypoint '" + tok + "': '" + t + "' is not a number");
-        if (std::abs(v) > 1) throw value_error("rcm path: waypoint '" + tok + "': " + t + " is outside [-1, 1]");
-        return v;
-    };
-    std::vector<path_point> out;
-    for (const auto& raw : tokens) {
-        const std::string tok = trim(raw);
-        if (tok.empty()) throw value_error("rcm path: '" + text + "' has an empty waypoint");
-        path_point p;
-        p.waypoint = true;
-        p.name = tok;
-        std::string body = tok;
-        char sep = ':';
-        if (body.front() == '(') {
-            if (body.back() != ')') throw value_error("rcm path: waypoint '" + tok + "' does not end with ')'");
-            body = body.substr(1, body.size() - 2);
-            sep = ',';
-        }
-        const auto at = body.find(sep);
-        if (tok.front() == '(' || at != std::string::npos) {
-            if (at == std::string::npos || body.find(sep, at + 1) != std::string::npos)
-                throw value_error("rcm path: waypoint '" + tok + "' is not two numbers V" + std::string(1, sep) + "A");
-            p.valence = number(body.substr(0, at), tok);
-            p.arousal = number(body.substr(at + 1), tok);
-        } else {
-            const auto it = std::find_if(labels.begin(), labels.end(), [&](const label_point& l) { return l.name == tok; });
-            if (it == labels.end()) {
-                std::string known;
-                for (const auto& l : labels) known += (known.empty() ? "" : ", ") + l.name;
-                throw value_error("rcm path: waypoint '" + tok + "' is not a label with coordinates (known: " + known +
-                                  ") nor a point V:A");
-            }
-            p.valence = it->valence, p.arousal = it->arousal;
-        }
-        out.push_back(p);
-    }
-    return out;
+    return handemo::parse_path(text, labels, "rcm path");
 }
 
-/// @brief Samples a polyline through `waypoints`: each segment gives `steps` points (its start and steps - 1
-/// evenly spaced points before its end), then the last waypoint, so every waypoint is a sample and there are
-/// (W - 1) steps + 1 samples.
-/// @throws value_error for no waypoints or steps == 0.
+/// @brief handemo::sample_path() for `handemo rcm path`.
 inline std::vector<path_point> sample_path(const std::vector<path_point>& waypoints, std::size_t steps)
 {
-    if (waypoints.empty()) throw value_error("rcm path: no waypoints");
-    if (steps == 0) throw value_error("rcm path: --steps must be at least 1");
-    std::vector<path_point> out;
-    for (std::size_t w = 0; w + 1 < waypoints.size(); ++w) {
-        const auto &a = waypoints[w], &b = waypoints[w + 1];
-        out.push_back(a);
-        for (std::size_t s = 1; s < steps; ++s) {
-            const double t = static_cast<double>(s) / static_cast<double>(steps);
-            path_point p;
-            p.valence = a.valence + t * (b.valence - a.valence);
-            p.arousal = a.arousal + t * (b.arousal - a.arousal);
-            out.push_back(p);
-        }
-    }
-    out.push_back(waypoints.back());
-    return out;
-}
-
-/// @brief A short title for a path point: `sad` or `(0.30,-0.10)`.
-inline std::string path_title(const path_point& p)
-{
-    char b[48];
-    std::snprintf(b, sizeof b, "(%.2f,%.2f)", p.valence, p.arousal);
-    if (p.name.empty() || p.name.find(':') != std::string::npos || p.name.front() == '(') return b;
-    return p.name;
+    return handemo::sample_path(waypoints, steps, "rcm path");
 }
 
 }  // namespace handemo::rcm

@@ -46,20 +46,16 @@ inline std::vector<double> typical_pose(const emotion_model& model)
     return r.center;
 }
 
-/// @brief Transfers `in` to `target` emotion. A capture on the model's own skeleton (same joint names and
-/// parents) with no hand or map asked for is transferred directly; any other is retargeted there and back.
-/// @throws what emotion_model::transfer() and retarget::make_map() throw (unrecognised skeletons, two hands
-/// and no choice, degenerate rest poses), naming the capture.
-inline capture_result transfer_capture(const emotion_model& model, const clip& in, std::string_view target,
-                                       std::optional<std::string_view> source = {}, const capture_options& o = {})
+/// @brief A capture through `run` (clip on the model's skeleton -> transfer_result): a capture on the model's own
+/// skeleton (same joint names and parents) with no hand or map asked for goes to `run` directly; any other is
+/// retargeted there and written back. transfer_capture() and the continuous control's share it.
+/// @throws what `run` and retarget::make_map() throw (unrecognised skeletons, two hands and no choice,
+/// degenerate rest poses), naming the capture.
+template <class Run>
+capture_result transfer_capture_with(const emotion_model& model, const clip& in, const capture_options& o, Run&& run)
 {
     capture_result r;
     const skeleton ms = model.model_skeleton();
-    auto run = [&](const clip& c) {
-        auto t = source ? model.transfer(c, target, *source) : model.transfer(c, target);
-        if (o.detail) t.motion = source ? model.add_detail(t.motion, c, target, *source) : model.add_detail(t.motion, c, target);
-        return t;
-    };
     if (in.skel.same_topology(ms) && !o.hand && !o.slots) {
         r.on_model = run(in);
         r.motion = r.on_model.motion;
@@ -74,6 +70,20 @@ inline capture_result transfer_capture(const emotion_model& model, const clip& i
     r.motion = retarget::write_back(in, r.on_model.motion, *r.map);
     r.retargeted = true;
     return r;
+}
+
+/// @brief Transfers `in` to `target` emotion (transfer_capture_with() of emotion_model::transfer(), plus the
+/// detail layer when asked for).
+/// @throws what emotion_model::transfer() and retarget::make_map() throw (unrecognised skeletons, two hands
+/// and no choice, degenerate rest poses), naming the capture.
+inline capture_result transfer_capture(const emotion_model& model, const clip& in, std::string_view target,
+                                       std::optional<std::string_view> source = {}, const capture_options& o = {})
+{
+    return transfer_capture_with(model, in, o, [&](const clip& c) {
+        auto t = source ? model.transfer(c, target, *source) : model.transfer(c, target);
+        if (o.detail) t.motion = source ? model.add_detail(t.motion, c, target, *source) : model.add_detail(t.motion, c, target);
+        return t;
+    });
 }
 
 }  // namespace handemo::stargan
