@@ -23,6 +23,12 @@ Usage:
   /usr/bin/python3 scripts/reference_stargan.py --params CONFIG
       Prints G's and D's parameter names and shapes of a configuration (hand-embedded, hand-paper,
       body-embedded, hand-micro, hand-tiny), one `G <name> <shape>` / `D <name> <shape>` line each.
+  /usr/bin/python3 scripts/reference_stargan.py --onnx SOURCE OUT.onnx
+      Exports G to ONNX (torch.onnx.export, opset 13; needs no `onnx` package) for ONNX Runtime: inputs
+      x [batch, 3, H, W] and c [batch, C] (one-hot), output y [batch, 3, H, W], the batch a dynamic axis.
+      SOURCE is a configuration name (its G with PyTorch's default initialisation after torch.manual_seed(0),
+      the G the benchmark times) or a checkpoint / generator.safetensors written by handemo (load_generator).
+      Prints `onnx <OUT.onnx>: <config>, H x W, C domains, P parameters`.
 
 Needs Debian's python3-torch (./setup.sh --golden). Checkpoints are read with the plain-Python safetensors
 reader of scripts/make_golden.py (st_read); the module functions load_generator() and build() are what the
@@ -198,7 +204,42 @@ def benchmark(config):
     return params, t_infer, t_step
 
 
+def generator_of(source):
+    """(G in eval mode, config) of a configuration name (PyTorch's default initialisation after
+    torch.manual_seed(0)) or of a checkpoint / generator.safetensors written by handemo."""
+    if source in CONFIGS:
+        torch.manual_seed(0)
+        g, _, _ = build(source)
+        return g.eval(), source
+    g, info = load_generator(source)
+    return g, info.get("config", "hand-embedded")
+
+
+def write_onnx(g, config, path):
+    """G of a configuration written to `path` as ONNX opset 13 with a dynamic batch axis (inputs x, c; output y).
+    Returns (H, W, C)."""
+    import warnings
+
+    _, _, (h, w, domains) = build(config)
+    x = torch.zeros(1, 3, h, w)
+    c = torch.zeros(1, domains)
+    axes = {"x": {0: "batch"}, "c": {0: "batch"}, "y": {0: "batch"}}
+    with warnings.catch_warnings():
+        # InstanceNorm2d without running statistics normalises by the instance's own statistics in eval mode
+        # too, which is what ONNX's InstanceNormalization does; torch warns about its train flag regardless
+        warnings.simplefilter("ignore", UserWarning)
+        torch.onnx.export(g.eval(), (x, c), path, opset_version=13, input_names=["x", "c"], output_names=["y"],
+                          dynamic_axes=axes)
+    return h, w, domains
+
+
 def main(argv):
+    if len(argv) == 3 and argv[0] == "--onnx":
+        g, config = generator_of(argv[1])
+        h, w, domains = write_onnx(g, config, argv[2])
+        params = sum(p.numel() for p in g.parameters())
+        print(f"onnx {argv[2]}: {config}, {h} x {w}, {domains} domains, {params} parameters")
+        return 0
     if len(argv) == 2 and argv[0] == "--params":
         g, d, _ = build(argv[1])
         for tag, net in (("G", g), ("D", d)):

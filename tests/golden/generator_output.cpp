@@ -4,11 +4,18 @@
 // generator::infer and through frozen_generator (the path transfers take), and the parameter names and
 // shapes of handemo's G and D, which the reference's state_dict must equal.
 // Usage: golden_generator_output <checkpoint.safetensors>
+//
+// A second mode feeds the agreement test with ONNX Runtime (tests/golden/onnx_test.py):
+//   golden_generator_output --batch CONFIG G.safetensors X.f32 C.f32 BATCH Y_BATCH.f32 Y_ONE.f32
+// loads the G parameters (PyTorch names, no prefix) of hand-embedded or hand-paper, reads BATCH images x
+// [BATCH, 3, H, W] and one-hot labels [BATCH, C] (little-endian float32), and writes G(x, c) computed by
+// frozen_generator::infer_batch on the whole batch (Y_BATCH) and by infer() one image at a time (Y_ONE).
 #include <handemo/stargan/configs.hpp>
 #include <handemo/stargan/train.hpp>
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <exception>
 #include <string>
 #include <vector>
@@ -43,12 +50,58 @@ void print_parameters(const char* key, M& model)
     std::printf("]");
 }
 
+std::vector<float> read_floats(const char* path, std::size_t count)
+{
+    std::vector<float> v(count);
+    std::ifstream in(path, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(v.data()), std::streamsize(count * sizeof(float))) || in.peek() != EOF)
+        throw io_error(std::string("golden_generator_output: ") + path + ": expected exactly " + std::to_string(count) + " float32 values");
+    return v;
+}
+
+void write_floats(const char* path, const std::vector<float>& v)
+{
+    write_file_atomic(path, std::string_view(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(float)));
+}
+
+/// The --batch mode for one configuration.
+template <stargan_config Base>
+void run_batch(char** arg)
+{
+    using cfg = with_batch<Base, 1>;
+    generator<float, cfg> g;
+    load_parameters(std::filesystem::path(arg[0]), g);
+    const std::size_t batch = std::stoul(arg[3]), per = 3 * dims<cfg>::H * dims<cfg>::W, C = Base::domains;
+    if (batch == 0) throw value_error("golden_generator_output: batch 0");
+    const auto x = read_floats(arg[1], batch * per), c = read_floats(arg[2], batch * C);
+    const auto f = g.freeze();
+    typename frozen_generator<float, cfg>::workspace ws(f, batch), one(f);
+    std::vector<float> y(batch * per), y1(batch * per);
+    f.infer_batch(x.data(), c.data(), y.data(), batch, ws);
+    for (std::size_t n = 0; n < batch; ++n) f.infer(x.data() + n * per, c.data() + n * C, y1.data() + n * per, one);
+    write_floats(arg[4], y);
+    write_floats(arg[5], y1);
+}
+
 }  // namespace
 
 int main(int argc, char** argv)
 {
+    if (argc == 9 && std::string(argv[1]) == "--batch") {
+        try {
+            const std::string config = argv[2];
+            if (config == "hand-embedded") run_batch<hand_embedded>(argv + 3);
+            else if (config == "hand-paper") run_batch<hand_paper>(argv + 3);
+            else throw value_error("golden_generator_output: configuration " + config + ", expected hand-embedded or hand-paper");
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "golden_generator_output: %s\n", e.what());
+            return 1;
+        }
+        return 0;
+    }
     if (argc != 2) {
-        std::fprintf(stderr, "usage: golden_generator_output <checkpoint.safetensors>\n");
+        std::fprintf(stderr, "usage: golden_generator_output <checkpoint.safetensors>\n"
+                             "       golden_generator_output --batch CONFIG G.safetensors X.f32 C.f32 BATCH Y_BATCH.f32 Y_ONE.f32\n");
         return 2;
     }
     try {
