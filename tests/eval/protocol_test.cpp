@@ -159,11 +159,26 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')) == n_samples + 1);  // header + samples
     // comparisons exist for each baseline and metric with a direction, pooled and per target
     const auto cmp = compare_with_baselines(r);
-    // identity, mean-offset, amplitude-only, statistics, nearest-neighbour x 8 metrics x (pooled + 4 targets)
-    CHECK(cmp.size() == 5 * 8 * 5);
+    // identity, mean-offset, amplitude-only, statistics, nearest-neighbour x 9 metrics x (pooled + 4 targets)
+    CHECK(cmp.size() == 5 * 9 * 5);
+    // the second judge: a prediction for every sample, its numbers in results.csv, its paragraph in the report, and
+    // each fold's weight from the grid with its cross-validated accuracy
+    for (const auto& s : r.samples) {
+        CHECK(std::find(r.domains.begin(), r.domains.end(), s.predicted_emotion_full) != r.domains.end());
+        CHECK(s.emotion_ok_full == (s.predicted_emotion_full == s.target));
+    }
+    CHECK(csv.find(",duration_error,emotion_ok_full,predicted_emotion_full\n") != std::string::npos);
+    CHECK(md.find("## The two emotion judges") != std::string::npos);
+    CHECK(md.find("recognised, full-rate judge (%)") != std::string::npos);
+    for (const auto& f : r.folds) {
+        CHECK(f.judge_cv_acc >= 0.0);
+        CHECK(f.judge_cv_acc <= 1.0);
+        const auto& grid = handemo::metrics::full_rate_classifier::lambda_grid;
+        CHECK(std::find(grid.begin(), grid.end(), f.judge_lambda) != grid.end());
+    }
     CHECK(md.find("**vs statistics**") != std::string::npos);
     CHECK(md.find("duration ratio error (abs log out/real)") != std::string::npos);
-    CHECK(csv.find(",duration_ratio,real_duration_ratio,duration_error\n") != std::string::npos);
+    CHECK(csv.find(",duration_ratio,real_duration_ratio,duration_error,") != std::string::npos);
     for (const auto& f : r.folds) {
         // the tempo's check on the fold's training contents is reported; the preset does not apply its weight
         CHECK(f.tempo_estimator != "");
@@ -402,6 +417,53 @@ TEST_CASE("report: the bar that says the network is worth having (stargan agains
     std::erase_if(r.samples, [](const sample_record& s) { return s.method == "statistics"; });
     CHECK(!network_bar_of(r).present);
     CHECK(markdown_report(r).find("Cleared") == std::string::npos);
+}
+
+TEST_CASE("report: the two emotion judges and the bar on the stronger one")
+{
+    eval_result r;
+    r.config = "hand-tiny", r.data = "toy", r.neutral = "neutral", r.domains = {"neutral", "angry", "sad"};
+    // 2 folds x 2 targets x 5 takes; real: nearest-centroid 60%, full-rate 90%; stargan: 50% and 80%
+    for (const char* f : {"a", "b"}) {
+        r.folds.push_back({});
+        r.folds.back().held_out = f;
+        for (const char* t : {"angry", "sad"})
+            for (int k = 0; k < 5; ++k)
+                for (const char* m : {"stargan", "real"}) {
+                    sample_record s;
+                    s.fold = f, s.target = t, s.take = std::to_string(k), s.method = m;
+                    s.rom_ratio = s.speed_ratio = s.real_rom_ratio = s.real_speed_ratio = 1;
+                    const int i = (std::string(t) == "sad") * 5 + k;  // 0..9 within the fold
+                    const bool real = std::string(m) == "real";
+                    s.emotion_ok = i < (real ? 6 : 5);
+                    s.emotion_ok_full = i < (real ? 9 : 8);
+                    r.samples.push_back(s);
+                }
+    }
+    auto b = judge_bar_of(r);
+    REQUIRE(b.present);
+    CHECK(b.real_centroid == doctest::Approx(60.0));
+    CHECK(b.real_full == doctest::Approx(90.0));
+    CHECK(b.stargan_full == doctest::Approx(80.0));
+    CHECK(std::string(b.stronger()) == "full-rate");
+    CHECK(b.cleared());  // 80 >= 90 - 10
+    CHECK(markdown_report(r).find("stronger judge on this set is the **full-rate** one; StarGAN at least real minus 10 points on it "
+                                  "(80.0% vs 80.0%): **yes**. The full-rate judge recognises at least 85% of the real clips: yes.") !=
+          std::string::npos);
+    // stargan's outputs recognised once less by the full-rate judge: below real minus 10
+    for (auto& s : r.samples)
+        if (s.method == "stargan" && s.fold == "a" && s.target == "sad" && s.take == "2") s.emotion_ok_full = false;
+    CHECK(!judge_bar_of(r).cleared());
+    // a tie goes to the nearest-centroid judge
+    for (auto& s : r.samples) s.emotion_ok_full = s.emotion_ok;
+    b = judge_bar_of(r);
+    CHECK(std::string(b.stronger()) == "nearest-centroid");
+    CHECK(b.cleared());  // 50 >= 60 - 10
+    CHECK(markdown_report(r).find("at least 85% of the real clips: no.") != std::string::npos);
+    // without a real row there is no paragraph
+    std::erase_if(r.samples, [](const sample_record& s) { return s.method == "real"; });
+    CHECK(!judge_bar_of(r).present);
+    CHECK(markdown_report(r).find("## The two emotion judges") == std::string::npos);
 }
 
 TEST_CASE("end to end: an emotion effect that depends on the content, which the statistics row cannot express")

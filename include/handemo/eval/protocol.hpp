@@ -13,6 +13,7 @@
 #include <handemo/core/progress.hpp>
 #include <handemo/metrics/baselines.hpp>
 #include <handemo/metrics/classifier.hpp>
+#include <handemo/metrics/full_rate_judge.hpp>
 #include <handemo/eval/extension.hpp>
 #include <handemo/metrics/compare.hpp>
 #include <handemo/eval/report.hpp>
@@ -90,6 +91,7 @@ struct prepared_clip {
     keyframes<K> kf;
     metrics::characteristics ch;
     metrics::characteristics full;  ///< measured on the clip as it is (measure_full())
+    std::vector<double> full_f;     ///< metrics::full_rate_features() of the clip, for the full-rate judge
 };
 
 /// Mean of a loss column over the last 10% of logged rows.
@@ -210,7 +212,9 @@ std::vector<prepared_clip<K>> prepare_clips(const std::vector<labelled_clip>& cl
 {
     std::vector<prepared_clip<K>> all;
     all.reserve(clips.size());
-    for (const auto& c : clips) all.push_back({&c, extract_keyframes<K>(c.motion), metrics::measure<K>(c.motion), metrics::measure_full(c.motion)});
+    for (const auto& c : clips)
+        all.push_back({&c, extract_keyframes<K>(c.motion), metrics::measure<K>(c.motion), metrics::measure_full(c.motion),
+                       metrics::full_rate_features(c.motion)});
     return all;
 }
 
@@ -370,6 +374,38 @@ metrics::nearest_centroid_classifier fit_classifier(const std::vector<const prep
     return clf;
 }
 
+/// The full-rate judge of a fold (metrics::full_rate_classifier), fitted on its training clips only: each clip read
+/// against the neutral clip of its content and take (its content's first neutral clip when that take has none;
+/// a content without a neutral clip is left out), the contents as the groups of its cross-validation. Records the
+/// cross-validated accuracy and the weight chosen.
+/// @throws value_error when no training clip has a neutral reference.
+template <std::size_t K>
+metrics::full_rate_classifier fit_full_rate_judge(const std::vector<const prepared_clip<K>*>& train_p, const std::string& neutral,
+                                                  fold_summary& fsum)
+{
+    std::vector<std::vector<double>> x;
+    std::vector<std::string> y, g;
+    for (const auto* p : train_p) {
+        const prepared_clip<K>* ref = nullptr;  // the same take's neutral clip, else the content's first
+        for (const auto* q : train_p) {
+            if (q->src->emotion != neutral || q->src->content != p->src->content) continue;
+            if (q->src->take == p->src->take) {
+                ref = q;
+                break;
+            }
+            if (!ref) ref = q;
+        }
+        if (!ref) continue;
+        x.push_back(metrics::full_rate_change(p->full_f, ref->full_f)), y.push_back(p->src->emotion), g.push_back(p->src->content);
+    }
+    if (x.empty()) throw value_error("eval: the full-rate judge has no training clip with a '" + neutral + "' clip of its content");
+    metrics::full_rate_classifier judge;
+    judge.fit(x, y, g);
+    fsum.judge_cv_acc = judge.cv_accuracy_chosen();
+    fsum.judge_lambda = judge.lambda();
+    return judge;
+}
+
 /// Seen-content diagnostic: the training contents' neutral takes transferred to their real targets (StarGAN
 /// and identity RMSE).
 template <std::size_t K, class Model>
@@ -490,6 +526,7 @@ inline report_section detail_section(const std::vector<track_series>& curves, co
 template <std::size_t K>
 sample_record score_output(const clip& out, const prepared_clip<K>& in, const prepared_clip<K>& real, const std::string& held,
                            const std::string& target, const char* method, const metrics::nearest_centroid_classifier& clf,
+                           const metrics::full_rate_classifier& judge,
                            const content_recogniser<K>& content_of, double real_rom, double real_speed,
                            const std::vector<std::shared_ptr<method_extension>>& extensions)
 {
@@ -502,6 +539,8 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
     s.rmse_input = metrics::keyframe_rmse(kf, in.kf);
     s.predicted_emotion = clf.predict(metrics::motion_features(kf, ch.duration));
     s.emotion_ok = s.predicted_emotion == target;
+    s.predicted_emotion_full = judge.predict(metrics::full_rate_change(metrics::full_rate_features(out), in.full_f));
+    s.emotion_ok_full = s.predicted_emotion_full == target;
     s.predicted_content = content_of(kf);
     s.content_ok = s.predicted_content == held;
     s.rom_ratio = metrics::ratio(ch.range_of_motion, in.ch.range_of_motion, "range of motion");
@@ -681,6 +720,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
             }
         }
         const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
+        const auto judge = detail::fit_full_rate_judge<K>(split.train_p, info.neutral, fsum);
         detail::seen_content_rmse<K>(models.model, split.train_p, info.neutral, fsum);
 
         // ---- extensions (eval/extension.hpp) fit on the fold's training clips only
@@ -736,7 +776,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                 const double real_rom = metrics::ratio(real->ch.range_of_motion, in->ch.range_of_motion, "range of motion");
                 const double real_speed = metrics::ratio(real->ch.speed, in->ch.speed, "speed");
                 for (const auto& [method, out] : o.rows())
-                    res.samples.push_back(detail::score_output<K>(*out, *in, *real, held, target, method, clf, content_of, real_rom,
+                    res.samples.push_back(detail::score_output<K>(*out, *in, *real, held, target, method, clf, judge, content_of, real_rom,
                                                                   real_speed, opt.extensions));
             }
         }
