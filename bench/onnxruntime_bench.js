@@ -8,7 +8,7 @@
 //   node bench/onnxruntime_bench.js check
 //       Prints `onnxruntime-node <version> (<directory>)` and exits 0, or says what is missing and exits 77.
 //   node bench/onnxruntime_bench.js time MODEL.onnx LABEL BATCHES [MIN_SECONDS]
-//       For each batch size of the comma-separated BATCHES, times session.run() on random x in [-1, 1] and
+//       For each batch size of the comma-separated BATCHES, times InferenceSession.run() on random x in [-1, 1] and
 //       one-hot labels (every target in turn): two warm-up calls, then calls until MIN_SECONDS (default 1) have
 //       passed (at least 3). Prints one line per batch:
 //       `onnxruntime <LABEL> b<batch>: <us> us per call, <clips> clips/s (<calls> calls)`.
@@ -37,7 +37,7 @@ function loadOrt() {
   return { error: `onnxruntime-node not found (${tried.join("; ")}); npm install --prefix ${dir} onnxruntime-node --ignore-scripts installs it` };
 }
 
-async function session(ort, model) {
+async function openModel(ort, model) {
   return ort.InferenceSession.create(model, {
     executionProviders: ["cpu"],
     intraOpNumThreads: 1,
@@ -64,7 +64,7 @@ function feeds(ort, x, c, batch, dims) {
 }
 
 async function time(ort, model, label, batches, minSeconds) {
-  const s = await session(ort, model);
+  const s = await openModel(ort, model);
   const dims = inputShapes(s);
   if (!dims || !(dims.H > 0 && dims.W > 0 && dims.C > 0)) throw new Error(`${model}: inputs are not x [batch, 3, H, W] and c [batch, C]`);
   let seed = 1;
@@ -91,7 +91,7 @@ async function time(ort, model, label, batches, minSeconds) {
 
 async function run(ort, model, inPath, outPath) {
   const input = JSON.parse(fs.readFileSync(inPath, "utf8"));
-  const s = await session(ort, model);
+  const s = await openModel(ort, model);
   const dims = inputShapes(s);
   const out = await s.run(feeds(ort, Float32Array.from(input.x), Float32Array.from(input.c), input.batch, dims));
   const tmp = `${outPath}.tmp${process.pid}`;
