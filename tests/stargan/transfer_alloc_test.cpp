@@ -1,7 +1,7 @@
 // transfer() with a workspace and a result to reuse allocates nothing after its first call for a clip length:
 // the allocation counter of tests/alloc_hook.hpp (this program's operator new) around repeated transfers of the
 // shipped model, which has every stage (amplitude, residual change, gate, posture prior, tempo). The results
-// equal the allocating calls' bit for bit.
+// equal the allocating calls' bit for bit; transfer_batch() gives each clip the bits of its transfer().
 #include <doctest/doctest.h>
 #include <handemo/motion/synth.hpp>
 #include <handemo/stargan/configs.hpp>
@@ -62,4 +62,38 @@ TEST_CASE("transfer with a workspace: no allocation after the first call for a c
     const long again = handemo_test::alloc_count.load();
     model.transfer(a, "sad", {}, ws, out);
     CHECK(handemo_test::alloc_count.load() - again == 0);
+}
+
+TEST_CASE("transfer_batch: each clip's result equals its transfer() bit for bit, in batches of any size")
+{
+    const auto ck = read_checkpoint(std::filesystem::path(HANDEMO_SOURCE_DIR) / "data" / "models" / "hand-embedded" / "checkpoint.safetensors");
+    const stargan::detail::emotion_model_impl<hand_embedded> model(ck.first, ck.second);
+    std::vector<clip> clips;
+    for (int take = 0; take < 7; ++take) {  // different motions, takes and lengths
+        const auto motion = take % 2 ? hand_motion::gripping : hand_motion::pointing;
+        clip c = synthesize(motion, take % 3 ? emotion::neutral : emotion::happy, take, 5, 30.0);
+        if (take == 4) c = reconstruct(extract_keyframes<9>(c), c.skel, c.frames + 23, c.fps);
+        clips.push_back(std::move(c));
+    }
+    for (const std::size_t batch : {std::size_t(3), std::size_t(7), std::size_t(16)}) {
+        CAPTURE(batch);
+        auto ws = model.make_batch_workspace(batch);
+        CHECK(ws.capacity() == batch);
+        std::vector<transfer_result> out(clips.size());
+        model.transfer_batch(clips, "angry", {}, ws, out);
+        for (std::size_t i = 0; i < clips.size(); ++i) {
+            CAPTURE(i);
+            const auto one = model.transfer(clips[i], "angry");
+            REQUIRE(out[i].motion.frames == one.motion.frames);
+            CHECK(std::memcmp(out[i].motion.angles.data(), one.motion.angles.data(), one.motion.angles.size() * sizeof(double)) == 0);
+            CHECK(std::memcmp(out[i].motion.positions.data(), one.motion.positions.data(), one.motion.positions.size() * sizeof(double)) == 0);
+            CHECK(out[i].image.values == one.image.values);
+            CHECK(out[i].tempo == one.tempo);
+            CHECK(out[i].amplitude == one.amplitude);
+        }
+    }
+    auto ws = model.make_batch_workspace(4);
+    std::vector<transfer_result> few(2);
+    CHECK_THROWS_WITH_AS(model.transfer_batch(clips, "sad", {}, ws, few), doctest::Contains("7 clips into 2 results"), value_error);
+    CHECK_THROWS_AS(model.transfer_batch(clips, "bored", {}, ws, few = std::vector<transfer_result>(7)), value_error);
 }

@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -84,8 +85,40 @@ public:
         std::unique_ptr<scratch> s_;
     };
 
+    /// @brief Per-thread scratch of transfer_batch(): a workspace per clip of a batch and the generator's buffers
+    /// for a batch (make_batch_workspace()); never shared between threads.
+    class batch_workspace {
+    public:
+        /// what the generator of a model needs for a batch of `capacity` images
+        struct generator_scratch {
+            virtual ~generator_scratch() = default;
+        };
+        batch_workspace() = default;
+        /// @brief The most clips one generator call of transfer_batch() takes.
+        std::size_t capacity() const noexcept { return clips_.size(); }
+
+    private:
+        friend class emotion_model;
+        std::vector<workspace> clips_;
+        std::unique_ptr<generator_scratch> g_;
+        std::vector<const float*> x_;
+        std::vector<float*> y_;
+        std::vector<std::size_t> targets_;
+    };
+
     /// @brief A workspace for this model's generator.
     workspace make_workspace() const { return workspace(new_scratch()); }
+
+    /// @brief A workspace for transfer_batch() with batches of `batch` clips (at least 1).
+    batch_workspace make_batch_workspace(std::size_t batch) const
+    {
+        batch_workspace ws;
+        batch = std::max<std::size_t>(batch, 1);
+        for (std::size_t i = 0; i < batch; ++i) ws.clips_.push_back(make_workspace());
+        ws.g_ = new_batch_scratch(batch);
+        ws.x_.resize(batch), ws.y_.resize(batch), ws.targets_.resize(batch);
+        return ws;
+    }
     const checkpoint_info& info() const noexcept { return info_; }
     std::size_t joints() const noexcept { return info_.range.joints; }
     std::size_t keyframes() const noexcept { return info_.range.keyframes; }
@@ -248,6 +281,52 @@ public:
     /// hold a clip as long.
     void parts_into(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws, transfer_parts& r) const
     {
+        if (!ws.get()) ws = make_workspace();
+        workspace::scratch& s = *ws.get();
+        parts_before_generator(in, target, source, ws, r);
+        generate_into(s.net, r.target, ws, s.gen);
+        parts_after_generator(in, target, source, s, r);
+    }
+
+    /// @brief transfer() of many clips to one target, with G run on batches of ws.capacity() clips (each layer over
+    /// the batch before the next: frozen_generator::infer_batch), one thread. out[i] is what transfer(in[i], target,
+    /// source) gives, bit for bit: G computes every image of a batch as it computes it alone.
+    /// @throws as transfer(), for the first clip that fails (its name in the message); `out` is valid only when the
+    /// call returns normally. value_error when out is shorter than in.
+    void transfer_batch(std::span<const clip> in, std::string_view target, std::optional<std::string_view> source, batch_workspace& ws,
+                        std::span<transfer_result> out) const
+    {
+        if (out.size() < in.size())
+            throw value_error("transfer: transfer_batch of " + std::to_string(in.size()) + " clips into " + std::to_string(out.size()) + " results");
+        if (ws.capacity() == 0) ws = make_batch_workspace(1);
+        for (std::size_t first = 0; first < in.size(); first += ws.capacity()) {
+            const std::size_t count = std::min(ws.capacity(), in.size() - first);
+            for (std::size_t i = 0; i < count; ++i) {
+                workspace::scratch& s = *ws.clips_[i].get();
+                parts_before_generator(in[first + i], target, source, ws.clips_[i], s.parts);
+                s.gen.count_ = s.net.count_;
+                s.gen.joints = s.net.joints;
+                s.gen.data.resize(s.net.data.size());
+                ws.x_[i] = s.net.data.data();
+                ws.y_[i] = s.gen.data.data();
+                ws.targets_[i] = s.parts.target;
+            }
+            run_generator_batch(ws.x_.data(), ws.targets_.data(), ws.y_.data(), count, *ws.g_);
+            for (std::size_t i = 0; i < count; ++i) {
+                workspace::scratch& s = *ws.clips_[i].get();
+                for (float v : s.gen.data)
+                    if (!std::isfinite(v)) throw value_error("transfer: model " + info_.source + ": the generator produced a non-finite value (corrupted weights?)");
+                parts_after_generator(in[first + i], target, source, s, s.parts);
+                finish_transfer(in[first + i], target, source, s, out[first + i]);
+            }
+        }
+    }
+
+private:
+    /// parts_into() up to G: the input's keyframes in the model's space, its network image in s.net, the target.
+    void parts_before_generator(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws,
+                                transfer_parts& r) const
+    {
         check_skeleton(in.skel);
         in.validate("transfer: input");
         if (!ws.get()) ws = make_workspace();
@@ -264,7 +343,15 @@ public:
         encode_into(kf, info_.range, s.pixels);
         to_network_into(s.pixels, s.net);
         r.target = domain(target);
-        generate_into(s.net, r.target, ws, s.gen);
+    }
+
+    /// parts_into() after G (its output in s.gen): the change or the decoded keyframes, amplitude, tempo, length.
+    void parts_after_generator(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace::scratch& s,
+                               transfer_parts& r) const
+    {
+        auto& kf = r.base;
+        const std::size_t C = joints() * 3;
+        const bool amp = amplitude_stage();
         from_network_into(s.gen, r.image);
         r.change.clear();
         r.change_mean.clear();
@@ -294,6 +381,7 @@ public:
         r.fps = in.fps;
     }
 
+public:
     /// @brief The output keyframes of `p` with a change gate (posture, motion, prior weights; see set_gate()).
     /// (1, 1, 0) is G's whole change, (0, 0, 0) the input with the amplitude stage. Not residual: G's output.
     handemo::keyframes<dynamic_keyframes> combine(const transfer_parts& p, double posture, double motion, double prior) const
@@ -386,8 +474,16 @@ public:
     {
         if (!ws.get()) ws = make_workspace();
         workspace::scratch& s = *ws.get();
-        transfer_parts& p = s.parts;
-        parts_into(in, target, source, ws, p);
+        parts_into(in, target, source, ws, s.parts);
+        finish_transfer(in, target, source, s, out);
+    }
+
+private:
+    /// transfer() after parts_into(): the gate, the spline at the target's tempo, the positions.
+    void finish_transfer(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace::scratch& s,
+                         transfer_result& out) const
+    {
+        const transfer_parts& p = s.parts;
         const std::size_t t = p.target;
         combine_into(p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], s.out_keys);
         reconstruct_into(s.out_keys, in.skel, p.frames, in.fps, out.motion);
@@ -398,6 +494,7 @@ public:
         stretch_positions_into(in, p.frames, out.motion.positions);
     }
 
+public:
     /// @brief Whether the checkpoint carries the detail layer (checkpoints written before it existed do not).
     bool has_detail() const noexcept { return info_.detail.has_value(); }
 
@@ -448,6 +545,23 @@ protected:
     /// x, out: [3, K, J] in [-1, 1]; `ws` made by new_scratch() of this model.
     virtual void run_generator(const float* x, std::size_t target, float* out, workspace::scratch& ws) const = 0;
     virtual std::unique_ptr<workspace::scratch> new_scratch() const = 0;
+    /// x[i], out[i]: [3, K, J] in [-1, 1], i < count <= the capacity `ws` was made for (new_batch_scratch()).
+    /// This default runs run_generator() one image at a time; a model with a batched generator overrides both.
+    virtual void run_generator_batch(const float* const* x, const std::size_t* targets, float* const* out, std::size_t count,
+                                     batch_workspace::generator_scratch& ws) const
+    {
+        auto& one = dynamic_cast<one_at_a_time&>(ws);
+        for (std::size_t i = 0; i < count; ++i) run_generator(x[i], targets[i], out[i], *one.ws.get());
+    }
+    virtual std::unique_ptr<batch_workspace::generator_scratch> new_batch_scratch(std::size_t) const
+    {
+        auto s = std::make_unique<one_at_a_time>();
+        s->ws = make_workspace();
+        return s;
+    }
+    struct one_at_a_time final : batch_workspace::generator_scratch {
+        workspace ws;
+    };
     checkpoint_info info_;
 };
 
@@ -507,6 +621,38 @@ private:
         frozen_->infer(s->in.data(), s->label.data(), s->out.data(), s->fws);
         crop_image(s->out.data(), H, W, out, K, J);
     }
+
+    /// A batch's padded inputs, labels and outputs, and the packed generator's buffers for `capacity` images.
+    struct batch_impl final : batch_workspace::generator_scratch {
+        batch_impl(const frozen_generator<float, cfg>& g, std::size_t capacity)
+            : fws(g, capacity), in(capacity * 3 * H * W), out(capacity * 3 * H * W), label(capacity * Base::domains)
+        {
+        }
+        typename frozen_generator<float, cfg>::workspace fws;
+        std::vector<float> in, out, label;
+    };
+
+    std::unique_ptr<batch_workspace::generator_scratch> new_batch_scratch(std::size_t capacity) const override
+    {
+        return std::make_unique<batch_impl>(*frozen_, capacity);
+    }
+
+    void run_generator_batch(const float* const* x, const std::size_t* targets, float* const* out, std::size_t count,
+                             batch_workspace::generator_scratch& ws) const override
+    {
+        auto* s = dynamic_cast<batch_impl*>(&ws);
+        if (!s) throw value_error("transfer: model " + info_.source + ": the batch workspace was made by another model");
+        constexpr std::size_t per = 3 * H * W, C = Base::domains;
+        std::fill(s->label.begin(), s->label.end(), 0.f);
+        for (std::size_t i = 0; i < count; ++i) {
+            if (targets[i] >= C) throw value_error("transfer: target domain " + std::to_string(targets[i]) + " out of range");
+            s->label[i * C + targets[i]] = 1.f;
+            pad_image(x[i], K, J, s->in.data() + i * per, H, W);
+        }
+        frozen_->infer_batch(s->in.data(), s->label.data(), s->out.data(), count, s->fws);  // throws when count > capacity
+        for (std::size_t i = 0; i < count; ++i) crop_image(s->out.data() + i * per, H, W, out[i], K, J);
+    }
+
     std::optional<frozen_generator<float, cfg>> frozen_;
 };
 
