@@ -9,6 +9,7 @@
 
 #include <handemo/render/animation.hpp>
 #include <handemo/render/canvas.hpp>
+#include <handemo/render/circumplex_strip.hpp>
 #include <handemo/render/figure.hpp>
 #include <handemo/render/filmstrip.hpp>
 #include <handemo/render/font.hpp>

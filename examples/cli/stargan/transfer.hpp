@@ -2,7 +2,9 @@
 // into the target emotion with a trained model (Section 3.4 of the hand paper: keyframes -> Eq. 3 image -> G ->
 // Eq. 6 -> interpolation, with the learned tempo factor). A folder in: every .bvh in it, on --threads threads
 // sharing the one loaded model, into the --out folder under the same names, with a progress bar; a file that
-// fails is named and skipped, and the command fails at the end when any did.
+// fails is named and skipped, and the command fails at the end when any did. Instead of --emotion, a point of the
+// circumplex (--valence V --arousal A), or a target that moves over the clip (--path "neutral,sad,angry" with
+// --duration, or --curve FILE of time,valence,arousal rows): the continuous control of stargan/continuous.hpp.
 #pragma once
 
 #include "../registry.hpp"
@@ -10,6 +12,7 @@
 
 #include <handemo/image.hpp>
 #include <handemo/image/keyframe_image.hpp>
+#include <handemo/render/circumplex_strip.hpp>
 #include <handemo/retarget.hpp>
 #include <handemo/stargan.hpp>
 #include "../retarget_common.hpp"
@@ -33,6 +36,12 @@
 #ifndef HANDEMO_INSTALLED_MODEL
 #define HANDEMO_INSTALLED_MODEL ""
 #endif
+#ifndef HANDEMO_SHIPPED_CIRCUMPLEX
+#define HANDEMO_SHIPPED_CIRCUMPLEX ""
+#endif
+#ifndef HANDEMO_INSTALLED_CIRCUMPLEX
+#define HANDEMO_INSTALLED_CIRCUMPLEX ""
+#endif
 
 namespace handemo::cli::transfer_cmd {
 
@@ -46,12 +55,126 @@ inline std::filesystem::path default_model()
                    " (set HANDEMO_MODEL or pass --model)");
 }
 
+/// The labels' circumplex coordinates: this source tree's data/rcm/circumplex.json, else the installed copy.
+inline std::filesystem::path default_circumplex()
+{
+    for (const char* p : {HANDEMO_SHIPPED_CIRCUMPLEX, HANDEMO_INSTALLED_CIRCUMPLEX})
+        if (*p && std::filesystem::exists(p)) return p;
+    throw io_error(std::string("transfer: no circumplex coordinates at ") + HANDEMO_SHIPPED_CIRCUMPLEX + " or " + HANDEMO_INSTALLED_CIRCUMPLEX +
+                   " (pass --circumplex)");
+}
+
 struct transfer_cli {
     std::string model, in, emotion, out, from, like, hand, map;
     std::size_t frames = 0, threads = 0;
     bool detail = false;
     kernels::weight_storage weights = kernels::weight_storage::native;
+    // the continuous target: a point, a path over a duration, or a curve file
+    std::optional<double> valence, arousal, duration;
+    std::string path, curve, circumplex;
+    // a filmstrip along the --path: one column per point (--steps per segment), a small circumplex above each
+    std::string filmstrip;
+    std::size_t steps = 4, rows = 5;
 };
+
+/// What a transfer goes to: an emotion, or the continuous control with a point or a curve.
+struct transfer_target {
+    std::optional<stargan::continuous_control> control;
+    std::optional<std::pair<double, double>> point;
+    std::optional<va_curve> curve;
+    std::string title;  ///< for the report: the emotion, the point or the path
+};
+
+/// The target of the options: exactly one of --emotion, --valence/--arousal, --path, --curve. A --path without
+/// --duration spans `clip_seconds` (the input's duration; 0 when the input is a folder: then --duration is needed).
+inline transfer_target target_of(const transfer_cli& o, const stargan::emotion_model& model)
+{
+    const int kinds = (o.emotion.empty() ? 0 : 1) + (o.valence || o.arousal ? 1 : 0) + (o.path.empty() ? 0 : 1) + (o.curve.empty() ? 0 : 1);
+    if (kinds == 0) throw value_error("transfer: no target: give --emotion, or --valence and --arousal, or --path, or --curve");
+    if (kinds > 1) throw value_error("transfer: give one target: --emotion, --valence/--arousal, --path or --curve");
+    if (o.duration && o.path.empty()) throw value_error("transfer: --duration is the time of a --path");
+    transfer_target t;
+    if (!o.emotion.empty()) {
+        model.domain(o.emotion);  // an unknown emotion stops here, before any file is read
+        t.title = o.emotion;
+        return t;
+    }
+    if (o.detail) throw value_error("transfer: --detail is per emotion: it is not available with a continuous target");
+    const std::filesystem::path table_path = o.circumplex.empty() ? default_circumplex() : std::filesystem::path(o.circumplex);
+    const circumplex_table table = load_circumplex(table_path);
+    t.control.emplace(model, table, table_path.string());
+    char b[96];
+    if (o.valence || o.arousal) {
+        if (!o.valence || !o.arousal) throw value_error("transfer: --valence and --arousal go together (a point of the circumplex)");
+        circumplex_interpolation::check_point(*o.valence, *o.arousal, "transfer: --valence/--arousal");
+        t.point.emplace(*o.valence, *o.arousal);
+        std::snprintf(b, sizeof b, "valence %g arousal %g", *o.valence, *o.arousal);
+        t.title = b;
+    } else if (!o.path.empty()) {
+        const auto waypoints = parse_path(o.path, table.labels, "transfer: --path");
+        if (o.duration && !(*o.duration > 0)) throw value_error("transfer: --duration " + std::to_string(*o.duration) + " s is not positive");
+        // without --duration, the path spans the input (set per clip by curve_for())
+        t.curve = path_curve(waypoints, o.duration ? *o.duration : 1.0, "transfer: --path");
+        t.title = "path " + o.path;
+    } else {
+        t.curve = read_va_curve(o.curve);
+        t.title = "curve " + o.curve;
+    }
+    return t;
+}
+
+/// The curve of `t` for a clip: a --path without --duration stretched from the clip's first frame to its last.
+inline va_curve curve_for(const transfer_cli& o, const transfer_target& t, const clip& in)
+{
+    va_curve c = *t.curve;
+    if (!o.path.empty() && !o.duration && c.size() > 1) {
+        const double d = in.frames > 1 ? static_cast<double>(in.frames - 1) / in.fps : 1.0;  // first frame to last
+        const double scale = d / c.time.back();
+        for (auto& x : c.time) x *= scale;
+    }
+    return c;
+}
+
+/// --filmstrip: the input, then one column per point of the --path (waypoints and --steps - 1 points between each
+/// two), each the transfer at that constant point, with the point drawn on a small circumplex above its column.
+inline void write_path_filmstrip(const transfer_cli& o, const transfer_target& t, const clip& in, const stargan::capture_options& co)
+{
+    const std::string ext = std::filesystem::path(o.filmstrip).extension().string();
+    if (ext != ".png" && ext != ".bmp") throw value_error("transfer: --filmstrip " + o.filmstrip + ": expected a .png or .bmp file");
+    const circumplex_table table = load_circumplex(o.circumplex.empty() ? default_circumplex() : std::filesystem::path(o.circumplex));
+    const auto points = sample_path(parse_path(o.path, table.labels, "transfer: --path"), o.steps, "transfer: --steps");
+    const auto source = o.from.empty() ? std::optional<std::string_view>() : std::optional<std::string_view>(o.from);
+    std::vector<clip> clips{in};
+    std::vector<std::optional<std::pair<double, double>>> where{std::nullopt};
+    filmstrip_options fo;
+    fo.rows = o.rows;
+    fo.cell_width = fo.cell_height = 140;
+    fo.titles.push_back("input");
+    for (const auto& p : points) {
+        clips.push_back(stargan::transfer_capture(*t.control, in, std::pair{p.valence, p.arousal}, source, co).motion);
+        where.emplace_back(std::pair{p.valence, p.arousal});
+        fo.titles.push_back(path_title(p));
+    }
+    // the labels' points on each inset: the model's, neutral first
+    const auto& labels = t.control->interpolation().labels();
+    std::vector<label_point> drawn{labels[t.control->interpolation().neutral()]};
+    for (std::size_t i = 0; i < labels.size(); ++i)
+        if (i != t.control->interpolation().neutral()) drawn.push_back(labels[i]);
+    const rgb_image im = render_circumplex_filmstrip(clips, where, drawn, fo);
+    (ext == ".png" ? write_png : write_bmp)(o.filmstrip, im);
+    std::cout << "transfer: wrote " << o.filmstrip << " (" << im.width << "x" << im.height << ", the input and " << points.size()
+              << " points of the path)\n";
+}
+
+/// One capture through the target: transfer_capture() of the emotion, the point or the curve.
+inline stargan::capture_result transfer_one(const transfer_cli& o, const stargan::emotion_model& model, const transfer_target& t, const clip& in,
+                                            const stargan::capture_options& co)
+{
+    const auto source = o.from.empty() ? std::optional<std::string_view>() : std::optional<std::string_view>(o.from);
+    if (t.point) return stargan::transfer_capture(*t.control, in, *t.point, source, co);
+    if (t.curve) return stargan::transfer_capture(*t.control, in, curve_for(o, t, in), source, co);
+    return stargan::transfer_capture(model, in, o.emotion, source, co);
+}
 
 inline bool has_ext(const std::string& p, const char* a, const char* b = nullptr)
 {
@@ -72,15 +195,15 @@ inline stargan::capture_options capture_options_of(const transfer_cli& o, const 
 /// --in DIR: every .bvh of the folder (not its subfolders), sorted by name, to --out DIR under the same name.
 /// Threads take files in turn; each output is written atomically; a failure is printed with the file's name and
 /// the rest go on; at the end, the files per second, and an error when any failed.
-inline void run_folder(const transfer_cli& o, const stargan::emotion_model& model)
+inline void run_folder(const transfer_cli& o, const stargan::emotion_model& model, const transfer_target& target)
 {
     namespace fs = std::filesystem;
     if (has_ext(o.out, ".bvh", ".bmp") || has_ext(o.out, ".png"))
         throw value_error("transfer: --in " + o.in + " is a folder: --out must be a folder too, not " + o.out);
     if (!o.like.empty() || o.frames) throw value_error("transfer: --like and --frames are for a motion image input, not a folder");
+    if (!o.filmstrip.empty()) throw value_error("transfer: --filmstrip draws one input: --in " + o.in + " is a folder");
     if (o.detail && !model.has_detail())
         throw value_error("transfer: --detail: model " + model.info().source + " has no detail layer (trained before it existed): train it again");
-    model.domain(o.emotion);  // an unknown emotion stops here, before any file is read
     if (!o.from.empty()) model.domain(o.from);
     std::vector<fs::path> files;
     for (const auto& e : regular_files_in(o.in))
@@ -103,8 +226,7 @@ inline void run_folder(const transfer_cli& o, const stargan::emotion_model& mode
             try {
                 const clip in = read_bvh(files[i]);
                 const auto co = capture_options_of(o, in);
-                const auto cr = o.from.empty() ? stargan::transfer_capture(model, in, o.emotion, {}, co)
-                                               : stargan::transfer_capture(model, in, o.emotion, o.from, co);
+                const auto cr = transfer_one(o, model, target, in, co);
                 write_bvh(fs::path(o.out) / files[i].filename(), cr.motion, cr.retargeted ? -1 : 6);
             } catch (const std::exception& e) {
                 error = e.what();
@@ -123,7 +245,7 @@ inline void run_folder(const transfer_cli& o, const stargan::emotion_model& mode
     for (auto& th : pool) th.join();
     bar.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cout << "transfer: " << files.size() - failed.size() << " of " << files.size() << " files of " << o.in << " -> " << o.emotion << " -> "
+    std::cout << "transfer: " << files.size() - failed.size() << " of " << files.size() << " files of " << o.in << " -> " << target.title << " -> "
               << o.out << " (" << threads << " threads, " << static_cast<double>(files.size()) / std::max(seconds, 1e-9) << " files/s)\n";
     if (!failed.empty()) {
         std::string names;
@@ -144,8 +266,9 @@ inline void run_transfer(const transfer_cli& o)
                   << " (trained on handemo's synthetic hand emotions, not on real captures)\n";
     const auto model = load_model(model_path, o.weights);
     const auto& info = model->info();
+    const transfer_target target = target_of(o, *model);
     if (is_folder(o.in)) {
-        run_folder(o, *model);
+        run_folder(o, *model, target);
         return;
     }
     if (o.threads) throw value_error("transfer: --threads is for a folder --in (" + o.in + " is a file)");
@@ -153,10 +276,13 @@ inline void run_transfer(const transfer_cli& o)
     if (!in_image && !has_ext(o.in, ".bvh"))
         throw value_error("transfer: --in " + o.in + ": expected a .bvh, .bmp or .png file");
     if (!out_image && !has_ext(o.out, ".bvh")) throw value_error("transfer: --out " + o.out + ": expected a .bvh, .bmp or .png file");
-    const std::size_t target = model->domain(o.emotion);
+    if (target.control && (in_image || out_image))
+        throw value_error("transfer: a continuous target blends full-rate motions: --in and --out must be .bvh files (" +
+                          (in_image ? o.in : o.out) + " is a motion image)");
     if (in_image) {
+        const std::size_t target_domain = model->domain(o.emotion);
         const auto px = from_image<dynamic_keyframes>(read_image(o.in), model->joints(), model->keyframes(), o.in);
-        const auto gen = model->translate(px, target);
+        const auto gen = model->translate(px, target_domain);
         if (out_image) {
             (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(gen));
         } else {
@@ -176,7 +302,8 @@ inline void run_transfer(const transfer_cli& o)
     if (o.detail && !model->has_detail())
         throw value_error("transfer: --detail: model " + model_path + " has no detail layer (trained before it existed): train it again");
     const auto co = capture_options_of(o, in);
-    const auto cr = o.from.empty() ? transfer_capture(*model, in, o.emotion, {}, co) : transfer_capture(*model, in, o.emotion, o.from, co);
+    if (!o.filmstrip.empty() && o.path.empty()) throw value_error("transfer: --filmstrip draws the points of a --path");
+    const auto cr = transfer_one(o, *model, target, in, co);
     if (cr.map) print_map_summary("transfer", o.in, *cr.map);
     const auto& r = cr.on_model;
     if (out_image)
@@ -186,8 +313,19 @@ inline void run_transfer(const transfer_cli& o)
     if (r.clamped_values)
         std::cerr << "transfer: warning: " << r.clamped_values << " keyframe angles of " << o.in << " lie outside the model's range ["
                   << info.range.p_min << ", " << info.range.p_max << "] and were clamped by Eq. 3\n";
-    std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << o.emotion << " (tempo x" << r.tempo << ", "
-              << cr.motion.frames << " frames" << (o.detail ? ", with detail" : "") << ") -> " << o.out << "\n";
+    std::string weights;
+    if (target.point) {  // the labels the point blends, in the model's domain order
+        const auto w = target.control->weights(target.point->first, target.point->second);
+        char b[64];
+        for (std::size_t d = 0; d < w.size(); ++d)
+            if (w[d] != 0) {
+                std::snprintf(b, sizeof b, "%s%s %.3f", weights.empty() ? ", weights " : " ", info.domains[d].c_str(), w[d]);
+                weights += b;
+            }
+    }
+    std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << target.title << " (tempo x" << r.tempo << ", "
+              << cr.motion.frames << " frames" << (o.detail ? ", with detail" : "") << weights << ") -> " << o.out << "\n";
+    if (!o.filmstrip.empty()) write_path_filmstrip(o, target, in, co);
 }
 
 }  // namespace handemo::cli::transfer_cmd
@@ -199,7 +337,20 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
                     "Model folder or checkpoint.safetensors written by 'handemo train' (default: the shipped hand model, trained on "
                     "handemo's synthetic hand emotions)");
     sub->add_option("--in", o->in, "Input motion: .bvh, a K x J motion image .bmp/.png, or a folder (its .bvh files)")->required();
-    sub->add_option("--emotion", o->emotion, "Target emotion (a domain of the model, e.g. angry)")->required();
+    sub->add_option("--emotion", o->emotion, "Target emotion (a domain of the model, e.g. angry); or one of the continuous targets below");
+    sub->add_option("--valence", o->valence, "Continuous target: valence of a point of the circumplex (with --arousal; V^2 + A^2 <= 1)");
+    sub->add_option("--arousal", o->arousal, "Continuous target: arousal of the point (with --valence)");
+    sub->add_option("--path", o->path,
+                    "Continuous target moving over the clip: waypoints, comma separated, labels (neutral,sad,angry) or points V:A; "
+                    "write --path=-0.5:0.2,... when the first starts with '-'");
+    sub->add_option("--duration", o->duration, "Seconds the --path takes from the clip's first frame (default: to its last); held after");
+    sub->add_option("--curve", o->curve, "Continuous target moving over the clip: a file of time,valence,arousal rows (seconds; linear between rows)");
+    sub->add_option("--filmstrip", o->filmstrip,
+                    "With --path: also draw a filmstrip (.png/.bmp), the input then one column per point of the path, each with its "
+                    "point on a small circumplex");
+    sub->add_option("--steps", o->steps, "Columns of the --filmstrip per path segment (each waypoint is a column)")->capture_default_str();
+    sub->add_option("--rows", o->rows, "Frames per column of the --filmstrip")->capture_default_str();
+    sub->add_option("--circumplex", o->circumplex, "The labels' circumplex coordinates (default: the shipped data/rcm/circumplex.json)");
     sub->add_option("--out", o->out, "Output: .bvh (full-rate motion), .bmp/.png (motion image), or a folder for a folder --in")->required();
     sub->add_option("--threads", o->threads, "Threads for a folder --in, sharing the one loaded model (default: the machine's cores)");
     sub->add_option("--hand", o->hand, "Which hand of the capture to transfer with a hand model: left or right (needed when it has two)")

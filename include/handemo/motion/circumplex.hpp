@@ -236,7 +236,7 @@ inline std::string path_title(const path_point& p)
 /// every other; on the straight line from N to a label they are (1 - t, t) for that label and neutral; inside
 /// the triangle (N, a, b) they are its barycentric coordinates (sum_l w_l c_l = p there); beyond the outline
 /// they keep the outline's blend (no extrapolation past what a label showed); and they are Lipschitz continuous
-/// on the whole disc. docs/continuous.md gives the reasons.
+/// on the whole disc (up to the snap to a label's point within snap_distance). docs/continuous.md gives the reasons.
 class circumplex_interpolation {
 public:
     /// @param labels the labels' points, in the order the weights are wanted in (a model's domains)
@@ -271,6 +271,10 @@ public:
                                   "' lie on one ray from neutral: their blend is undefined");
     }
 
+    /// Points this close to a label's point take its weights exactly (far below any meaningful difference of
+    /// valence or arousal; far above the rounding of decimal coordinates).
+    static constexpr double snap_distance = 1e-9;
+
     const std::vector<label_point>& labels() const noexcept { return labels_; }
     std::size_t neutral() const noexcept { return neutral_; }
 
@@ -304,6 +308,13 @@ public:
     {
         check_point(valence, arousal, "circumplex interpolation");
         w.assign(labels_.size(), 0.0);
+        // a point within snap_distance of a label's is that label's: decimals typed for a label's coordinates
+        // (-0.725, -0.3775 for sad) are its point, and its transfer exactly
+        for (std::size_t l = 0; l < labels_.size(); ++l)
+            if (std::hypot(valence - labels_[l].valence, arousal - labels_[l].arousal) <= snap_distance) {
+                w[l] = 1;
+                return;
+            }
         const auto& n = labels_[neutral_];
         const double dx = valence - n.valence, dy = arousal - n.arousal, r = std::hypot(dx, dy);
         if (r == 0) {
