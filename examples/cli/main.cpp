@@ -1,5 +1,6 @@
 // handemo: the command-line front end. Subcommands are headers under motion/, render/ and stargan/, compiled
 // in cmd_motion.cpp, cmd_render.cpp and cmd_stargan.cpp; errors print one line and exit 1.
+#include "build_info.hpp"
 #include "registry.hpp"
 
 #include <handemo/core/error.hpp>
@@ -13,7 +14,7 @@ int main(int argc, char** argv)
 {
     CLI::App app{"handemo: change the emotion of captured 3D hand and body motion (StarGAN)", "handemo"};
     app.require_subcommand(1);
-    app.set_version_flag("--version", "handemo 0.1.0");
+    app.set_version_flag("--version", std::string("handemo 0.1.0 (commit ") + handemo::cli::build_commit() + ")");
     // usage errors in the same one-line form as every other error
     app.failure_message([](const CLI::App*, const CLI::Error& e) {
         return "handemo: error: " + std::string(e.what()) + " (see --help)\n";

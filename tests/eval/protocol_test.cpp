@@ -460,6 +460,10 @@ TEST_CASE("report: the two emotion judges and the bar on the stronger one")
     CHECK(std::string(b.stronger()) == "nearest-centroid");
     CHECK(b.cleared());  // 50 >= 60 - 10
     CHECK(markdown_report(r).find("at least 85% of the real clips: no.") != std::string::npos);
+    // the commit the program was built from, when given
+    CHECK(markdown_report(r).find("Commit:") == std::string::npos);
+    r.commit = "0123abc-dirty";
+    CHECK(markdown_report(r).find("Command: ``\n\nCommit: `0123abc-dirty`\n\n") != std::string::npos);
     // without a real row there is no paragraph
     std::erase_if(r.samples, [](const sample_record& s) { return s.method == "real"; });
     CHECK(!judge_bar_of(r).present);

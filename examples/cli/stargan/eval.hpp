@@ -5,6 +5,7 @@
 // xtensor-blas, cmd_rcm.cpp adds the circumplex method (on by default, `--no-rcm`) through eval_extensions().
 #pragma once
 
+#include "../build_info.hpp"
 #include "../registry.hpp"
 #include "options.hpp"
 
@@ -32,6 +33,7 @@ void run_eval_cli(eval_cli& o)
     using namespace handemo;
     finish_train_options(o.opt.train, o.ov);
     o.opt.command = o.command;
+    o.opt.commit = handemo::cli::build_commit();  // printed in the report: the code that made it
     if (o.has_synth_seed) o.opt.synth_seed = o.synth_seed;
     const auto r = eval::run_eval_named(o.data, o.config, o.opt, o.report);
     std::cout << "eval: " << r.folds.size() << " folds, " << r.samples.size() << " scored clips in " << r.seconds / 60.0

@@ -50,6 +50,9 @@ struct eval_options {
     double shrinkage = 0.5;         ///< of the emotion classifier, see nearest_centroid_classifier
     std::FILE* progress_out = stderr;
     std::string command;            ///< recorded in the report
+    /// The source commit of the program that runs the evaluation, printed in the report (the CLI gives the one it was
+    /// built from, cmake/build_commit.cmake; "-dirty" when tracked files differed from it). Empty: not printed.
+    std::string commit;
     std::string data;               ///< data set name recorded in the report
     bool write_partial = true;      ///< rewrite the report in out_dir after every fold (an interrupted run leaves one)
     /// Load a fold's model from out_dir/folds/<content>/checkpoint.safetensors instead of training it when that
@@ -199,6 +202,7 @@ inline eval_result new_result(const stargan::config_info& info, const eval_optio
     res.config = info.name;
     res.data = opt.data;
     res.command = opt.command;
+    res.commit = opt.commit;
     res.domains = info.domain_names;
     res.neutral = info.neutral;
     res.options_text = options_text(opt);

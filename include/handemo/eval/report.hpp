@@ -94,6 +94,7 @@ struct report_section {
 /// @brief Everything one evaluation run produced.
 struct eval_result {
     std::string config, data, command;
+    std::string commit;  ///< the source commit the program was built from (eval_options::commit; empty: not recorded)
     std::vector<std::string> domains;
     std::string neutral;
     std::string options_text;  ///< training and evaluation options, one `key value` per line
@@ -453,6 +454,7 @@ inline std::string report_introduction(const eval_result& r, const std::vector<m
     std::string s;
     s += "# handemo eval: " + r.config + " on " + r.data + "\n\n";
     s += "Command: `" + r.command + "`\n\n";
+    if (!r.commit.empty()) s += "Commit: `" + r.commit + "`\n\n";
     if (r.planned_folds > r.folds.size())
         s += "**Partial report: " + std::to_string(r.folds.size()) + " of " + std::to_string(r.planned_folds) +
              " folds done.**\n\n";

@@ -1,0 +1,28 @@
+# Writes OUT, a header defining HANDEMO_BUILD_COMMIT: the git commit of the source tree SRC at build time, with
+# "-dirty" when tracked files differ from it, or "unknown" outside a git checkout (a source archive). Run at every
+# build (the custom target handemo_build_commit, examples/CMakeLists.txt), not at configure time: a value taken
+# when CMake configured would go stale at the next commit, since nothing re-runs the configure then. The file is
+# rewritten only when its text changes, so an unchanged commit recompiles nothing.
+# Variables: SRC, OUT.
+set(commit unknown)
+find_package(Git QUIET)
+if(GIT_FOUND)
+  execute_process(COMMAND ${GIT_EXECUTABLE} -C ${SRC} rev-parse --verify HEAD
+                  OUTPUT_VARIABLE head RESULT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
+  if(rc EQUAL 0 AND head MATCHES "^[0-9a-f]+$")
+    set(commit ${head})
+    execute_process(COMMAND ${GIT_EXECUTABLE} -C ${SRC} status --porcelain --untracked-files=no
+                    OUTPUT_VARIABLE changes RESULT_VARIABLE rc2 ERROR_QUIET)
+    if(rc2 EQUAL 0 AND NOT changes STREQUAL "")
+      string(APPEND commit "-dirty")
+    endif()
+  endif()
+endif()
+set(text "// Generated at build time by cmake/build_commit.cmake: the source tree's git commit.\n#pragma once\n#define HANDEMO_BUILD_COMMIT \"${commit}\"\n")
+set(old "")
+if(EXISTS ${OUT})
+  file(READ ${OUT} old)
+endif()
+if(NOT old STREQUAL text)
+  file(WRITE ${OUT} "${text}")
+endif()

@@ -1,0 +1,53 @@
+# The commit the CLI reports (`handemo --version`; the evaluation report prints the same, tests/eval/cli_test.cmake):
+# in a git checkout it is a commit of the repository that HEAD contains (HEAD itself, unless commits were made
+# after the build), with "-dirty" exactly when tracked files differed; cmake/build_commit.cmake writes "unknown"
+# outside a checkout and leaves an unchanged header untouched. Skipped (77) without git or outside a checkout.
+# Variables: HANDEMO_CLI, SRC, WORK_DIR.
+find_package(Git QUIET)
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR}/not_a_checkout)
+
+# the script on a folder that is no checkout: "unknown"; run again on the same text, the file is not rewritten
+set(out ${WORK_DIR}/commit.hpp)
+execute_process(COMMAND ${CMAKE_COMMAND} -DSRC=${WORK_DIR}/not_a_checkout -DOUT=${out} -P ${SRC}/cmake/build_commit.cmake RESULT_VARIABLE rc)
+file(READ ${out} text)
+if(NOT rc EQUAL 0 OR NOT text MATCHES "#define HANDEMO_BUILD_COMMIT \"unknown\"")
+  message(FATAL_ERROR "build_commit.cmake outside a checkout: exit ${rc}, wrote:\n${text}")
+endif()
+file(TIMESTAMP ${out} before "%Y%m%d%H%M%S" UTC)
+execute_process(COMMAND ${CMAKE_COMMAND} -E sleep 1)
+execute_process(COMMAND ${CMAKE_COMMAND} -DSRC=${WORK_DIR}/not_a_checkout -DOUT=${out} -P ${SRC}/cmake/build_commit.cmake)
+file(TIMESTAMP ${out} after "%Y%m%d%H%M%S" UTC)
+if(NOT before STREQUAL after)
+  message(FATAL_ERROR "build_commit.cmake rewrote an unchanged header (${before} -> ${after}): every build would recompile")
+endif()
+# a different text is rewritten
+file(WRITE ${out} "stale")
+execute_process(COMMAND ${CMAKE_COMMAND} -DSRC=${WORK_DIR}/not_a_checkout -DOUT=${out} -P ${SRC}/cmake/build_commit.cmake)
+file(READ ${out} again)
+if(NOT again STREQUAL text)
+  message(FATAL_ERROR "build_commit.cmake left a stale header:\n${again}")
+endif()
+
+if(NOT GIT_FOUND)
+  message("build_commit: git not found: the CLI's commit is not checked: skipped")
+  cmake_language(EXIT 77)
+endif()
+execute_process(COMMAND ${GIT_EXECUTABLE} -C ${SRC} rev-parse --verify HEAD RESULT_VARIABLE rc OUTPUT_QUIET ERROR_QUIET)
+if(NOT rc EQUAL 0)
+  message("build_commit: ${SRC} is not a git checkout: the CLI's commit is not checked: skipped")
+  cmake_language(EXIT 77)
+endif()
+execute_process(COMMAND ${HANDEMO_CLI} --version RESULT_VARIABLE rc OUTPUT_VARIABLE version)
+if(NOT rc EQUAL 0 OR NOT version MATCHES "^handemo [0-9.]+ \\(commit ([0-9a-f]+)(-dirty)?\\)")
+  message(FATAL_ERROR "handemo --version: exit ${rc}, printed '${version}', expected 'handemo X.Y.Z (commit <sha>[-dirty])'")
+endif()
+set(sha ${CMAKE_MATCH_1})
+string(LENGTH "${sha}" n)
+if(NOT n EQUAL 40)
+  message(FATAL_ERROR "handemo --version: '${sha}' is not a full commit id")
+endif()
+execute_process(COMMAND ${GIT_EXECUTABLE} -C ${SRC} merge-base --is-ancestor ${sha} HEAD RESULT_VARIABLE rc ERROR_QUIET)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "handemo --version names commit ${sha}, which is not HEAD or one of its ancestors in ${SRC}")
+endif()
