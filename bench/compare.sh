@@ -1,35 +1,42 @@
 #!/usr/bin/env bash
-# Side-by-side: handemo's benchmarks vs the PyTorch CPU reference StarGAN vs this machine's FMA peak.
-# Everything it measures against is in the repository: the reference is scripts/reference_stargan.py and the
-# peak program bench/peak_fma.cpp (CMake target peak_fma).
+# Side-by-side: handemo's benchmarks vs the PyTorch CPU reference StarGAN vs ONNX Runtime vs this machine's FMA
+# peak. Everything it measures against is in the repository: the reference is scripts/reference_stargan.py, which
+# also exports the G that ONNX Runtime runs (--onnx, opset 13), ONNX Runtime's runner bench/onnxruntime_bench.js
+# (the npm package onnxruntime-node, one thread), and the peak program bench/peak_fma.cpp (CMake target peak_fma).
 # Builds bench_conv, peak_fma (and bench_stargan when bench/stargan_bench.cpp exists) in Release with
 # -march=native, then in one run: the instruction set the kernels were compiled for (xsimd's default_arch:
 # avx512bw, avx2, ...), the FP32 FMA peak of that instruction set (peak_fma's AVX512 or AVX2 line; and the
 # same loop inside bench_conv, which the table uses), reference_stargan.py with 1 and 2 threads, the handemo
-# benchmarks, and a table of ratios.
+# benchmarks, ONNX Runtime at batch 1 and 32, and tables of ratios and of FLOPs against the peak.
 # The machine this runs on may be a shared VM whose speed moves by 15-30% within minutes, so the PyTorch
-# reference, the in-process peaks and the handemo inference and training benchmarks run in ROUNDS rounds,
+# reference, the in-process peaks, the handemo inference and training benchmarks and ONNX Runtime run in ROUNDS rounds,
 # one after the other within each round; the table gives each number's median over the rounds with its
 # range, and the 2-thread / 1-thread ratio as the median of the rounds' ratios (each round's pair is
 # measured back to back).
-# Usage: bench/compare.sh [--out[=FILE]] [--dry-run] [build-dir]   (default build-dir: <repo>/build-bench)
+# Usage: bench/compare.sh [--out[=FILE]] [--dry-run] [--quick] [build-dir]   (default build-dir: <repo>/build-bench)
 #   --out       also writes the table to bench/results/<YYYY-MM-DD>-<cpu-model>.md (FILE: there instead)
 #               under a header giving the commit, the CPU model, the compiler, the load average at the start
 #               and the number of rounds; an existing file of that name is kept (-2, -3, ... is added)
 #   --dry-run   checks that the reference and the peak program are there and whether Python has torch,
 #               prints what a run would build, run and write (with --out, the file's name and header), and
 #               builds and measures nothing
+#   --quick     runs every step for a moment (benchmarks 0.01 s, a few reference calls): checks that the whole
+#               comparison runs end to end; its numbers are not measurements (the table says so; no --out)
 #   HANDEMO_COMPARE_ROUNDS=N (default 3; 1 gives the single-pass numbers of earlier versions)
+#   HANDEMO_ORT_DIR=DIR (default <repo>/build-ort): where onnxruntime-node is installed, by
+#               npm install --prefix DIR onnxruntime-node --ignore-scripts (without it, or without node or
+#               torch, the ONNX Runtime columns are n/a)
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
 usage() { sed -n '/^# Usage: /,/^#   HANDEMO/s/^# \{0,1\}//p' "$0"; }
-write_out=0 results="" dry=0 build=""
+write_out=0 results="" dry=0 build="" quick=0
 for arg in "$@"; do
   case "$arg" in
     --out) write_out=1 ;;
     --out=*) write_out=1; results=${arg#--out=} ;;
     --dry-run) dry=1 ;;
+    --quick) quick=1 ;;
     -h|--help) usage; exit 0 ;;
     -*) echo "compare.sh: unknown option $arg" >&2; usage >&2; exit 2 ;;
     *) [ -z "$build" ] || { echo "compare.sh: more than one build directory ($build, $arg)" >&2; exit 2; }
@@ -37,6 +44,9 @@ for arg in "$@"; do
   esac
 done
 build=${build:-$root/build-bench}
+if [ "$quick" = 1 ] && [ "$write_out" = 1 ]; then
+  echo "compare.sh: --quick numbers are not measurements: no --out with --quick" >&2; exit 2
+fi
 rounds=${HANDEMO_COMPARE_ROUNDS:-3}
 case "$rounds" in ''|*[!0-9]*|0) echo "compare.sh: HANDEMO_COMPARE_ROUNDS '$rounds' is not a positive integer"; exit 1 ;; esac
 py=/usr/bin/python3
@@ -63,6 +73,7 @@ results_header() {  # $1: the load average when the rounds started
   echo "- CPU: $(cpu_model) ($(nproc) logical CPUs); kernels compiled for ${isa:-the native instruction set}"
   echo "- compiler: $(compiler_version)"
   echo "- PyTorch: $torch_version"
+  echo "- ONNX Runtime: $ort_version"
   echo "- load average (1, 5, 15 min): $load_start at the start, $1 when the rounds started"
   echo "- rounds: $rounds (HANDEMO_COMPARE_ROUNDS): every time is the median over the rounds, its range in parentheses"
   echo
@@ -81,13 +92,27 @@ elif [ -x "$py" ] && v=$("$py" -c 'import torch; print(torch.__version__)' 2>/de
   have_torch=1 torch_version="$v ($py)"
 fi
 
+# ONNX Runtime: node, the runner, onnxruntime-node where HANDEMO_ORT_DIR says, and torch to export G
+ort_runner="$here/onnxruntime_bench.js" have_ort=0
+export HANDEMO_ORT_DIR=${HANDEMO_ORT_DIR:-$root/build-ort}
+if ! command -v node >/dev/null 2>&1; then
+  ort_version="n/a: node is not on PATH"
+elif ! v=$(node "$ort_runner" check 2>&1); then
+  ort_version="n/a: ${v#SKIP: }"
+elif [ "$have_torch" != 1 ]; then
+  ort_version="n/a: exporting G to ONNX needs torch ($torch_version)"
+else
+  have_ort=1 ort_version="${v%% (*} (HANDEMO_ORT_DIR)"  # no machine path in a results file
+fi
+
 if [ "$dry" = 1 ]; then
   echo "== dry run: nothing is built or measured"
   echo "build directory: $build (Release, -march=native; targets bench_conv peak_fma$([ -f "$here/stargan_bench.cpp" ] && echo ' bench_stargan'))"
   echo "peak program:    $peak_src$([ -f "$peak_src" ] || echo ': MISSING')"
   echo "reference:       $ref$([ -f "$ref" ] || echo ': MISSING')"
   echo "PyTorch:         $torch_version"
-  echo "rounds:          $rounds"
+  echo "ONNX Runtime:    $ort_version"
+  echo "rounds:          $rounds$([ "$quick" = 1 ] && echo ' (--quick: a run-through, not a measurement)')"
   if [ "$write_out" = 1 ]; then
     echo "results file:    $results, starting:"
     results_header "..." | sed 's/^/    /'
@@ -134,6 +159,21 @@ else
 fi
 
 [ "$have_torch" = 1 ] || echo "(PyTorch $torch_version: PyTorch columns n/a)"
+# --quick: every benchmark for a moment
+ref_quick="" conv_min=0.5 layer_min=0.1 ort_min=1
+if [ "$quick" = 1 ]; then
+  export HANDEMO_BENCH_QUICK=1
+  ref_quick=--quick conv_min=0.01 layer_min=0.01 ort_min=0
+fi
+# the G ONNX Runtime runs: the reference's paper and embedded G, exported once for every round
+if [ "$have_ort" = 1 ]; then
+  echo "== ONNX Runtime: $ort_version; exporting G (reference_stargan.py --onnx, opset 13)"
+  for cfg in paper embedded; do
+    "$py" "$ref" --onnx "hand-$cfg" "$out/$cfg.onnx" || { echo "(export of hand-$cfg failed: ONNX Runtime columns n/a)"; have_ort=0; }
+  done
+else
+  echo "(ONNX Runtime $ort_version: ONNX Runtime columns n/a)"
+fi
 load_rounds=$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)
 start=$(date +%s)
 for r in $(seq 1 "$rounds"); do
@@ -145,21 +185,27 @@ for r in $(seq 1 "$rounds"); do
   fi
   echo "-- PyTorch reference (CPU)"
   if [ "$have_torch" = 1 ]; then
-    echo "-- 1 thread";  "$py" "$ref" 1 | tee "$out/torch1_$r.txt"
-    echo "-- 2 threads"; "$py" "$ref" 2 | tee "$out/torch2_$r.txt"
+    echo "-- 1 thread";  "$py" "$ref" 1 $ref_quick | tee "$out/torch1_$r.txt"
+    echo "-- 2 threads"; "$py" "$ref" 2 $ref_quick | tee "$out/torch2_$r.txt"
   else
     : >"$out/torch1_$r.txt"; : >"$out/torch2_$r.txt"
   fi
   echo "-- handemo"
-  "$build/bench/bench_conv" --benchmark_filter='peak_fma|generator_convs' --benchmark_min_time=0.5 \
+  "$build/bench/bench_conv" --benchmark_filter='peak_fma|generator_convs' --benchmark_min_time=$conv_min \
     --benchmark_format=console --benchmark_out="$out/conv_$r.json" --benchmark_out_format=json
   if [ -x "$build/bench/bench_stargan" ]; then
     "$build/bench/bench_stargan" --benchmark_out="$out/stargan_$r.json" --benchmark_out_format=json
   else
     echo "(bench_stargan not built yet: n/a)"
   fi
+  : >"$out/ort_$r.txt"
+  if [ "$have_ort" = 1 ]; then
+    echo "-- ONNX Runtime (onnxruntime-node, 1 thread)"
+    node "$ort_runner" time "$out/paper.onnx" "paper(64,6)" 1,32 "$ort_min" | tee -a "$out/ort_$r.txt"
+    node "$ort_runner" time "$out/embedded.onnx" "embedded(32,3)" 1,32 "$ort_min" | tee -a "$out/ort_$r.txt"
+  fi
 done
-"$build/bench/bench_conv" --benchmark_filter='^(cd|packed/)' --benchmark_min_time=0.1 \
+"$build/bench/bench_conv" --benchmark_filter='^(cd|packed/)' --benchmark_min_time=$layer_min \
   --benchmark_out="$out/conv_layers.json" --benchmark_out_format=json >/dev/null
 echo "== $rounds rounds in $(( $(date +%s) - start )) s"
 
@@ -167,6 +213,7 @@ echo "== comparison"
 list() { local f=$1 acc="" r; for r in $(seq 1 "$rounds"); do acc="$acc${acc:+,}$out/${f}_$r.$2"; done; echo "$acc"; }
 "$py" "$here/compare_table.py" --isa "${isa:-unknown}" --peak "${peak:-0}" --torch1 "$(list torch1 txt)" \
   --torch2 "$(list torch2 txt)" --conv "$(list conv json)" --layers "$out/conv_layers.json" --stargan "$(list stargan json)" \
+  --ort "$(list ort txt)" --quick "$quick" \
   | tee "$out/table.txt"
 status=${PIPESTATUS[0]}
 

@@ -1,9 +1,13 @@
 #!/usr/bin/python3
-"""Prints the handemo vs PyTorch vs FMA-peak table of compare.sh from the outputs it collected.
-bench_stargan results are matched by name: a benchmark whose name contains `paper` or `64` (resp.
-`embedded` or `32`) and `infer` is the batch-1 generator inference, one containing `train` the training
-step (D+G, batch 16). Anything missing prints n/a.
---torch1, --torch2, --conv and --stargan take a comma-separated list of files, one per round (compare.sh's
+"""Prints the handemo vs PyTorch vs ONNX Runtime vs FMA-peak tables of compare.sh from the outputs it collected.
+bench_stargan results are matched by name: a benchmark whose name contains `paper` or `(64,` (resp.
+`embedded` or `(32,`) and `stargan_infer/` is the generator inference (`/b1` batch 1, `/b32` batch 32), one
+containing `train` the training step (D+G, batch 16), `stargan_transfer/` the transfer of 32 clips. Anything missing prints n/a. The FLOPs of a call are the
+benchmark's FLOP counter (stargan/flops.hpp: counted from the layer shapes), its share of the peak FLOP / time /
+peak. onnxruntime_bench.js lines (`onnxruntime <config>(...) b<batch>: <us> us per call, ...`) give ONNX
+Runtime's times; each round's ONNX Runtime / handemo ratio is taken within the round (the two ran one after the
+other) and the table gives the median of those ratios.
+--torch1, --torch2, --conv, --stargan and --ort take a comma-separated list of files, one per round (compare.sh's
 HANDEMO_COMPARE_ROUNDS): every time is the median over the rounds, printed with its range; the FMA peaks are
 the median of the rounds' best repetitions; the 2-thread / 1-thread ratio of the training step is the median
 of the rounds' ratios (each round measures the pair back to back)."""
@@ -94,9 +98,11 @@ def ratio(a, b):
     return "n/a" if a is None or b is None or b == 0 else f"{a/b:.2f}x"
 
 ap = argparse.ArgumentParser()
-for a in ("--isa", "--peak", "--torch1", "--torch2", "--conv", "--layers", "--stargan"):
+for a in ("--isa", "--peak", "--torch1", "--torch2", "--conv", "--layers", "--stargan", "--ort", "--quick"):
     ap.add_argument(a, default="")
 o = ap.parse_args()
+if o.quick == "1":
+    print("QUICK RUN-THROUGH (compare.sh --quick): every benchmark ran for a moment; no number below is a measurement")
 peak = float(o.peak or 0)
 t1, t2 = torch_results(o.torch1), torch_results(o.torch2)
 conv_rounds = [load_json(f) for f in files(o.conv)]
@@ -160,7 +166,7 @@ def frac_of_peak(b):
     gfl = gflops(b)
     return f"{gfl/peak:.0%} ({gfl:.1f} GFLOP/s)" if peak and gfl else "n/a"
 
-for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedded", ("embedded", "32"), "embedded(32,3)/b1")):
+for cfg, keys, suffix in (("paper", ("paper", "(64,"), "paper(64,6)/b1"), ("embedded", ("embedded", "(32,"), "embedded(32,3)/b1")):
     tp1 = t1.get(cfg, (None, None, [], [])); tp2 = t2.get(cfg, (None, None, [], []))
     for label, gname in (("G conv stack, weights packed once (bench_conv)", "packed_generator_convs/" + suffix),
                          ("G conv stack, unpacked kernels (bench_conv)", "generator_convs/" + suffix)):
@@ -168,7 +174,7 @@ for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedd
         if g:
             print(f"| {cfg} | {label} | {fmt_b(g)} | | | | {frac_of_peak(g)} |")
     # the G inference of the target: frozen_generator (weights packed once), what transfer and the CLI run
-    inf_b = star_bench(keys, "stargan_infer/")  # not stargan_infer_f16/ nor stargan_infer_unpacked/
+    inf_b = star_bench(keys, "stargan_infer/", "/b1")  # not stargan_infer_f16/ nor stargan_infer_unpacked/
     inf = seconds(inf_b) if inf_b else None
     print(f"| {cfg} | **G inference, batch 1, 1 thread** (frozen_generator) | {fmt_b(inf_b)} | {fmt_t(tp1[0])}{fmt_range(tp1[2])} | {fmt_t(tp2[0])}{fmt_range(tp2[2])} | {ratio(best(tp1[0], tp2[0]), inf)} | **{frac_of_peak(inf_b)}**{peak_range(inf_b)} |")
     h_b = star_bench(keys, "infer_f16")
@@ -205,7 +211,81 @@ for cfg, keys, suffix in (("paper", ("paper", "64"), "paper(64,6)/b1"), ("embedd
                 if prr:
                     eff += (f"; two independent half-batch steps at once (the bound with the memory system): "
                             f"{fmt_t(seconds(pair_b) * nt)} = {statistics.median(prr):.2f}x")
-        print(f"| {cfg} | train step D+G, batch 16, 1 thread | {fmt_b(tr1_b)} | {fmt_t(tp1[1])} | | {ratio(tp1[1], tr1)} | {eff} |")
+        share = frac_of_peak(tr1_b)
+        print(f"| {cfg} | train step D+G, batch 16, 1 thread | {fmt_b(tr1_b)} | {fmt_t(tp1[1])} | | {ratio(tp1[1], tr1)} | "
+              f"{share if share != 'n/a' else ''}{peak_range(tr1_b)}{'; ' if eff and share != 'n/a' else ''}{eff} |")
+print()
+
+
+def ort_results(paths):
+    """{(config, batch): {round: seconds}} of onnxruntime_bench.js's `time` lines, one file per round."""
+    per = {}
+    for r, path in enumerate(files(paths)):
+        try:
+            for line in open(path):
+                m = re.match(r"onnxruntime (\w+)\(.*?\) b(\d+): ([0-9.]+) us per call", line)
+                if m:
+                    per.setdefault((m.group(1), int(m.group(2))), {})[r] = float(m.group(3)) * 1e-6
+        except OSError:
+            pass
+    return per
+
+
+ort = ort_results(o.ort)
+print("ONNX Runtime side by side (the same G exported by reference_stargan.py --onnx; one intra-op thread; "
+      "handemo: frozen_generator, batch 32 through infer_batch):")
+print()
+print("| config | batch | handemo | ONNX Runtime | handemo throughput / ONNX Runtime's | handemo clips/s | ONNX Runtime clips/s |")
+print("|---|---|---|---|---|---|---|")
+for cfg, keys in (("paper", ("paper", "(64,")), ("embedded", ("embedded", "(32,"))):
+    for batch in (1, 32):
+        b = star_bench(keys, "stargan_infer/", f"/b{batch}")
+        ot = ort.get((cfg, batch), {})
+        o_med = statistics.median(ot.values()) if ot else None
+        o_rng = fmt_range(list(ot.values()))
+        rr = round_ratios(ot, b.get("_times", {})) if b else []
+        ratio_s = (f"{statistics.median(rr):.2f}x" + (f" (rounds {', '.join(f'{x:.2f}' for x in rr)})" if len(rr) > 1 else "")
+                   if rr else "n/a")
+        h_cps = f"{batch / seconds(b):.0f}" if b else "n/a"
+        o_cps = f"{batch / o_med:.0f}" if o_med else "n/a"
+        print(f"| {cfg} | {batch} | {fmt_b(b)} | {fmt_t(o_med)}{o_rng} | {ratio_s} | {h_cps} | {o_cps} |")
+print()
+
+tr_rows = [(label, star_bench(("embedded",), "stargan_transfer/", suffix))
+           for label, suffix in (("clip by clip (transfer() with a workspace)", "one_at_a_time"),
+                                 ("in batches of 32 (transfer_batch)", "batch32"))]
+if any(b for _, b in tr_rows):
+    print("Transfer of 32 clips with the shipped hand-embedded model (keyframes, G, spline), 1 thread:")
+    print()
+    print("| path | 32 clips | per clip | clips/s |")
+    print("|---|---|---|---|")
+    for label, b in tr_rows:
+        print(f"| {label} | {fmt_b(b)} | {fmt_t(seconds(b) / 32) if b else 'n/a'} | {f'{32 / seconds(b):.0f}' if b else 'n/a'} |")
+    print()
+
+print("Roofline: FLOPs per call counted from the layer shapes (stargan/flops.hpp; the training step's forward, "
+      "backward and the gradient penalty's double backward), against the 1-thread FP32 FMA peak"
+      + (f" of {peak:.1f} GFLOP/s" if peak else "") + ":")
+print()
+print("| config | measure | FLOP per call | handemo | GFLOP/s | share of the peak |")
+print("|---|---|---|---|---|---|")
+
+
+def fmt_flop(f):
+    return "n/a" if not f else (f"{f / 1e9:.2f} G" if f >= 1e9 else f"{f / 1e6:.1f} M")
+
+
+for cfg, keys in (("paper", ("paper", "(64,")), ("embedded", ("embedded", "(32,"))):
+    for label, b in (("G inference, batch 1", star_bench(keys, "stargan_infer/", "/b1")),
+                     ("G inference, batch 32 (infer_batch)", star_bench(keys, "stargan_infer/", "/b32")),
+                     ("train step D+G, batch 16, 1 thread", star_bench(keys, "stargan_train/", "threads:1"))):
+        # FLOP over the median wall time (what the user waits for), each round's range against the median peak
+        flop = b.get("FLOP") if b else None
+        gfl = flop / seconds(b) / 1e9 if flop else None
+        ts = list(b.get("_times", {}).values()) if b else []
+        rng = f" ({flop / max(ts) / 1e9 / peak:.0%}-{flop / min(ts) / 1e9 / peak:.0%})" if gfl and peak and len(ts) > 1 else ""
+        print(f"| {cfg} | {label} | {fmt_flop(flop)} | {fmt_b(b)} | {f'{gfl:.1f}' if gfl else 'n/a'} | "
+              f"{f'{gfl / peak:.0%}' if gfl and peak else 'n/a'}{rng} |")
 print()
 layers = load_json(o.layers)
 if layers:

@@ -1,18 +1,27 @@
-// Whole-StarGAN benchmarks (hand paper Sec. 3.3) side by side with reference_stargan.py: batch-1 generator
-// inference, single thread, tape-free (frozen_generator and generator::infer); one training step of the
+// Whole-StarGAN benchmarks (hand paper Sec. 3.3) side by side with reference_stargan.py and ONNX Runtime
+// (onnxruntime_bench.js): batch-1 generator inference, single thread, tape-free (frozen_generator and
+// generator::infer), and batch-32 inference (frozen_generator::infer_batch, clips/s); the whole transfer of 32
+// clips with the shipped model, clip by clip and in batches (emotion_model::transfer_batch, clips/s); one training step of the
 // library's trainer (D step with WGAN-GP + G step, batch 16, Adam on both), data-parallel on 2 threads and on 1
 // (threads:N), and two independent half-batch steps at once on two threads (stargan_train_pair: the bound of the
-// 2-thread step with the memory system's contention). GFLOP/s counters are
-// multiply-adds x 2 / time (for training, an estimate: 7 G-forward + 14 D-forward equivalents per step).
+// 2-thread step with the memory system's contention). Every benchmark but the pair has a FLOP counter (the FLOPs of one
+// call, stargan/flops.hpp: inference 2 x G's multiply-adds per image; the training step pass by pass, the
+// gradient penalty's double backward included) and GFLOP/s = FLOP / time.
+// HANDEMO_BENCH_QUICK=1 in the environment runs every benchmark for 0.01 s instead of its minimum time: a check
+// that the program runs end to end, not a measurement.
+#include <handemo/motion/synth.hpp>
 #include <handemo/nn/adam.hpp>
 #include <handemo/nn/init.hpp>
+#include <handemo/stargan/flops.hpp>
 #include <handemo/stargan/model.hpp>
 #include <handemo/stargan/train.hpp>
+#include <handemo/stargan/transfer.hpp>
 
 #include <benchmark/benchmark.h>
 
 #include "../tests/micro/helpers.hpp"  // runtime_model, seed_generator, flat_parameters
 
+#include <cstdlib>
 #include <memory>
 #include <random>
 #include <thread>
@@ -22,6 +31,20 @@ using namespace handemo::stargan;
 using autodiff::tape;
 
 namespace {
+
+/// A benchmark's minimum time: `seconds`, or 0.01 s with HANDEMO_BENCH_QUICK set (a run-through, not a measurement).
+double min_time(double seconds)
+{
+    const char* q = std::getenv("HANDEMO_BENCH_QUICK");
+    return q && *q && *q != '0' ? 0.01 : seconds;
+}
+
+/// The FLOP counter (one call's FLOPs) and GFLOP/s of a benchmark.
+void flop_counters(benchmark::State& st, double flop)
+{
+    st.counters["FLOP"] = flop;
+    st.counters["GFLOP/s"] = benchmark::Counter(flop, benchmark::Counter::kIsIterationInvariantRate, benchmark::Counter::kIs1000);
+}
 
 /// frozen: frozen_generator (weights packed once, the path of transfer and the CLI); else generator::infer.
 /// storage: the frozen generator's weight storage (kernels::weight_storage::f16: binary16 panels).
@@ -46,9 +69,34 @@ void bm_infer(benchmark::State& st)
         else g.infer(x.data(), lab.data(), out.data(), ws);
         benchmark::DoNotOptimize(out.data());
     }
-    st.counters["GFLOP/s"] =
-        benchmark::Counter(2.0 * generator<float, Config>::forward_macs(), benchmark::Counter::kIsIterationInvariantRate,
-                           benchmark::Counter::kIs1000);
+    flop_counters(st, generator_flops<Config>());
+}
+
+/// G inference of a batch of B clips through one packed batch-1 generator (frozen_generator::infer_batch: each
+/// layer over the whole batch), one thread: the batched path of a folder transfer; clips/s as items per second.
+template <class Config, std::size_t B>
+void bm_infer_batch(benchmark::State& st)
+{
+    static_assert(Config::batch == 1, "bm_infer_batch: a batch-1 configuration (the generator a transfer loads)");
+    using cfg = Config;
+    generator<float, cfg> g;
+    rng gen(1);
+    init_pytorch_default(g, gen);
+    const auto f = g.freeze();
+    typename frozen_generator<float, cfg>::workspace ws(f, B);
+    constexpr std::size_t H = dims<cfg>::H, W = dims<cfg>::W, C = Config::domains;
+    std::vector<float> x(B * 3 * H * W), lab(B * C, 0.f), out(x.size());
+    std::mt19937 r(2);
+    std::uniform_real_distribution<float> u(-1, 1);
+    for (auto& v : x) v = u(r);
+    for (std::size_t n = 0; n < B; ++n) lab[n * C + n % C] = 1;
+    for (auto _ : st) {
+        f.infer_batch(x.data(), lab.data(), out.data(), B, ws);
+        benchmark::DoNotOptimize(out.data());
+    }
+    st.SetItemsProcessed(std::int64_t(st.iterations()) * std::int64_t(B));
+    st.counters["batch"] = double(B);
+    flop_counters(st, double(B) * generator_flops<cfg>());
 }
 
 /// G inference of hand-micro on the microcontroller path (micro::generator: plain loops, no heap), batch 1,
@@ -70,8 +118,31 @@ void bm_infer_micro(benchmark::State& st)
         mg::infer(x.data(), 2, out.data(), ws);
         benchmark::DoNotOptimize(out.data());
     }
-    st.counters["GFLOP/s"] = benchmark::Counter(2.0 * micro_model::layout::macs(), benchmark::Counter::kIsIterationInvariantRate,
-                                                benchmark::Counter::kIs1000);
+    flop_counters(st, 2.0 * micro_model::layout::macs());
+}
+
+/// The shipped hand-embedded model transferring 32 synthesized clips (pointing and gripping at 30 fps) to
+/// "sad", one thread: clip by clip (transfer() with a workspace, as each thread of `handemo transfer --in DIR` does)
+/// or, with batch > 0, through transfer_batch() in batches of `batch` clips. clips/s as items per second.
+void bm_transfer(benchmark::State& st, std::size_t batch)
+{
+    const auto ck = read_checkpoint(std::filesystem::path(HANDEMO_SOURCE_DIR) / "data" / "models" / "hand-embedded" / "checkpoint.safetensors");
+    const stargan::detail::emotion_model_impl<hand_embedded> model(ck.first, ck.second);
+    std::vector<clip> clips;
+    for (int i = 0; i < 32; ++i)
+        clips.push_back(synthesize(i % 2 ? hand_motion::gripping : hand_motion::pointing, emotion::neutral, i / 2, 7, 30.0));
+    std::vector<transfer_result> out(clips.size());
+    auto ws = model.make_workspace();
+    auto bws = model.make_batch_workspace(std::max<std::size_t>(batch, 1));
+    for (auto _ : st) {
+        if (batch) model.transfer_batch(clips, "sad", {}, bws, out);
+        else
+            for (std::size_t i = 0; i < clips.size(); ++i) model.transfer(clips[i], "sad", {}, ws, out[i]);
+        benchmark::DoNotOptimize(out.data());
+    }
+    st.SetItemsProcessed(std::int64_t(st.iterations()) * std::int64_t(clips.size()));
+    st.counters["batch"] = double(batch);
+    flop_counters(st, double(clips.size()) * generator_flops<hand_embedded>());
 }
 
 /// A trainer of batch N (the library's own, data-parallel over `threads`) on 64 random images with random
@@ -109,14 +180,6 @@ std::unique_ptr<trainer<Base, N>> warm_trainer(unsigned threads)
     return tr;
 }
 
-/// Multiply-adds of one training step of batch N: 7 G-forward + 14 D-forward equivalents.
-template <class Base, std::size_t N>
-double train_macs()
-{
-    return 7 * generator<float, with_batch<Base, N>>::forward_macs() +
-           14 * discriminator<float, with_batch<Base, N>>::forward_macs();
-}
-
 /// One trainer::train_step() (D step with WGAN-GP and a G step, batch 16, Adam on both), data-parallel over
 /// the benchmark's argument of threads (1 and 2: the 2-thread / 1-thread ratio; 0 = all cores).
 template <class Base>
@@ -126,8 +189,7 @@ void bm_train(benchmark::State& st)
     auto tr = warm_trainer<Base, 16>(threads);
     for (auto _ : st) tr->train_step();
     benchmark::DoNotOptimize(tr->log());
-    st.counters["GFLOP/s"] = benchmark::Counter(2.0 * train_macs<Base, 16>(), benchmark::Counter::kIsIterationInvariantRate,
-                                                benchmark::Counter::kIs1000);
+    flop_counters(st, train_step_flops<with_batch<Base, 16>>().total());
     st.counters["threads"] = double(threads);
 }
 
@@ -145,21 +207,27 @@ void bm_train_pair(benchmark::State& st)
 
 }  // namespace
 
-BENCHMARK(bm_infer<hand_paper, true>)->Name("stargan_infer/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_embedded, true>)->Name("stargan_infer/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_micro, true>)->Name("stargan_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_paper, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_embedded, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_paper, false>)->Name("stargan_infer_unpacked/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer<hand_embedded, false>)->Name("stargan_infer_unpacked/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
-BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(1.0);
+BENCHMARK(bm_infer<hand_paper, true>)->Name("stargan_infer/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer<hand_embedded, true>)->Name("stargan_infer/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer_batch<hand_paper, 32>)->Name("stargan_infer/paper(64,6)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
+BENCHMARK(bm_infer_batch<hand_embedded, 32>)->Name("stargan_infer/embedded(32,3)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
+BENCHMARK_CAPTURE(bm_transfer, one_at_a_time, 0)->Name("stargan_transfer/embedded(32,3)/32clips/one_at_a_time")
+    ->Unit(benchmark::kMillisecond)->MinTime(min_time(2.0));
+BENCHMARK_CAPTURE(bm_transfer, batch32, 32)->Name("stargan_transfer/embedded(32,3)/32clips/batch32")
+    ->Unit(benchmark::kMillisecond)->MinTime(min_time(2.0));
+BENCHMARK(bm_infer<hand_micro, true>)->Name("stargan_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer<hand_paper, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer<hand_embedded, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer<hand_paper, false>)->Name("stargan_infer_unpacked/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer<hand_embedded, false>)->Name("stargan_infer_unpacked/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_train<hand_paper>)->Name("stargan_train/paper(64,6)/b16")->ArgName("threads")->Arg(2)->Arg(1)
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(min_time(3.0));
 BENCHMARK(bm_train<hand_embedded>)->Name("stargan_train/embedded(32,3)/b16")->ArgName("threads")->Arg(2)->Arg(1)
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(min_time(2.0));
 BENCHMARK(bm_train_pair<hand_paper>)->Name("stargan_train_pair/paper(64,6)/2xb8")->Threads(2)
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(min_time(3.0));
 BENCHMARK(bm_train_pair<hand_embedded>)->Name("stargan_train_pair/embedded(32,3)/2xb8")->Threads(2)
-    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2.0);
+    ->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(min_time(2.0));
 
 BENCHMARK_MAIN();

@@ -15,11 +15,12 @@ with the same parameter names, so a generator.safetensors written by `handemo tr
 Motion images are K x J x 3 zero-padded to H x W = round_up(K, 4) x round_up(J, 4).
 
 Usage:
-  /usr/bin/python3 scripts/reference_stargan.py [threads]
+  /usr/bin/python3 scripts/reference_stargan.py [threads] [--quick]
       For hand-paper (conv_dim 64, 6 blocks) and hand-embedded (32, 3), prints one line each:
       `<name>(<conv_dim>,<blocks>): G params P, inference b1 T us, train step (D+G, b16, GP) S ms`:
       batch-1 generator inference latency (no autograd) and one training step (D step with WGAN-GP, then G
       step with adversarial, reconstruction and classification losses; Adam on both; batch 16).
+      --quick: 3 inference calls and 1 training step instead of 200 and 10 (a run-through, not a measurement).
   /usr/bin/python3 scripts/reference_stargan.py --params CONFIG
       Prints G's and D's parameter names and shapes of a configuration (hand-embedded, hand-paper,
       body-embedded, hand-micro, hand-tiny), one `G <name> <shape>` / `D <name> <shape>` line each.
@@ -157,14 +158,14 @@ def seconds_per_call(fn, calls):
     return (time.perf_counter() - start) / calls
 
 
-def benchmark(config):
+def benchmark(config, infer_calls=200, step_calls=10):
     """(G parameters, inference seconds at batch 1, training step seconds at batch 16) of a configuration."""
     g, d, (h, w, domains) = build(config)
     params = sum(p.numel() for p in g.parameters())
     x1 = torch.rand(1, 3, h, w) * 2 - 1
     c1 = F.one_hot(torch.tensor([2]), domains).float()
     with torch.no_grad():
-        t_infer = seconds_per_call(lambda: g(x1, c1), 200)
+        t_infer = seconds_per_call(lambda: g(x1, c1), infer_calls)
 
     batch, lambda_cls, lambda_rec, lambda_gp = 16, 1.0, 10.0, 10.0
     opt_g = torch.optim.Adam(g.parameters(), 1e-4, betas=(0.5, 0.999))
@@ -200,7 +201,7 @@ def benchmark(config):
         loss_g.backward()
         opt_g.step()
 
-    t_step = seconds_per_call(train_step, 10)
+    t_step = seconds_per_call(train_step, step_calls)
     return params, t_infer, t_step
 
 
@@ -246,6 +247,8 @@ def main(argv):
             for name, p in net.state_dict().items():
                 print(tag, name, list(p.shape))
         return 0
+    quick = "--quick" in argv
+    argv = [a for a in argv if a != "--quick"]
     if len(argv) > 1 or (argv and not argv[0].isdigit()):
         print(__doc__)
         return 2
@@ -253,7 +256,7 @@ def main(argv):
     torch.manual_seed(0)
     for label, config in (("paper", "hand-paper"), ("embedded", "hand-embedded")):
         _, _, _, cd, blocks, _ = CONFIGS[config]
-        params, t_infer, t_step = benchmark(config)
+        params, t_infer, t_step = benchmark(config, *((3, 1) if quick else (200, 10)))
         print(f"{label}({cd},{blocks}): G params {params}, inference b1 {t_infer * 1e6:.0f} us, "
               f"train step (D+G, b16, GP) {t_step * 1e3:.1f} ms", flush=True)
     return 0
