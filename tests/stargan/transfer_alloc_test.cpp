@@ -1,13 +1,16 @@
 // transfer() with a workspace and a result to reuse allocates nothing after its first call for a clip length:
 // the allocation counter of tests/alloc_hook.hpp (this program's operator new) around repeated transfers of the
 // shipped model, which has every stage (amplitude, residual change, gate, posture prior, tempo). The results
-// equal the allocating calls' bit for bit; transfer_batch() gives each clip the bits of its transfer().
+// equal the allocating calls' bit for bit; transfer_batch() gives each clip the bits of its transfer(), and
+// transfer_capture_batch() each capture the bits of its transfer_capture(), a failing capture failing alone.
 #include <doctest/doctest.h>
 #include <handemo/motion/synth.hpp>
+#include <handemo/stargan/capture.hpp>
 #include <handemo/stargan/configs.hpp>
 #include <handemo/stargan/transfer.hpp>
 
 #include "../alloc_hook.hpp"
+#include "../retarget/rigs.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -96,4 +99,44 @@ TEST_CASE("transfer_batch: each clip's result equals its transfer() bit for bit,
     std::vector<transfer_result> few(2);
     CHECK_THROWS_WITH_AS(model.transfer_batch(clips, "sad", {}, ws, few), doctest::Contains("7 clips into 2 results"), value_error);
     CHECK_THROWS_AS(model.transfer_batch(clips, "bored", {}, ws, few = std::vector<transfer_result>(7)), value_error);
+}
+
+TEST_CASE("transfer_capture_batch: each capture as transfer_capture() gives it, through retargeting; a failing capture fails alone")
+{
+    const auto ck = read_checkpoint(std::filesystem::path(HANDEMO_SOURCE_DIR) / "data" / "models" / "hand-embedded" / "checkpoint.safetensors");
+    const stargan::detail::emotion_model_impl<hand_embedded> model(ck.first, ck.second);
+    std::vector<clip> in;
+    in.push_back(synthesize(hand_motion::pointing, emotion::neutral, 0, 9, 30.0));  // on the model's skeleton
+    in.push_back(test::random_motion(test::make_rig(test::openxr_names('r', false), {}), 90, 4, 15));  // retargeted
+    in.push_back(test::random_motion(test::make_rig(test::cmu_names(), {}), 40, 2, 10));  // a body without fingers: refused
+    in.push_back(synthesize(hand_motion::gripping, emotion::happy, 1, 9, 30.0));
+    std::vector<capture_options> options(in.size());
+    options[3].detail = model.has_detail();
+    auto ws = model.make_batch_workspace(2);
+    std::vector<capture_result> out(in.size());
+    const auto errors = transfer_capture_batch(model, in, "fearful", {}, options, ws, out);
+    REQUIRE(errors.size() == in.size());
+    for (std::size_t i = 0; i < in.size(); ++i) {
+        CAPTURE(i);
+        if (i == 2) {
+            CHECK_FALSE(errors[i].empty());
+            std::string direct;
+            try {
+                transfer_capture(model, in[i], "fearful", {}, options[i]);
+            } catch (const std::exception& e) {
+                direct = e.what();
+            }
+            CHECK(errors[i] == direct);
+            continue;
+        }
+        REQUIRE(errors[i].empty());
+        const auto one = transfer_capture(model, in[i], "fearful", {}, options[i]);
+        CHECK(out[i].retargeted == one.retargeted);
+        REQUIRE(out[i].motion.frames == one.motion.frames);
+        CHECK(out[i].motion.angles == one.motion.angles);  // bit for bit
+        CHECK(out[i].motion.positions == one.motion.positions);
+        CHECK(out[i].on_model.image.values == one.on_model.image.values);
+    }
+    CHECK(out[1].retargeted);
+    CHECK_THROWS_AS(transfer_capture_batch(model, in, "bored", {}, options, ws, out), value_error);
 }

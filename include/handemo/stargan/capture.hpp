@@ -10,6 +10,7 @@
 #include <handemo/stargan/transfer.hpp>
 
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -84,6 +85,78 @@ inline capture_result transfer_capture(const emotion_model& model, const clip& i
         if (o.detail) t.motion = source ? model.add_detail(t.motion, c, target, *source) : model.add_detail(t.motion, c, target);
         return t;
     });
+}
+
+/// @brief transfer_capture() of many captures to one `target` emotion, with G run on batches of ws.capacity()
+/// captures (emotion_model::transfer_batch): out[i] is transfer_capture(model, in[i], target, source, options[i])
+/// bit for bit. A capture that fails (a skeleton that cannot be retargeted, a clip transfer() refuses) does not stop
+/// the others: its error is returned and out[i] is left as it was.
+/// @return one string per capture: empty when out[i] holds its result, else the error that stopped it.
+/// @throws value_error when options or out is shorter than in; value_error for an unknown target or source.
+inline std::vector<std::string> transfer_capture_batch(const emotion_model& model, std::span<const clip> in, std::string_view target,
+                                                       std::optional<std::string_view> source, std::span<const capture_options> options,
+                                                       emotion_model::batch_workspace& ws, std::span<capture_result> out)
+{
+    if (options.size() < in.size() || out.size() < in.size())
+        throw value_error("transfer: transfer_capture_batch of " + std::to_string(in.size()) + " captures with " +
+                          std::to_string(options.size()) + " options into " + std::to_string(out.size()) + " results");
+    model.domain(target);  // an unknown emotion stops here, before any capture is touched
+    if (source) model.domain(*source);
+    std::vector<std::string> errors(in.size());
+    // 1. every capture onto the model's skeleton, as transfer_capture_with() does
+    const skeleton ms = model.model_skeleton();
+    std::vector<capture_result> r(in.size());
+    std::vector<clip> on_model;
+    std::vector<std::size_t> index;  // the capture of each clip of on_model
+    for (std::size_t i = 0; i < in.size(); ++i) {
+        try {
+            const capture_options& o = options[i];
+            if (in[i].skel.same_topology(ms) && !o.hand && !o.slots) {
+                on_model.push_back(in[i]);
+            } else {
+                retarget::map_options mo;
+                mo.hand = o.hand;
+                mo.source_slots = o.slots;
+                r[i].map = retarget::make_map(in[i].skel, ms, mo);
+                on_model.push_back(retarget::retarget_clip(in[i], *r[i].map, o.reference.empty() ? typical_pose(model) : o.reference));
+                r[i].retargeted = true;
+            }
+            index.push_back(i);
+        } catch (const std::exception& e) {
+            errors[i] = e.what();
+        }
+    }
+    // 2. the transfers, G on batches; when one clip is refused, each clip alone, so that only it fails
+    std::vector<transfer_result> t(on_model.size());
+    std::vector<char> ok(on_model.size(), 1);
+    try {
+        model.transfer_batch(on_model, target, source, ws, t);
+    } catch (const std::exception&) {
+        auto one = model.make_workspace();
+        for (std::size_t k = 0; k < on_model.size(); ++k) {
+            try {
+                model.transfer(on_model[k], target, source, one, t[k]);
+            } catch (const std::exception& e) {
+                errors[index[k]] = e.what();
+                ok[k] = 0;
+            }
+        }
+    }
+    // 3. the detail layer and the way back onto each capture's skeleton
+    for (std::size_t k = 0; k < on_model.size(); ++k) {
+        if (!ok[k]) continue;
+        const std::size_t i = index[k];
+        try {
+            if (options[i].detail)
+                t[k].motion = source ? model.add_detail(t[k].motion, on_model[k], target, *source) : model.add_detail(t[k].motion, on_model[k], target);
+            r[i].on_model = std::move(t[k]);
+            r[i].motion = r[i].retargeted ? retarget::write_back(in[i], r[i].on_model.motion, *r[i].map) : r[i].on_model.motion;
+            out[i] = std::move(r[i]);
+        } catch (const std::exception& e) {
+            errors[i] = e.what();
+        }
+    }
+    return errors;
 }
 
 }  // namespace handemo::stargan
