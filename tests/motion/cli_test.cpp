@@ -172,3 +172,28 @@ TEST_CASE("cli: synth -> encode -> decode round trip and failure cases")
     CHECK(!fs::exists(w / "x.bvh"));
     fs::remove_all(w);
 }
+
+TEST_CASE("cli: synth --motion-set extended writes the 12-type set, the paper set's files among them unchanged")
+{
+    const fs::path w = work_dir() / "sets";
+    fs::create_directories(w);  // the work folder again, if an earlier case removed it
+    const std::string W = "'" + w.string() + "'";
+    run_result r = run("synth --out " + W + "/paper --seed 4");
+    REQUIRE_MESSAGE(r.rc == 0, r.err);
+    r = run("synth --out " + W + "/ext --seed 4 --motion-set extended");
+    REQUIRE_MESSAGE(r.rc == 0, r.err);
+    std::size_t paper = 0, ext = 0;
+    for (const auto& e : fs::directory_iterator(w / "paper")) paper += e.path().extension() == ".bvh";
+    for (const auto& e : fs::directory_iterator(w / "ext")) ext += e.path().extension() == ".bvh";
+    CHECK(paper == 35);
+    CHECK(ext == 60);
+    for (hand_motion m : all_hand_motions)
+        for (emotion e : all_emotions) {
+            const std::string f = file_stem(m, e, 0) + ".bvh";
+            CHECK_MESSAGE(read_file(w / "paper" / f) == read_file(w / "ext" / f), f);
+        }
+    CHECK(fs::exists(w / "ext" / "hand_beckoning_fearful_0.bvh"));
+    CHECK(fs::exists(w / "ext" / "hand_counting_sad_0.csv"));
+    expect_failure("synth --out " + W + "/bad --motion-set all", "unknown set 'all'");
+    fs::remove_all(work_dir());
+}

@@ -80,7 +80,7 @@ TEST_CASE("synth: names, file stems and their errors")
     for (hand_motion m : all_hand_motions) CHECK(hand_motion_from_string(to_string(m)) == m);
     CHECK(to_string(hand_motion::hand_on_mouse) == "hand-on-mouse");
     CHECK_THROWS_AS(emotion_from_string("bored"), value_error);
-    CHECK_THROWS_AS(hand_motion_from_string("waving"), value_error);
+    CHECK_THROWS_AS(hand_motion_from_string("swimming"), value_error);
     CHECK(file_stem(hand_motion::hand_on_mouse, emotion::sad, 3) == "hand_hand-on-mouse_sad_3");
     const auto l = parse_file_stem("hand_hand-on-mouse_sad_3");
     CHECK(l.motion == hand_motion::hand_on_mouse);
@@ -305,4 +305,85 @@ TEST_CASE("synth: the 7-type set is byte for byte what it was for its seed and o
     MESSAGE("synth: hashes " << h1 << " " << h2);
     CHECK(h1 == 0xa406cbc768309049ULL);
     CHECK(h2 == 0x2f21dba4a111422eULL);
+}
+
+TEST_CASE("synth: the extended set, 12 motion types, the paper's 7 first and unchanged")
+{
+    CHECK(motions_of(motion_set::paper).size() == 7);
+    CHECK(motions_of(motion_set::extended).size() == 12);
+    CHECK(motion_set_from_string("extended") == motion_set::extended);
+    CHECK(motion_set_from_string(to_string(motion_set::paper)) == motion_set::paper);
+    CHECK_THROWS_WITH_AS(motion_set_from_string("all"), doctest::Contains("paper (7 motion types) or extended (12)"), value_error);
+    for (hand_motion m : extended_hand_motions) {
+        CHECK(hand_motion_from_string(to_string(m)) == m);
+        CHECK(parse_file_stem(file_stem(m, emotion::sad, 2)).motion == m);
+    }
+    const auto paper = synthesize_dataset(1, 8, 30.0), ext = synthesize_dataset(1, 8, 30.0, motion_set::extended);
+    REQUIRE(ext.size() == 60);
+    for (std::size_t i = 0; i < paper.size(); ++i) {
+        CHECK(ext[i].file_stem == paper[i].file_stem);
+        CHECK(ext[i].c.angles == paper[i].c.angles);
+        CHECK(ext[i].c.positions == paper[i].c.positions);
+    }
+    // the paper's seven show the table as it is, bit for bit
+    for (hand_motion m : all_hand_motions)
+        for (emotion e : all_emotions) {
+            const auto a = style_of(m, e), b = style_of(e);
+            CHECK(a.tempo == b.tempo);
+            CHECK(a.amplitude == b.amplitude);
+            CHECK(a.droop_deg == b.droop_deg);
+            CHECK(a.tremor_deg == b.tremor_deg);
+            CHECK(a.phase_lag == b.phase_lag);
+        }
+    // the new types: within limits, exactly 2 cycles, each its own movement (its neutral takes closer to each other than
+    // to any other type's)
+    for (std::size_t i = 35; i < ext.size(); ++i) {
+        const auto& it = ext[i];
+        for (std::size_t f = 0; f < it.c.frames; ++f)
+            for (std::size_t j = 0; j < it.c.skel.size(); ++j)
+                for (std::size_t a = 0; a < 3; ++a) {
+                    CHECK(it.c.angle(f, j, a) >= it.c.skel.joints[j].lower_limit[a]);
+                    CHECK(it.c.angle(f, j, a) <= it.c.skel.joints[j].upper_limit[a]);
+                }
+        const double expect = synth_cycles * neutral_period(it.motion) / style_of(it.motion, it.emo).tempo;
+        CHECK(it.c.duration() == doctest::Approx(expect).epsilon(0.08));
+    }
+    for (hand_motion m : extended_hand_motions) {
+        if (static_cast<std::size_t>(m) < hand_motion_count) continue;
+        const clip a = synthesize(m, emotion::neutral, 0, 8), b = synthesize(m, emotion::neutral, 1, 8);
+        const double same = keyframe_distance(a, b);
+        for (hand_motion o : extended_hand_motions)
+            if (o != m) CHECK_MESSAGE(keyframe_distance(a, synthesize(o, emotion::neutral, 0, 8)) > same, to_string(m) << " vs " << to_string(o));
+    }
+}
+
+TEST_CASE("synth: the extended types show each emotion effect as their gains say")
+{
+    for (hand_motion m : extended_hand_motions) {
+        if (static_cast<std::size_t>(m) < hand_motion_count) continue;
+        const auto g = expression_of(m);
+        double dur[emotion_count] = {}, rom[emotion_count] = {};
+        for (emotion e : all_emotions)
+            for (int take = 0; take < 3; ++take) {
+                const clip c = synthesize(m, e, take, 2024);
+                dur[static_cast<int>(e)] += c.duration() / 3, rom[static_cast<int>(e)] += range_of_motion(c) / 3;
+            }
+        const auto d = [&](emotion e) { return dur[static_cast<int>(e)]; };
+        const auto r = [&](emotion e) { return rom[static_cast<int>(e)]; };
+        // tempo: sad lasts 1 / 0.6^power as long as neutral (per-take jitter 7%), angry 1 / 1.6^power
+        CHECK_MESSAGE(d(emotion::sad) / d(emotion::neutral) == doctest::Approx(std::pow(0.6, -g.tempo)).epsilon(0.08), to_string(m));
+        CHECK_MESSAGE(d(emotion::angry) / d(emotion::neutral) == doctest::Approx(std::pow(1.6, -g.tempo)).epsilon(0.08), to_string(m));
+        // amplitude: angry's excursions larger than neutral's, sad's smaller
+        CHECK_MESSAGE(r(emotion::angry) > r(emotion::neutral), to_string(m));
+        CHECK_MESSAGE(r(emotion::sad) < r(emotion::neutral), to_string(m));
+        // the styles themselves
+        CHECK(style_of(m, emotion::sad).tempo == doctest::Approx(std::pow(0.6, g.tempo)));
+        CHECK(style_of(m, emotion::angry).amplitude == doctest::Approx(std::pow(1.45, g.amplitude)));
+        CHECK(style_of(m, emotion::sad).droop_deg == doctest::Approx(12 * g.droop));
+        CHECK(style_of(m, emotion::fearful).tremor_deg == doctest::Approx(1.0 * g.tremor));
+        CHECK(style_of(m, emotion::fearful).phase_lag == doctest::Approx(0.09 * g.lag));
+    }
+    // finger lag: under fear, counting (lag x 2) moves its fingers' phases apart from their calm sequence (either way)
+    const clip fear = synthesize(hand_motion::counting, emotion::fearful, 0, 2024), calm = synthesize(hand_motion::counting, emotion::neutral, 0, 2024);
+    CHECK(std::abs(finger_phase_spread(fear) - finger_phase_spread(calm)) > 0.1);
 }

@@ -1,6 +1,7 @@
-// `handemo synth --out DIR [--takes N] [--seed S] [--fps F]`: writes the synthetic hand-motion emotion
-// dataset (handemo/motion/synth.hpp: 7 motion types x 5 emotions x N takes, each exactly 2 cycles on the
-// 23-joint hand of Eq. 1) as hand_<motion>_<emotion>_<take>.bvh plus a matching .csv per take.
+// `handemo synth --out DIR [--takes N] [--seed S] [--fps F] [--motion-set paper|extended]`: writes the synthetic
+// hand-motion emotion dataset (handemo/motion/synth.hpp: 7 motion types, or 12 with the extended set, x 5 emotions
+// x N takes, each exactly 2 cycles on the 23-joint hand of Eq. 1) as hand_<motion>_<emotion>_<take>.bvh plus a
+// matching .csv per take.
 #pragma once
 
 #include "../registry.hpp"
@@ -20,6 +21,7 @@ struct synth_options {
     int takes = 1;
     std::uint64_t seed = 1;
     double fps = 60.0;
+    std::string motion_set = "paper";
 };
 
 void run_synth(const synth_options& o)
@@ -33,7 +35,8 @@ void run_synth(const synth_options& o)
     if (!fs::is_directory(dir)) throw handemo::io_error("synth: cannot create output directory " + dir.string());
     std::size_t files = 0;
     double seconds = 0;
-    for (handemo::hand_motion m : handemo::all_hand_motions)
+    const auto set = handemo::motion_set_from_string(o.motion_set);
+    for (handemo::hand_motion m : handemo::motions_of(set))
         for (handemo::emotion e : handemo::all_emotions)
             for (int k = 0; k < o.takes; ++k) {
                 const handemo::clip c = handemo::synthesize(m, e, k, o.seed, o.fps);
@@ -53,11 +56,13 @@ void run_synth(const synth_options& o)
 
 static handemo::cli::add_command reg_synth{10, [](CLI::App& app) {
     using namespace handemo::cli::synth_cmd;
-    auto* sub = app.add_subcommand("synth", "Write the synthetic hand-motion emotion dataset (7 motions x 5 emotions) as BVH + CSV");
+    auto* sub = app.add_subcommand("synth", "Write the synthetic hand-motion emotion dataset (7 or 12 motions x 5 emotions) as BVH + CSV");
     auto o = std::make_shared<synth_options>();
     sub->add_option("--out", o->out, "Output directory (created if missing)")->required();
     sub->add_option("--takes", o->takes, "Takes per motion/emotion pair (default 1)");
     sub->add_option("--seed", o->seed, "Random seed (default 1); the same seed always gives the same files");
     sub->add_option("--fps", o->fps, "Frame rate (default 60)");
+    sub->add_option("--motion-set", o->motion_set,
+                    "paper: the paper's 7 motion types (default); extended: 12, five more with motion-dependent emotion effects");
     sub->callback([o] { run_synth(*o); });
 }};

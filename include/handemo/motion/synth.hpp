@@ -10,6 +10,12 @@
 //   hand-on-mouse hand resting curved, small index and middle clicks half a cycle apart, wrist sway
 //   pointing      index extended, the others curled, the wrist and forearm moving the pointer
 //   pushing       wrist extension with straight spread fingers, forearm swing and root translation
+// The extended set (motion_set::extended, `handemo synth --motion-set extended`) adds five, 12 in all:
+//   waving        forearm raised, the wrist sweeping side to side, spread fingers trailing
+//   counting      from a fist, thumb .. pinky extend one after another (0.12 cycle apart), then close
+//   scratching    the four fingers flex quickly together (0.7 s cycles), the wrist flexed and still
+//   piano         presses thumb .. pinky in sequence on an arched, pronated hand (narrow pulses)
+//   beckoning     palm up, index and middle curl in and out, the others curled
 // Emotion styles (ground truth for later evaluation, returned by style_of()):
 //
 // | emotion | tempo | amplitude | sharpness | finger lag (cycles) | tremor (deg @ Hz) | noise (deg) | droop (deg) | bounce (deg) |
@@ -31,6 +37,19 @@
 // clamped into the joint's limits. Neutral periods: crawling 1.5 s, gripping 1.6, patting 1.0, impatient
 // 1.2, hand-on-mouse 1.1, pointing 1.8, pushing 1.7 (neutral clips 2.0-3.6 s). Deterministic for a seed:
 // std::mt19937_64 with handemo's own uniform/normal transforms (detail/synth_random.hpp).
+// The extended set's types show the emotions differently (style_of(motion, emotion), expression_of()): the
+// table's tempo and amplitude factors are raised to a per-motion power, its droop, tremor and finger lag scaled:
+//
+// | motion     | neutral period (s) | tempo power | amplitude power | droop x | tremor x | finger lag x |
+// |------------|--------------------|-------------|-----------------|---------|----------|--------------|
+// | waving     | 1.3                | 1.0         | 1.3             | 0.5     | 1.0      | 0.5          |
+// | counting   | 2.4                | 0.6         | 0.6             | 1.0     | 1.0      | 2.0          |
+// | scratching | 0.7                | 1.2         | 1.0             | 1.0     | 1.5      | 1.0          |
+// | piano      | 1.6                | 1.0         | 1.2             | 0.5     | 1.0      | 1.5          |
+// | beckoning  | 1.2                | 1.0         | 1.0             | 1.5     | 0.5      | 0.5          |
+//
+// The paper's seven types use the table as it is, so the 7-type set is the same files for the same seed and
+// options as before the extended set existed (a test hashes them).
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -56,13 +75,33 @@ inline constexpr std::size_t emotion_count = 5;
 inline constexpr std::array<emotion, 5> all_emotions{emotion::angry, emotion::happy, emotion::neutral, emotion::sad,
                                                      emotion::fearful};
 
-/// The seven hand motion types of the paper (Section 3.1).
-enum class hand_motion : std::uint8_t { crawling, gripping, patting, impatient, hand_on_mouse, pointing, pushing };
+/// The hand motion types: the seven of the paper (Section 3.1), then the five of the extended set.
+enum class hand_motion : std::uint8_t {
+    crawling, gripping, patting, impatient, hand_on_mouse, pointing, pushing,  // the paper's
+    waving, counting, scratching, piano, beckoning                              // the extended set's
+};
+/// The paper's seven motion types (the default set).
 inline constexpr std::size_t hand_motion_count = 7;
 inline constexpr std::array<hand_motion, 7> all_hand_motions{hand_motion::crawling,  hand_motion::gripping,
                                                              hand_motion::patting,   hand_motion::impatient,
                                                              hand_motion::hand_on_mouse, hand_motion::pointing,
                                                              hand_motion::pushing};
+/// The twelve motion types of the extended set: the paper's seven, then five more.
+inline constexpr std::size_t extended_hand_motion_count = 12;
+inline constexpr std::array<hand_motion, 12> extended_hand_motions{
+    hand_motion::crawling, hand_motion::gripping, hand_motion::patting,  hand_motion::impatient,
+    hand_motion::hand_on_mouse, hand_motion::pointing, hand_motion::pushing, hand_motion::waving,
+    hand_motion::counting, hand_motion::scratching, hand_motion::piano,  hand_motion::beckoning};
+
+/// @brief Which motion types a synthetic set holds: the paper's 7 or the extended 12.
+enum class motion_set : std::uint8_t { paper, extended };
+
+/// @brief The motion types of a set, in order.
+inline std::vector<hand_motion> motions_of(motion_set s)
+{
+    if (s == motion_set::extended) return {extended_hand_motions.begin(), extended_hand_motions.end()};
+    return {all_hand_motions.begin(), all_hand_motions.end()};
+}
 
 /// @brief Lower-case name: angry, happy, neutral, sad, fearful.
 constexpr std::string_view to_string(emotion e) noexcept
@@ -71,11 +110,25 @@ constexpr std::string_view to_string(emotion e) noexcept
     return n[static_cast<int>(e)];
 }
 
-/// @brief Name as used in file names: crawling, gripping, patting, impatient, hand-on-mouse, pointing, pushing.
+/// @brief Name as used in file names: crawling, gripping, patting, impatient, hand-on-mouse, pointing, pushing,
+/// waving, counting, scratching, piano, beckoning.
 constexpr std::string_view to_string(hand_motion m) noexcept
 {
-    constexpr std::string_view n[] = {"crawling", "gripping", "patting", "impatient", "hand-on-mouse", "pointing", "pushing"};
+    constexpr std::string_view n[] = {"crawling", "gripping", "patting",  "impatient",  "hand-on-mouse", "pointing",
+                                      "pushing",  "waving",   "counting", "scratching", "piano",         "beckoning"};
     return n[static_cast<int>(m)];
+}
+
+/// @brief The name of a motion set: paper or extended.
+constexpr std::string_view to_string(motion_set s) noexcept { return s == motion_set::extended ? "extended" : "paper"; }
+
+/// @brief Parses a motion set name (paper, extended).
+/// @throws value_error naming the text and the valid names.
+inline motion_set motion_set_from_string(std::string_view s)
+{
+    if (s == "paper") return motion_set::paper;
+    if (s == "extended") return motion_set::extended;
+    throw value_error("motion set: unknown set '" + std::string(s) + "', expected paper (7 motion types) or extended (12)");
 }
 
 /// @brief Parses an emotion name (exact, lower case).
@@ -92,10 +145,11 @@ inline emotion emotion_from_string(std::string_view s)
 inline hand_motion hand_motion_from_string(std::string_view s)
 {
     if (s == "hand_on_mouse") return hand_motion::hand_on_mouse;
-    for (hand_motion m : all_hand_motions)
+    for (hand_motion m : extended_hand_motions)
         if (to_string(m) == s) return m;
     throw value_error("hand_motion: unknown motion '" + std::string(s) +
-                      "', expected crawling, gripping, patting, impatient, hand-on-mouse, pointing or pushing");
+                      "', expected crawling, gripping, patting, impatient, hand-on-mouse, pointing, pushing, waving, "
+                      "counting, scratching, piano or beckoning");
 }
 
 /// @brief The generator parameters of one emotion (see the table in this header's comment).
@@ -123,10 +177,46 @@ constexpr emotion_style style_of(emotion e) noexcept
     }
 }
 
+/// @brief How strongly a motion type shows each emotion effect (the extended set's table in this header's
+/// comment): the style's tempo and amplitude factors are raised to `tempo` and `amplitude`, its droop, tremor and
+/// finger lag multiplied by `droop`, `tremor` and `lag`. The paper's seven types show every effect as style_of(e)
+/// gives it (all 1).
+struct expression_gains {
+    double tempo = 1, amplitude = 1, droop = 1, tremor = 1, lag = 1;
+};
+
+/// @brief The expression gains of a motion type (see expression_gains).
+constexpr expression_gains expression_of(hand_motion m) noexcept
+{
+    switch (m) {
+    case hand_motion::waving: return {1.0, 1.3, 0.5, 1.0, 0.5};
+    case hand_motion::counting: return {0.6, 0.6, 1.0, 1.0, 2.0};
+    case hand_motion::scratching: return {1.2, 1.0, 1.0, 1.5, 1.0};
+    case hand_motion::piano: return {1.0, 1.2, 0.5, 1.0, 1.5};
+    case hand_motion::beckoning: return {1.0, 1.0, 1.5, 0.5, 0.5};
+    default: return {};
+    }
+}
+
+/// @brief The style an emotion has on a motion type: style_of(e) for the paper's seven (bit for bit), and for
+/// the extended set's types style_of(e) with the motion's expression_of() gains applied.
+inline emotion_style style_of(hand_motion m, emotion e) noexcept
+{
+    emotion_style s = style_of(e);
+    if (static_cast<std::size_t>(m) < hand_motion_count) return s;
+    const expression_gains g = expression_of(m);
+    s.tempo = std::pow(s.tempo, g.tempo);
+    s.amplitude = std::pow(s.amplitude, g.amplitude);
+    s.droop_deg *= g.droop;
+    s.tremor_deg *= g.tremor;
+    s.phase_lag *= g.lag;
+    return s;
+}
+
 /// @brief Seconds per cycle of a motion type performed neutrally (before per-take variation).
 constexpr double neutral_period(hand_motion m) noexcept
 {
-    constexpr double p[] = {1.5, 1.6, 1.0, 1.2, 1.1, 1.8, 1.7};
+    constexpr double p[] = {1.5, 1.6, 1.0, 1.2, 1.1, 1.8, 1.7, 1.3, 2.4, 0.7, 1.6, 1.2};
     return p[static_cast<int>(m)];
 }
 
@@ -302,6 +392,73 @@ inline std::vector<motion_track> motion_tracks(hand_motion m)
         pose(finger_joint(0, 1), z, -25);
         pose(finger_joint(0, 1), x, -5);
         break;
+    case hand_motion::waving:
+        pose(F, x, 60);  // forearm raised
+        add(W, z, 0, 25, wave::sine, 0.0, -1);  // side to side
+        add(F, y, 0, 10, wave::sine, 0.05, -1);
+        for (int f = 1; f < 5; ++f) {
+            add(finger_joint(f, 1), x, 5, 6, wave::sine, 0.15 + 0.03 * f, f);  // fingers trailing the wave
+            pose(finger_joint(f, 1), z, spread[f] * 1.5);
+        }
+        pose(finger_joint(0, 1), z, -30);
+        break;
+    case hand_motion::counting:
+        for (int f = 0; f < 5; ++f) {  // from a fist, thumb .. pinky extend one after another, then close
+            const double seq = 0.12 * f;
+            if (f == 0) {
+                add(finger_joint(0, 1), x, 25, -20, wave::plateau, seq, 0);
+                add(finger_joint(0, 2), x, 35, -30, wave::plateau, seq + 0.02, 0);
+                add(finger_joint(0, 3), x, 30, -25, wave::plateau, seq + 0.03, 0);
+                pose(finger_joint(0, 1), z, -10);
+                continue;
+            }
+            add(finger_joint(f, 1), x, 70, -65, wave::plateau, seq, f);
+            add(finger_joint(f, 2), x, 90, -85, wave::plateau, seq + 0.02, f);
+            add(finger_joint(f, 3), x, 50, -45, wave::plateau, seq + 0.03, f);
+            pose(finger_joint(f, 1), z, spread[f]);
+        }
+        pose(F, y, 20);
+        pose(F, x, 30);
+        break;
+    case hand_motion::scratching:
+        for (int f = 1; f < 5; ++f) {  // quick flexion of the four fingers together, the wrist still
+            add(finger_joint(f, 1), x, 35, 20, wave::sine, 0.02 * f, f);
+            add(finger_joint(f, 2), x, 50, 25, wave::sine, 0.05 + 0.02 * f, f);
+            add(finger_joint(f, 3), x, 30, 15, wave::sine, 0.07 + 0.02 * f, f);
+        }
+        pose(W, x, 20);
+        pose(F, y, -40);
+        pose(finger_joint(0, 1), z, -15);
+        pose(finger_joint(0, 2), x, 20);
+        break;
+    case hand_motion::piano:
+        for (int f = 0; f < 5; ++f) {  // presses thumb .. pinky in sequence on an arched hand
+            const double seq = 0.18 * f;
+            add(finger_joint(f, 1), x, 25, 25, wave::pulse, seq, f, 0.16);
+            add(finger_joint(f, 2), x, 40, 15, wave::pulse, seq + 0.01, f, 0.16);
+            pose(finger_joint(f, 3), x, 15);
+        }
+        pose(W, x, -5);
+        pose(F, y, -60);  // pronated over the keys
+        add(F, z, 0, 5, wave::sine, 0.0, -1);
+        break;
+    case hand_motion::beckoning:
+        pose(F, y, 70);  // supinated: palm up
+        pose(F, x, 30);
+        for (int f = 1; f < 3; ++f) {  // index and middle curl in and out
+            add(finger_joint(f, 1), x, 10, 55, wave::raised, 0.03 * f, f);
+            add(finger_joint(f, 2), x, 10, 70, wave::raised, 0.03 * f + 0.02, f);
+            add(finger_joint(f, 3), x, 5, 40, wave::raised, 0.03 * f + 0.04, f);
+        }
+        for (int f = 3; f < 5; ++f) {
+            pose(finger_joint(f, 1), x, 60);
+            pose(finger_joint(f, 2), x, 80);
+            pose(finger_joint(f, 3), x, 40);
+        }
+        pose(finger_joint(0, 1), z, -20);
+        pose(finger_joint(0, 2), x, 20);
+        add(W, x, 0, 8, wave::raised, 0.05, -1);
+        break;
     }
     return t;
 }
@@ -406,7 +563,7 @@ inline clip synthesize_take(hand_motion motion, const emotion_style& st, std::ui
 /// @throws value_error for a non-positive fps.
 inline clip synthesize(hand_motion motion, emotion emo, int take, std::uint64_t seed, double fps = 60.0)
 {
-    return detail::synthesize_take(motion, style_of(emo), detail::synth_seed(motion, emo, take, seed), fps, "synthesize");
+    return detail::synthesize_take(motion, style_of(motion, emo), detail::synth_seed(motion, emo, take, seed), fps, "synthesize");
 }
 
 /// @brief The oracle of a transfer on the synthetic set: take `take` of `input_emotion` performed again with
@@ -420,7 +577,7 @@ inline clip synthesize(hand_motion motion, emotion emo, int take, std::uint64_t 
 inline clip synthesize_as(hand_motion motion, emotion input_emotion, emotion target_emotion, int take, std::uint64_t seed,
                           double fps = 60.0)
 {
-    return detail::synthesize_take(motion, style_of(target_emotion), detail::synth_seed(motion, input_emotion, take, seed), fps,
+    return detail::synthesize_take(motion, style_of(motion, target_emotion), detail::synth_seed(motion, input_emotion, take, seed), fps,
                                    "synthesize_as");
 }
 
@@ -473,14 +630,17 @@ struct synth_item {
     std::string file_stem;  ///< hand_<motion>_<emotion>_<take>
 };
 
-/// @brief The whole dataset: 7 motions x 5 emotions x `takes` takes (0 .. takes-1), motion-major order.
+/// @brief The whole dataset: the set's motions (7 or 12) x 5 emotions x `takes` takes (0 .. takes-1), motion-major
+/// order. A take is the same clip in both sets (its seed depends on motion, emotion, take and seed only), so the
+/// extended set begins with the paper set.
 /// @throws value_error when takes < 1.
-inline std::vector<synth_item> synthesize_dataset(int takes, std::uint64_t seed, double fps = 60.0)
+inline std::vector<synth_item> synthesize_dataset(int takes, std::uint64_t seed, double fps = 60.0, motion_set set = motion_set::paper)
 {
     if (takes < 1) throw value_error("synthesize_dataset: takes " + std::to_string(takes) + " is below 1");
     std::vector<synth_item> out;
-    out.reserve(hand_motion_count * emotion_count * static_cast<std::size_t>(takes));
-    for (hand_motion m : all_hand_motions)
+    const auto motions = motions_of(set);
+    out.reserve(motions.size() * emotion_count * static_cast<std::size_t>(takes));
+    for (hand_motion m : motions)
         for (emotion e : all_emotions)
             for (int k = 0; k < takes; ++k) out.push_back({m, e, k, synthesize(m, e, k, seed, fps), file_stem(m, e, k)});
     return out;
