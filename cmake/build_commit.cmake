@@ -11,7 +11,8 @@ if(GIT_FOUND)
                   OUTPUT_VARIABLE head RESULT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
   if(rc EQUAL 0 AND head MATCHES "^[0-9a-f]+$")
     set(commit ${head})
-    execute_process(COMMAND ${GIT_EXECUTABLE} -C ${SRC} status --porcelain --untracked-files=no
+    # --no-optional-locks: a build never takes the index lock a git command running beside it may need
+    execute_process(COMMAND ${GIT_EXECUTABLE} --no-optional-locks -C ${SRC} status --porcelain --untracked-files=no
                     OUTPUT_VARIABLE changes RESULT_VARIABLE rc2 ERROR_QUIET)
     if(rc2 EQUAL 0 AND NOT changes STREQUAL "")
       string(APPEND commit "-dirty")
