@@ -10,7 +10,7 @@
 using namespace handemo;
 
 namespace {
-constexpr double tau = 2 * std::numbers::pi;
+constexpr double two_pi = 2 * std::numbers::pi;
 
 // A smooth base motion plus, on channels 3k (k < 6), a sinusoid of `hz` and amplitude `amp` with a zero at every
 // keyframe when `hz` is a multiple of 4 at 241 frames and 120 fps (keyframes every 0.25 s).
@@ -21,8 +21,8 @@ clip detailed_clip(double hz, double amp, std::size_t frames = 241, double fps =
     for (std::size_t f = 0; f < frames; ++f) {
         const double t = static_cast<double>(f) / fps;
         for (std::size_t ch = 0; ch < C; ++ch) {
-            double v = base * std::sin(tau * 0.3 * t + 0.2 * static_cast<double>(ch));
-            if (ch % 3 == 0 && ch < 18) v += amp * std::sin(tau * hz * t);
+            double v = base * std::sin(two_pi * 0.3 * t + 0.2 * static_cast<double>(ch));
+            if (ch % 3 == 0 && ch < 18) v += amp * std::sin(two_pi * hz * t);
             c.angles[f * C + ch] = v;
         }
     }
@@ -52,7 +52,7 @@ TEST_CASE("detail_residual: a keyframe spline has no detail; a sinusoid between 
     const auto r = detail_residual<9>(c), rb = detail_residual<9>(base);
     const std::size_t C = 69;
     for (std::size_t f = 0; f < c.frames; ++f) {
-        CHECK(r[f * C + 0] - rb[f * C + 0] == doctest::Approx(2.0 * std::sin(tau * 8.0 * static_cast<double>(f) / 120.0)).epsilon(1e-9).scale(1));
+        CHECK(r[f * C + 0] - rb[f * C + 0] == doctest::Approx(2.0 * std::sin(two_pi * 8.0 * static_cast<double>(f) / 120.0)).epsilon(1e-9).scale(1));
         CHECK(std::abs(r[f * C + 1] - rb[f * C + 1]) < 1e-12);  // no sinusoid on channel 1
     }
     CHECK(std::abs(r[0]) < 1e-12);  // the first and last frames are keyframes
@@ -67,7 +67,7 @@ TEST_CASE("measure_detail: RMS amplitude and RMS frequency of a sinusoid")
     CHECK(s.amplitude[1] == doctest::Approx(s0.amplitude[1]).epsilon(1e-9));
     // velocity RMS = 2 pi f amp / sqrt 2, times the backward difference's sinc factor sin(pi f / fps) / (pi f / fps)
     const double x = std::numbers::pi * 8.0 / 120.0;
-    CHECK(s.velocity[0] == doctest::Approx(tau * 8.0 * 2.0 / std::sqrt(2.0) * std::sin(x) / x).epsilon(0.02));
+    CHECK(s.velocity[0] == doctest::Approx(two_pi * 8.0 * 2.0 / std::sqrt(2.0) * std::sin(x) / x).epsilon(0.02));
     // the pooled frequency of the sinusoid channels alone is 8 Hz (the base's spline error is tiny beside it)
     detail_stats only;
     for (std::size_t ch = 0; ch < 18; ch += 3) only.amplitude.push_back(s.amplitude[ch]), only.velocity.push_back(s.velocity[ch]);

@@ -19,7 +19,7 @@ const std::vector<synth_item>& dataset()
 }
 
 // Sum over rotation channels of the range of motion, after a 7-frame moving average (removes tremor).
-double range_of_motion(const clip& c)
+double smoothed_range(const clip& c)
 {
     const std::size_t J3 = c.skel.size() * 3;
     double total = 0;
@@ -160,7 +160,7 @@ TEST_CASE("synth: per-emotion statistics follow Table 1")
     std::map<emotion, double> rom, dur, spread;
     std::map<hand_motion, std::map<emotion, double>> rom_m;
     for (const auto& it : dataset()) {
-        const double r = range_of_motion(it.c);
+        const double r = smoothed_range(it.c);
         rom[it.emo] += r;
         rom_m[it.motion][it.emo] += r;
         dur[it.emo] += it.c.duration();
