@@ -1,8 +1,8 @@
 // `handemo transfer --model MODEL --in IN.bvh|IN.bmp|DIR --emotion E --out OUT.bvh|OUT.bmp|DIR`: turns a motion
 // into the target emotion with a trained model (Section 3.4 of the hand paper: keyframes -> Eq. 3 image -> G ->
 // Eq. 6 -> interpolation, with the learned tempo factor). A folder in: every .bvh in it, on --threads threads
-// sharing the one loaded model, into the --out folder under the same names, with a progress bar; a file that
-// fails is named and skipped, and the command fails at the end when any did. Instead of --emotion, a point of the
+// sharing the one loaded model (with an emotion target each thread runs G on batches of files), into the --out
+// folder under the same names, with a progress bar; a file that fails is named and skipped, and the command fails at the end when any did. Instead of --emotion, a point of the
 // circumplex (--valence V --arousal A), or a target that moves over the clip (--path "neutral,sad,angry" with
 // --duration, or --curve FILE of time,valence,arousal rows): the continuous control of stargan/continuous.hpp.
 #pragma once
@@ -25,6 +25,7 @@
 #include <iostream>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -193,6 +194,7 @@ inline stargan::capture_options capture_options_of(const transfer_cli& o, const 
 }
 
 /// --in DIR: every .bvh of the folder (not its subfolders), sorted by name, to --out DIR under the same name.
+/// With an emotion target the threads take the files in batches of up to 32 and run G once per batch.
 /// Threads take files in turn; each output is written atomically; a failure is printed with the file's name and
 /// the rest go on; at the end, the files per second, and an error when any failed.
 inline void run_folder(const transfer_cli& o, const stargan::emotion_model& model, const transfer_target& target)
@@ -213,6 +215,11 @@ inline void run_folder(const transfer_cli& o, const stargan::emotion_model& mode
     if (path_exists(o.out) && !is_folder(o.out)) throw value_error("transfer: --out " + o.out + " exists and is not a folder");
     make_directories(o.out);
     const std::size_t threads = std::clamp<std::size_t>(o.threads ? o.threads : std::thread::hardware_concurrency(), 1, files.size());
+    // an emotion target: each thread takes the files in batches and runs G once per batch (transfer_capture_batch,
+    // the same bytes as file by file); a continuous target (a point, a path, a curve) goes file by file
+    const bool batched = !target.control;
+    const std::size_t batch = batched ? std::clamp<std::size_t>((files.size() + threads - 1) / threads, 1, 32) : 1;
+    const auto source = o.from.empty() ? std::optional<std::string_view>() : std::optional<std::string_view>(o.from);
     std::atomic<std::size_t> next{0};
     std::mutex m;  // guards the progress bar, the failure list and std::cout
     std::vector<std::string> failed;
@@ -221,22 +228,58 @@ inline void run_folder(const transfer_cli& o, const stargan::emotion_model& mode
     progress bar("transfer " + std::to_string(files.size()) + " files", static_cast<long>(files.size()), stdout);
     const auto start = std::chrono::steady_clock::now();
     const auto work = [&] {
-        for (std::size_t i = next++; i < files.size(); i = next++) {
-            std::string error;
-            try {
-                const clip in = read_bvh(files[i]);
-                const auto co = capture_options_of(o, in);
-                const auto cr = transfer_one(o, model, target, in, co);
-                write_bvh(fs::path(o.out) / files[i].filename(), cr.motion, cr.retargeted ? -1 : 6);
-            } catch (const std::exception& e) {
-                error = e.what();
+        std::optional<stargan::emotion_model::batch_workspace> ws;  // this thread's
+        if (batched) ws = model.make_batch_workspace(batch);
+        std::vector<clip> clips;
+        std::vector<stargan::capture_options> options;
+        std::vector<std::size_t> which;
+        std::vector<stargan::capture_result> results;
+        for (std::size_t first = next.fetch_add(batch); first < files.size(); first = next.fetch_add(batch)) {
+            const std::size_t end = std::min(files.size(), first + batch);
+            std::vector<std::string> error(end - first);
+            const auto write = [&](std::size_t i, const stargan::capture_result& cr) {
+                try {
+                    write_bvh(fs::path(o.out) / files[i].filename(), cr.motion, cr.retargeted ? -1 : 6);
+                } catch (const std::exception& e) {
+                    error[i - first] = e.what();
+                }
+            };
+            if (batched) {
+                clips.clear(), options.clear(), which.clear();
+                for (std::size_t i = first; i < end; ++i) {
+                    try {
+                        clip in = read_bvh(files[i]);
+                        options.push_back(capture_options_of(o, in));
+                        clips.push_back(std::move(in));
+                        which.push_back(i);
+                    } catch (const std::exception& e) {
+                        error[i - first] = e.what();
+                    }
+                }
+                results.assign(clips.size(), {});
+                const auto errors = stargan::transfer_capture_batch(model, clips, o.emotion, source, options, *ws, results);
+                for (std::size_t k = 0; k < clips.size(); ++k) {
+                    if (errors[k].empty()) write(which[k], results[k]);
+                    else error[which[k] - first] = errors[k];
+                }
+            } else {
+                for (std::size_t i = first; i < end; ++i) {
+                    try {
+                        const clip in = read_bvh(files[i]);
+                        write(i, transfer_one(o, model, target, in, capture_options_of(o, in)));
+                    } catch (const std::exception& e) {
+                        error[i - first] = e.what();
+                    }
+                }
             }
             const std::lock_guard lock(m);
-            if (!error.empty()) {
-                failed.push_back(files[i].filename().string());
-                std::cout << "transfer: " << files[i].string() << ": " << error << " (skipped)" << std::endl;
+            for (std::size_t i = first; i < end; ++i) {
+                if (!error[i - first].empty()) {
+                    failed.push_back(files[i].filename().string());
+                    std::cout << "transfer: " << files[i].string() << ": " << error[i - first] << " (skipped)" << std::endl;
+                }
+                bar.update(static_cast<long>(++done));
             }
-            bar.update(static_cast<long>(++done));
         }
     };
     std::vector<std::thread> pool;
@@ -246,7 +289,8 @@ inline void run_folder(const transfer_cli& o, const stargan::emotion_model& mode
     bar.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "transfer: " << files.size() - failed.size() << " of " << files.size() << " files of " << o.in << " -> " << target.title << " -> "
-              << o.out << " (" << threads << " threads, " << static_cast<double>(files.size()) / std::max(seconds, 1e-9) << " files/s)\n";
+              << o.out << " (" << threads << " threads, " << (batched ? "G on batches of " + std::to_string(batch) + " files, " : std::string())
+              << static_cast<double>(files.size()) / std::max(seconds, 1e-9) << " files/s)\n";
     if (!failed.empty()) {
         std::string names;
         for (std::size_t i = 0; i < failed.size() && i < 5; ++i) names += (i ? ", " : "") + failed[i];
