@@ -366,7 +366,7 @@ TEST_CASE("synth: the extended types show each emotion effect as their gains say
         for (emotion e : all_emotions)
             for (int take = 0; take < 3; ++take) {
                 const clip c = synthesize(m, e, take, 2024);
-                dur[static_cast<int>(e)] += c.duration() / 3, rom[static_cast<int>(e)] += range_of_motion(c) / 3;
+                dur[static_cast<int>(e)] += c.duration() / 3, rom[static_cast<int>(e)] += smoothed_range(c) / 3;
             }
         const auto d = [&](emotion e) { return dur[static_cast<int>(e)]; };
         const auto r = [&](emotion e) { return rom[static_cast<int>(e)]; };
