@@ -9,7 +9,7 @@ include(${CMAKE_CURRENT_LIST_DIR}/../cli_expect.cmake)
 
 run_ok(synth synth --out ${WORK_DIR}/data --takes 1 --seed 2)
 run_ok(eval eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/report --iters 8 --threads 1
-       --folds patting,gripping --seed 3 --synth-seed 2 --no-rcm)
+       --folds patting,gripping --seed 3 --synth-seed 2 --no-rcm --continuous)
 foreach(f report.md results.csv summary.csv summary.svg folds/patting/checkpoint.safetensors folds/gripping/losses.svg)
   if(NOT EXISTS ${WORK_DIR}/report/${f})
     message(FATAL_ERROR "eval did not write ${f}")
@@ -59,6 +59,18 @@ foreach(s "### held out: patting" "### held out: gripping" "Where StarGAN beats 
     message(FATAL_ERROR "report.md lacks '${s}'")
   endif()
 endforeach()
+
+# the continuous control's section (--continuous): both folds, every label's point the discrete transfer bit for bit
+foreach(s "## Continuous control" "| patting | 1 | 5 / 5 |" "| gripping | 1 | 5 / 5 |" "| all | 2 | 10 / 10 | ")
+  string(FIND "${md}" "${s}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "report.md lacks '${s}'")
+  endif()
+endforeach()
+file(WRITE ${WORK_DIR}/no_fearful.json "{\"format\": \"handemo-rcm-circumplex\", \"version\": 1, \"source\": \"a test\", \"labels\": {\"neutral\": {\"valence\": 0.1, \"arousal\": -0.4}, \"sad\": {\"valence\": -0.7, \"arousal\": -0.4}}}")
+run_fail(eval_continuous_table eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --continuous
+         --circumplex ${WORK_DIR}/no_fearful.json)
+expect_error_matches("label '[a-z]+' has no circumplex coordinates in .*no_fearful.json")
 
 run_fail(eval_config eval --data ${WORK_DIR}/data --config hand-huge --report ${WORK_DIR}/bad)
 expect_error_matches("unknown configuration 'hand-huge'")

@@ -39,6 +39,11 @@ TEST_CASE("circumplex interpolation: weights sum to one, never negative, exact a
             const auto w = ip.weights(ip.labels()[l].valence, ip.labels()[l].arousal);
             for (std::size_t i = 0; i < w.size(); ++i) CHECK(w[i] == (i == l ? 1.0 : 0.0));
         }
+        // a point a hair from a label's (coordinates typed as decimals, rounded) is the label's, exactly
+        const auto& l1 = ip.labels()[1];
+        const auto near = ip.weights(l1.valence + 1e-12, l1.arousal - 1e-12);
+        CHECK(near[1] == 1.0);
+        CHECK(near[0] == 0.0);
         // a partition of unity over the disc
         std::mt19937 rng(3);
         std::uniform_real_distribution<double> u(-1, 1);

@@ -26,6 +26,8 @@ struct eval_cli {
     bool has_synth_seed = false;
     handemo::eval::eval_options opt{.train = handemo::eval::default_train_options()};
     std::string command;
+    bool continuous = false;  ///< measure the continuous control (eval_options::continuous) with the --circumplex table
+    std::string circumplex;
 };
 
 void run_eval_cli(eval_cli& o)
@@ -35,6 +37,7 @@ void run_eval_cli(eval_cli& o)
     o.opt.command = o.command;
     o.opt.commit = handemo::cli::build_commit();  // printed in the report: the code that made it
     if (o.has_synth_seed) o.opt.synth_seed = o.synth_seed;
+    if (o.continuous) o.opt.continuous = o.circumplex.empty() ? transfer_cmd::default_circumplex().string() : o.circumplex;
     const auto r = eval::run_eval_named(o.data, o.config, o.opt, o.report);
     std::cout << "eval: " << r.folds.size() << " folds, " << r.samples.size() << " scored clips in " << r.seconds / 60.0
               << " min; wrote " << o.report << "/report.md, results.csv, summary.csv, summary.svg\n";
@@ -82,6 +85,10 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
                                                "binary16 (with --reuse-models: the same trained models, the accuracy cost of "
                                                "binary16 weights)");
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
+    sub->add_flag("--continuous", o->continuous,
+                  "Also measure the continuous control on every fold (equality at the labels' points, monotone paths from neutral, "
+                  "the Lipschitz bound, halfway points; docs/continuous.md)");
+    sub->add_option("--circumplex", o->circumplex, "The labels' circumplex coordinates for --continuous (default: the shipped data/rcm/circumplex.json)");
     // methods from other translation units (cmd_rcm.cpp: --rcm, the circumplex method of Aristidou et al. 2017)
     for (const auto& e : handemo::cli::eval_extensions()) e.add_options(sub);
     if (!sub->get_option_no_throw("--rcm")) {  // built without it: --no-rcm is accepted, --rcm says why it is absent

@@ -14,6 +14,7 @@
 #include <handemo/metrics/baselines.hpp>
 #include <handemo/metrics/classifier.hpp>
 #include <handemo/metrics/full_rate_judge.hpp>
+#include <handemo/eval/continuous.hpp>
 #include <handemo/eval/extension.hpp>
 #include <handemo/metrics/compare.hpp>
 #include <handemo/eval/report.hpp>
@@ -74,6 +75,10 @@ struct eval_options {
     /// names, rest pose, proportions, units, channel order; eval/retargeted.hpp), transferred through the
     /// retargeting and scored back on the model's skeleton.
     bool retargeted = true;
+    /// A circumplex table (data/rcm/circumplex.json): also measure the continuous control on every fold
+    /// (eval/continuous.hpp: equality at the labels' points, monotone paths, the Lipschitz bound, halfway points)
+    /// and report it. Empty: not measured.
+    std::string continuous;
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
@@ -681,6 +686,13 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
     progress overall("eval " + info.name, static_cast<long>(folds.size()), opt.progress_out, 0.0);
     std::vector<track_series> detail_curves;  // the detail layer's example: the first fold's first input
     std::string detail_take;
+    // the continuous control's table, read and checked against the model's emotions before any fold trains
+    std::optional<circumplex_table> continuous_table;
+    std::vector<continuous_fold> continuous_folds;
+    if (!opt.continuous.empty()) {
+        continuous_table = load_circumplex(opt.continuous);
+        for (const auto& d : info.domain_names) continuous_table->at(d, opt.continuous);
+    }
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         const std::string& held = folds[fi];
         const auto split = detail::split_fold(all, held);
@@ -786,6 +798,16 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
         }
         if (fsum.test_inputs == 0)
             throw value_error("eval: data set " + opt.data + ": fold '" + held + "' has no '" + info.neutral + "' clip to transfer");
+        if (continuous_table) {  // the continuous control of the fold's model on its held-out clips
+            const stargan::continuous_control control(models.model, *continuous_table, opt.continuous);
+            std::vector<const clip*> inputs;
+            std::vector<std::pair<const clip*, std::string>> reals;
+            for (const auto* p : split.test_p) {
+                if (p->src->emotion == info.neutral) inputs.push_back(&p->src->motion);
+                reals.emplace_back(&p->src->motion, p->src->emotion);
+            }
+            continuous_folds.push_back(measure_continuous<K>(models.model, control, clf, inputs, reals, held));
+        }
         fsum.eval_seconds = std::chrono::duration<double>(clock::now() - t0).count();
         res.folds.push_back(fsum);
         for (const auto& x : opt.extensions) x->end_fold(res);
@@ -798,6 +820,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
     }
     res.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     if (auto sec = gate_check_section(res, out_dir); !sec.title.empty()) res.sections.push_back(std::move(sec));
+    if (continuous_table) res.sections.push_back(continuous_section(continuous_folds));
     if (auto sec = detail::detail_section(detail_curves, folds.front(), detail_take, res.folds); !sec.title.empty()) res.sections.push_back(std::move(sec));
     return res;
 }

@@ -1,0 +1,133 @@
+// The continuous control's properties on a fold's held-out motion type (stargan/continuous.hpp,
+// docs/continuous.md): at each label's point the output equals the discrete transfer; along straight paths from
+// neutral to each label the fold's independent classifier's posterior for that label rises monotonically; the
+// keyframes change at most so many degrees per unit of circumplex distance; and the halfway points are
+// recognised as the label they lean to or as neutral, not as a third emotion more often than the real clips are.
+#pragma once
+
+#include <handemo/eval/report.hpp>
+#include <handemo/metrics/classifier.hpp>
+#include <handemo/metrics/compare.hpp>
+#include <handemo/motion/circumplex.hpp>
+#include <handemo/motion/keyframes.hpp>
+#include <handemo/stargan/continuous.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace handemo::eval {
+
+/// @brief The continuous control's numbers on one fold.
+struct continuous_fold {
+    std::string held_out;
+    std::size_t inputs = 0;
+    std::size_t label_points = 0, label_equal = 0;  ///< (input, label) pairs, and those equal to the discrete transfer bit for bit
+    std::size_t paths = 0, monotone = 0;            ///< paths neutral -> label, and those whose log posterior never falls
+    double lipschitz = 0;                           ///< largest keyframe change (deg, any channel) per unit circumplex distance between path steps
+    std::size_t halfway = 0, halfway_third = 0;     ///< halfway points, and those recognised as neither the label nor neutral
+    std::size_t real = 0, real_third = 0;           ///< the held-out real emotional clips, and those recognised as a third emotion
+};
+
+/// @brief Measures the properties on a fold: `inputs` the held-out neutral takes, `reals` the held-out real clips
+/// with their emotion, `steps` the path's steps from neutral to a label (its halfway point is step steps / 2).
+template <std::size_t K>
+continuous_fold measure_continuous(const stargan::emotion_model& model, const stargan::continuous_control& control,
+                                   const metrics::nearest_centroid_classifier& clf, const std::vector<const clip*>& inputs,
+                                   const std::vector<std::pair<const clip*, std::string>>& reals, const std::string& held, std::size_t steps = 10)
+{
+    const auto& info = model.info();
+    const auto& labels = control.interpolation().labels();
+    const auto& neutral = labels[control.interpolation().neutral()];
+    continuous_fold f;
+    f.held_out = held;
+    const auto features = [](const clip& c) { return metrics::motion_features(extract_keyframes<K>(c), metrics::measure<K>(c).duration); };
+    const auto third = [&](const std::string& predicted, const std::string& label) { return predicted != label && predicted != info.neutral; };
+    for (const auto& [c, emotion] : reals) {
+        if (emotion == info.neutral) continue;
+        ++f.real;
+        f.real_third += third(clf.predict(features(*c)), emotion);
+    }
+    auto ws = model.make_workspace();
+    for (const clip* in : inputs) {
+        ++f.inputs;
+        const auto lk = control.prepare(*in);
+        for (std::size_t d = 0; d < info.domains.size(); ++d) {
+            const auto& label = labels[d];
+            ++f.label_points;
+            f.label_equal += control.transfer(*in, lk, label.valence, label.arousal).motion.angles == model.transfer(*in, info.domains[d], {}, ws).motion.angles;
+            if (info.domains[d] == info.neutral) continue;
+            ++f.paths;
+            const std::size_t ci = clf.index_of(info.domains[d]);
+            double prev_log = -1e300;
+            bool rising = true;
+            std::vector<double> prev_keys;
+            const double step_dist = std::hypot(label.valence - neutral.valence, label.arousal - neutral.arousal) / static_cast<double>(steps);
+            for (std::size_t s = 0; s <= steps; ++s) {
+                const double t = static_cast<double>(s) / static_cast<double>(steps);
+                const auto r = control.transfer(*in, lk, neutral.valence + t * (label.valence - neutral.valence),
+                                                neutral.arousal + t * (label.arousal - neutral.arousal));
+                const auto x = features(r.motion);
+                // the log posterior (it rises exactly when the posterior does; the posterior underflows far off)
+                const auto dist = clf.distances(x);
+                const double dmin = *std::min_element(dist.begin(), dist.end());
+                double z = 0;
+                for (double v : dist) z += std::exp(-0.5 * (v - dmin));
+                const double log_post = ci < dist.size() ? -0.5 * (dist[ci] - dmin) - std::log(z) : -1e300;
+                rising = rising && log_post >= prev_log - 1e-9 * std::abs(prev_log);
+                prev_log = log_post;
+                if (!prev_keys.empty()) {
+                    double m = 0;
+                    for (std::size_t i = 0; i < prev_keys.size(); ++i) m = std::max(m, std::abs(r.keys.angles[i] - prev_keys[i]));
+                    f.lipschitz = std::max(f.lipschitz, m / step_dist);
+                }
+                prev_keys = r.keys.angles;
+                if (2 * s == steps) {
+                    ++f.halfway;
+                    f.halfway_third += third(clf.predict(x), info.domains[d]);
+                }
+            }
+            f.monotone += rising;
+        }
+    }
+    return f;
+}
+
+/// @brief The report's section on the continuous control: one row per fold and the total.
+inline report_section continuous_section(const std::vector<continuous_fold>& folds, std::size_t steps = 10)
+{
+    report_section sec;
+    sec.title = "Continuous control (circumplex points through the StarGAN transfer)";
+    std::string& m = sec.markdown;
+    m += "Each held-out neutral take goes to every label's circumplex point and along the straight path from neutral's point to each "
+         "label in " + std::to_string(steps) + " steps (docs/continuous.md). *Equal*: outputs at the labels' points equal to the discrete "
+         "transfer bit for bit. *Monotone*: paths along which the fold's classifier's posterior for the label never falls. *Lipschitz*: "
+         "the largest keyframe change (degrees, any channel) per unit of circumplex distance between two steps. *Halfway, third*: halfway "
+         "points recognised as neither the label nor neutral, against the held-out real emotional clips recognised as another emotion "
+         "than their own and neutral.\n\n";
+    m += "| fold | inputs | equal at labels | monotone paths | Lipschitz (deg per unit) | halfway: third emotion | real clips: third emotion |\n";
+    m += "|---|---|---|---|---|---|---|\n";
+    continuous_fold all;
+    all.held_out = "all";
+    char b[512];
+    const auto pct = [](std::size_t a, std::size_t n) { return n ? 100.0 * static_cast<double>(a) / static_cast<double>(n) : std::nan(""); };
+    const auto row = [&](const continuous_fold& f) {
+        std::snprintf(b, sizeof b, "| %s | %zu | %zu / %zu | %zu / %zu (%.1f%%) | %.2f | %zu / %zu (%.1f%%) | %zu / %zu (%.1f%%) |\n", f.held_out.c_str(),
+                      f.inputs, f.label_equal, f.label_points, f.monotone, f.paths, pct(f.monotone, f.paths), f.lipschitz, f.halfway_third,
+                      f.halfway, pct(f.halfway_third, f.halfway), f.real_third, f.real, pct(f.real_third, f.real));
+        m += b;
+    };
+    for (const auto& f : folds) {
+        row(f);
+        all.inputs += f.inputs, all.label_points += f.label_points, all.label_equal += f.label_equal, all.paths += f.paths;
+        all.monotone += f.monotone, all.halfway += f.halfway, all.halfway_third += f.halfway_third, all.real += f.real;
+        all.real_third += f.real_third, all.lipschitz = std::max(all.lipschitz, f.lipschitz);
+    }
+    row(all);
+    return sec;
+}
+
+}  // namespace handemo::eval
