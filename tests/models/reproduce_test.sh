@@ -7,7 +7,7 @@ src=$1 build=$2 work=$3
 rm -rf "$work"
 mkdir -p "$work"
 for run in a b; do
-  "$src/scripts/make_hand_model.sh" --build "$build" --out "$work/$run" --iters 10 > "$work/$run.log" 2>&1 ||
+  "$src/scripts/make_hand_model.sh" --build "$build" --out "$work/$run" --iters 4 > "$work/$run.log" 2>&1 ||
     { cat "$work/$run.log"; exit 1; }
 done
 cmp "$work/a/checkpoint.safetensors" "$work/b/checkpoint.safetensors"

@@ -46,7 +46,7 @@ check_after_kill() {
   done
   echo "kill ${what}: ${how}, bitwise equal"
 }
-for pct in 10 25 40 55 70 85 95; do
+for pct in 15 45 75 95; do
   out="$work/kill_$pct"
   delay_ms=$(( total_ms * pct / 100 ))
   "$cli" "${train[@]}" --out "$out" >/dev/null 2>&1 &
