@@ -29,7 +29,7 @@
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/.." && pwd)
-usage() { sed -n '/^# Usage: /,/^#   HANDEMO/s/^# \{0,1\}//p' "$0"; }
+usage() { sed -n '/^# Usage: /,/^[^#]/{/^#/s/^# \{0,1\}//p}' "$0"; }
 write_out=0 results="" dry=0 build="" quick=0
 for arg in "$@"; do
   case "$arg" in
