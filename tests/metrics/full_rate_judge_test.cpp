@@ -204,7 +204,7 @@ TEST_CASE("full-rate features: invariant to whole turns of a track and to playin
     const std::size_t J3 = c.skel.size() * 3;
     for (std::size_t f = 0; f < c.frames; ++f) {
         turned.angles[f * J3 + 4] += 360;                                  // a whole turn on one channel
-        wrapped.angles[f * J3 + 7] = metrics::detail::wrap180(c.angles[f * J3 + 7] + 170) - 170;  // a track written across +-180
+        wrapped.angles[f * J3 + 7] = wrap_angle_deg(c.angles[f * J3 + 7] + 170) - 170;  // a track written across +-180
         for (std::size_t k = 0; k < J3; ++k) backwards.angles[f * J3 + k] = c.angles[(c.frames - 1 - f) * J3 + k];
     }
     const auto x = full_rate_features(c);
@@ -227,7 +227,7 @@ TEST_CASE("full-rate judge: the change against a neutral clip cancels the conten
     CHECK(sad[3 * J] > 1.5);      // and droops: flexion (x) up on average (12 deg on the wrist, 6 on 10 finger joints)
     // posture differences are wrapped: a whole turn on every angle changes nothing
     auto turned = fn;
-    for (std::size_t i = J; i < 4 * J; ++i) turned[i] = metrics::detail::wrap180(turned[i] + 350) - 350 + 360;
+    for (std::size_t i = J; i < 4 * J; ++i) turned[i] = wrap_angle_deg(turned[i] + 350) - 350 + 360;
     for (double v : full_rate_change(turned, fn)) CHECK(v == doctest::Approx(0.0).scale(1.0));
     CHECK_THROWS_AS((void)full_rate_change(fn, std::vector<double>(fn.size() - 6)), shape_error);
     CHECK_THROWS_AS((void)full_rate_change(std::vector<double>(7), std::vector<double>(7)), shape_error);

@@ -15,6 +15,7 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/motion/clip.hpp>
+#include <handemo/motion/codec.hpp>
 
 #include <algorithm>
 #include <array>
@@ -39,14 +40,6 @@ struct full_rate_feature_options {
 constexpr std::size_t full_rate_feature_count(std::size_t joints) noexcept { return 6 * joints + 8; }
 
 namespace detail {
-
-inline double wrap180(double a) noexcept
-{
-    a = std::fmod(a, 360.0);
-    if (a > 180) a -= 360;
-    if (a <= -180) a += 360;
-    return a;
-}
 
 /// Savitzky-Golay smoothing (a least-squares quadratic over 2h + 1 frames, the centre's value):
 ///   s_i = sum_{k=-h..h} c_k v_{i+k},  c_k = (3 (3h^2 + 3h - 1) - 15 k^2) / ((2h + 1)(4h^2 + 4h - 3)).
@@ -101,7 +94,7 @@ inline std::vector<double> full_rate_features(const clip& c, const full_rate_fea
         double s = std::sin(u[0] * std::numbers::pi / 180), co = std::cos(u[0] * std::numbers::pi / 180);
         for (std::size_t i = 1; i < n; ++i) {
             const double a = c.angles[i * J3 + ch];
-            u[i] = u[i - 1] + detail::wrap180(a - c.angles[(i - 1) * J3 + ch]);
+            u[i] = u[i - 1] + wrap_angle_deg(a - c.angles[(i - 1) * J3 + ch]);
             s += std::sin(a * std::numbers::pi / 180), co += std::cos(a * std::numbers::pi / 180);
         }
         const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
@@ -219,7 +212,7 @@ inline std::vector<double> full_rate_change(const std::vector<double>& clip_feat
         out[J + j] = clip_features[4 * J + j] - neutral_features[4 * J + j];      // log speed
         out[2 * J + j] = clip_features[5 * J + j] - neutral_features[5 * J + j];  // log tremor energy
         for (std::size_t a = 0; a < 3; ++a)
-            out[3 * J + a] += detail::wrap180(clip_features[J + 3 * j + a] - neutral_features[J + 3 * j + a]) / static_cast<double>(J);
+            out[3 * J + a] += wrap_angle_deg(clip_features[J + 3 * j + a] - neutral_features[J + 3 * j + a]) / static_cast<double>(J);
     }
     for (std::size_t i = 0; i < 8; ++i) out[3 * J + 3 + i] = clip_features[6 * J + i] - neutral_features[6 * J + i];
     return out;
