@@ -7,3 +7,4 @@
 #include <handemo/metrics/classifier.hpp>
 #include <handemo/metrics/full_rate_judge.hpp>
 #include <handemo/metrics/baselines.hpp>
+#include <handemo/metrics/correlation.hpp>

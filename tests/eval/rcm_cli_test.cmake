@@ -8,7 +8,7 @@ include(${CMAKE_CURRENT_LIST_DIR}/../cli_expect.cmake)
 
 run_ok(synth synth --out ${WORK_DIR}/data --takes 1 --seed 2 --fps 30)
 run_ok(eval eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/report --iters 4 --threads 1
-       --folds patting --seed 3 --gate-folds 0 --rcm-iters 10 --rcm-min-features 8)
+       --folds patting --seed 3 --gate-folds 0 --rcm-iters 10 --rcm-min-features 8 --continuous)
 if(NOT last_output MATCHES "eval: rcm: +rmse_real [0-9.]+" OR NOT last_output MATCHES "circumplex_quadrant [0-9.]+")
   message(FATAL_ERROR "eval --rcm printed:\n${last_output}")
 endif()
@@ -32,6 +32,10 @@ if(NOT n EQUAL 6)
   message(FATAL_ERROR "rcm_regression.csv has ${n} lines, expected 6 (header + 5 held-out clips)")
 endif()
 file(READ ${WORK_DIR}/report/report.md md)
+# --continuous with the circumplex method on: Spearman's rho of the grid's targets against its analysis, numbers
+if(NOT md MATCHES "\\| all \\| 1 \\| 5 / 5 \\|[^\n]*\\| -?[01]\\.[0-9][0-9], -?[01]\\.[0-9][0-9] \\| -?[01]\\.[0-9][0-9], -?[01]\\.[0-9][0-9] \\|")
+  message(FATAL_ERROR "report.md's continuous section has no Spearman numbers for the outputs and the real clips")
+endif()
 foreach(s "## Circumplex (Aristidou et al. 2017)" "| all | rcm |" "circumplex quadrant reached (%)" "**vs rcm**" "--rcm-iters 10"
           "rcm min_features 8")
   string(FIND "${md}" "${s}" at)

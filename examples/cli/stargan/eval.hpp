@@ -87,7 +87,7 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
     sub->add_flag("--continuous", o->continuous,
                   "Also measure the continuous control on every fold (equality at the labels' points, monotone paths from neutral, "
-                  "the Lipschitz bound, halfway points; docs/continuous.md)");
+                  "the Lipschitz bound, halfway points, and with --rcm the Spearman correlation of targets and analysis; docs/continuous.md)");
     sub->add_option("--circumplex", o->circumplex, "The labels' circumplex coordinates for --continuous (default: the shipped data/rcm/circumplex.json)");
     // methods from other translation units (cmd_rcm.cpp: --rcm, the circumplex method of Aristidou et al. 2017)
     for (const auto& e : handemo::cli::eval_extensions()) e.add_options(sub);

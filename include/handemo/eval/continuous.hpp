@@ -2,12 +2,16 @@
 // docs/continuous.md): at each label's point the output equals the discrete transfer; along straight paths from
 // neutral to each label the fold's independent classifier's posterior for that label rises monotonically; the
 // keyframes change at most so many degrees per unit of circumplex distance; and the halfway points are
-// recognised as the label they lean to or as neutral, not as a third emotion more often than the real clips are.
+// recognised as the label they lean to or as neutral, not as a third emotion more often than the real clips are;
+// and, given an analysis of clips onto the circumplex fitted on the fold's training clips (the circumplex method's,
+// eval/rcm.hpp), the Spearman correlation between target and analysed valence and arousal over a grid of targets
+// per input, beside the real clips' own.
 #pragma once
 
 #include <handemo/eval/report.hpp>
 #include <handemo/metrics/classifier.hpp>
 #include <handemo/metrics/compare.hpp>
+#include <handemo/metrics/correlation.hpp>
 #include <handemo/motion/circumplex.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/stargan/continuous.hpp>
@@ -15,6 +19,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,14 +35,35 @@ struct continuous_fold {
     double lipschitz = 0;                           ///< largest keyframe change (deg, any channel) per unit circumplex distance between path steps
     std::size_t halfway = 0, halfway_third = 0;     ///< halfway points, and those recognised as neither the label nor neutral
     std::size_t real = 0, real_third = 0;           ///< the held-out real emotional clips, and those recognised as a third emotion
+    /// Spearman's rho of target against analysed valence and arousal over the grid (mean over the inputs), and of
+    /// the real held-out clips' labels' points against their analysis; NaN when no analysis was given
+    double spearman_valence = std::nan(""), spearman_arousal = std::nan("");
+    double real_spearman_valence = std::nan(""), real_spearman_arousal = std::nan("");
 };
+
+/// @brief An analysis of a clip onto the circumplex, (valence, arousal); NaN where it cannot say.
+using circumplex_analysis = std::function<std::pair<double, double>(const clip&)>;
+
+/// @brief The grid of targets the Spearman correlations are taken over: valence and arousal in -0.8, -0.4, 0, 0.4,
+/// 0.8, the 21 points inside the unit circle.
+inline std::vector<std::pair<double, double>> continuous_grid()
+{
+    std::vector<std::pair<double, double>> g;
+    for (int i = -2; i <= 2; ++i)
+        for (int j = -2; j <= 2; ++j) {
+            const double v = 0.4 * i, a = 0.4 * j;
+            if (v * v + a * a <= 1.0) g.emplace_back(v, a);
+        }
+    return g;
+}
 
 /// @brief Measures the properties on a fold: `inputs` the held-out neutral takes, `reals` the held-out real clips
 /// with their emotion, `steps` the path's steps from neutral to a label (its halfway point is step steps / 2).
 template <std::size_t K>
 continuous_fold measure_continuous(const stargan::emotion_model& model, const stargan::continuous_control& control,
                                    const metrics::nearest_centroid_classifier& clf, const std::vector<const clip*>& inputs,
-                                   const std::vector<std::pair<const clip*, std::string>>& reals, const std::string& held, std::size_t steps = 10)
+                                   const std::vector<std::pair<const clip*, std::string>>& reals, const std::string& held, std::size_t steps = 10,
+                                   const circumplex_analysis& analyse = {})
 {
     const auto& info = model.info();
     const auto& labels = control.interpolation().labels();
@@ -52,6 +78,7 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
         f.real_third += third(clf.predict(features(*c)), emotion);
     }
     auto ws = model.make_workspace();
+    std::vector<double> grid_v, grid_a;  // per input
     for (const clip* in : inputs) {
         ++f.inputs;
         const auto lk = control.prepare(*in);
@@ -92,6 +119,35 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
             }
             f.monotone += rising;
         }
+        if (analyse) {  // the grid of targets against their analysis
+            std::vector<double> tv, ta, av, aa;
+            for (const auto& [v, a] : continuous_grid()) {
+                const auto an = analyse(control.transfer(*in, lk, v, a).motion);
+                tv.push_back(v), ta.push_back(a), av.push_back(an.first), aa.push_back(an.second);
+            }
+            grid_v.push_back(metrics::spearman(tv, av));
+            grid_a.push_back(metrics::spearman(ta, aa));
+        }
+    }
+    if (analyse) {
+        const auto mean = [](const std::vector<double>& x) {
+            double m = 0;
+            std::size_t n = 0;
+            for (double v : x)
+                if (std::isfinite(v)) m += v, ++n;
+            return n ? m / static_cast<double>(n) : std::nan("");
+        };
+        f.spearman_valence = mean(grid_v), f.spearman_arousal = mean(grid_a);
+        std::vector<double> tv, ta, av, aa;
+        for (const auto& [c, emotion] : reals) {
+            const auto it = std::find(info.domains.begin(), info.domains.end(), emotion);
+            if (it == info.domains.end()) continue;
+            const auto& l = labels[static_cast<std::size_t>(it - info.domains.begin())];
+            const auto an = analyse(*c);
+            tv.push_back(l.valence), ta.push_back(l.arousal), av.push_back(an.first), aa.push_back(an.second);
+        }
+        f.real_spearman_valence = metrics::spearman(tv, av);
+        f.real_spearman_arousal = metrics::spearman(ta, aa);
     }
     return f;
 }
@@ -107,25 +163,46 @@ inline report_section continuous_section(const std::vector<continuous_fold>& fol
          "transfer bit for bit. *Monotone*: paths along which the fold's classifier's posterior for the label never falls. *Lipschitz*: "
          "the largest keyframe change (degrees, any channel) per unit of circumplex distance between two steps. *Halfway, third*: halfway "
          "points recognised as neither the label nor neutral, against the held-out real emotional clips recognised as another emotion "
-         "than their own and neutral.\n\n";
-    m += "| fold | inputs | equal at labels | monotone paths | Lipschitz (deg per unit) | halfway: third emotion | real clips: third emotion |\n";
-    m += "|---|---|---|---|---|---|---|\n";
+         "than their own and neutral. *Spearman*: with the circumplex method built and on (`--rcm`), its analysis (fitted on the fold's "
+         "training clips) of the outputs at 21 grid targets per input against the targets' valence and arousal (mean over the inputs), "
+         "and of the held-out real clips against their labels' points; n/a without it.\n\n";
+    m += "| fold | inputs | equal at labels | monotone paths | Lipschitz (deg per unit) | halfway: third emotion | real clips: third emotion "
+         "| Spearman valence, arousal | real clips: Spearman valence, arousal |\n";
+    m += "|---|---|---|---|---|---|---|---|---|\n";
     continuous_fold all;
     all.held_out = "all";
-    char b[512];
+    char b[640];
+    const auto rho = [](double x) {
+        char t[16];
+        if (!std::isfinite(x)) return std::string("n/a");
+        std::snprintf(t, sizeof t, "%.2f", x);
+        return std::string(t);
+    };
     const auto pct = [](std::size_t a, std::size_t n) { return n ? 100.0 * static_cast<double>(a) / static_cast<double>(n) : std::nan(""); };
     const auto row = [&](const continuous_fold& f) {
-        std::snprintf(b, sizeof b, "| %s | %zu | %zu / %zu | %zu / %zu (%.1f%%) | %.2f | %zu / %zu (%.1f%%) | %zu / %zu (%.1f%%) |\n", f.held_out.c_str(),
-                      f.inputs, f.label_equal, f.label_points, f.monotone, f.paths, pct(f.monotone, f.paths), f.lipschitz, f.halfway_third,
-                      f.halfway, pct(f.halfway_third, f.halfway), f.real_third, f.real, pct(f.real_third, f.real));
+        std::snprintf(b, sizeof b, "| %s | %zu | %zu / %zu | %zu / %zu (%.1f%%) | %.2f | %zu / %zu (%.1f%%) | %zu / %zu (%.1f%%) | %s, %s | %s, %s |\n",
+                      f.held_out.c_str(), f.inputs, f.label_equal, f.label_points, f.monotone, f.paths, pct(f.monotone, f.paths), f.lipschitz,
+                      f.halfway_third, f.halfway, pct(f.halfway_third, f.halfway), f.real_third, f.real, pct(f.real_third, f.real),
+                      rho(f.spearman_valence).c_str(), rho(f.spearman_arousal).c_str(), rho(f.real_spearman_valence).c_str(),
+                      rho(f.real_spearman_arousal).c_str());
         m += b;
     };
+    // the total's Spearman columns: the mean over the folds that have one
+    double sv = 0, sa = 0, rv = 0, ra = 0;
+    std::size_t nsv = 0, nsa = 0, nrv = 0, nra = 0;
     for (const auto& f : folds) {
         row(f);
+        if (std::isfinite(f.spearman_valence)) sv += f.spearman_valence, ++nsv;
+        if (std::isfinite(f.spearman_arousal)) sa += f.spearman_arousal, ++nsa;
+        if (std::isfinite(f.real_spearman_valence)) rv += f.real_spearman_valence, ++nrv;
+        if (std::isfinite(f.real_spearman_arousal)) ra += f.real_spearman_arousal, ++nra;
         all.inputs += f.inputs, all.label_points += f.label_points, all.label_equal += f.label_equal, all.paths += f.paths;
         all.monotone += f.monotone, all.halfway += f.halfway, all.halfway_third += f.halfway_third, all.real += f.real;
         all.real_third += f.real_third, all.lipschitz = std::max(all.lipschitz, f.lipschitz);
     }
+    const auto avg = [](double s, std::size_t n) { return n ? s / static_cast<double>(n) : std::nan(""); };
+    all.spearman_valence = avg(sv, nsv), all.spearman_arousal = avg(sa, nsa);
+    all.real_spearman_valence = avg(rv, nrv), all.real_spearman_arousal = avg(ra, nra);
     row(all);
     return sec;
 }

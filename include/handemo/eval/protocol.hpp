@@ -806,7 +806,16 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                 if (p->src->emotion == info.neutral) inputs.push_back(&p->src->motion);
                 reals.emplace_back(&p->src->motion, p->src->emotion);
             }
-            continuous_folds.push_back(measure_continuous<K>(models.model, control, clf, inputs, reals, held));
+            // the circumplex analysis of an extension that gives one (eval/rcm.hpp's, fitted on this fold's training clips)
+            circumplex_analysis analyse;
+            if (!opt.extensions.empty())
+                analyse = [&](const clip& c) {
+                    sample_record s;
+                    s.target = info.neutral;
+                    for (const auto& x : opt.extensions) x->score(s, c);
+                    return std::pair{s.circumplex_valence, s.circumplex_arousal};
+                };
+            continuous_folds.push_back(measure_continuous<K>(models.model, control, clf, inputs, reals, held, 10, analyse));
         }
         fsum.eval_seconds = std::chrono::duration<double>(clock::now() - t0).count();
         res.folds.push_back(fsum);
