@@ -12,6 +12,8 @@
 #                                 libstdc++-arm-none-eabi-newlib, qemu-system-arm)
 #        ./setup.sh --fuzz        also clang 14's runtime libraries (libFuzzer, sanitizers), for the
 #                                 libFuzzer harnesses (-DHANDEMO_FUZZ=ON, tests/fuzz/)
+#        ./setup.sh --mpi         also Debian's Open MPI (libopenmpi-dev, openmpi-bin): training across processes
+#                                 (target handemo::mpi, handemo_mpi, CTest label mpi; docs/scale-out.md)
 # clang-14 itself is in the default set: the test clang_syntax compiles the library with it.
 set -euo pipefail
 # libgif-dev: giflib, the animated GIFs of `handemo render --animate` and the demo (target handemo::gif).
@@ -25,9 +27,10 @@ for arg in "$@"; do
     --golden) pkgs+=(python3 python3-torch python3-numpy) ;;
     --cross) pkgs+=(g++-aarch64-linux-gnu qemu-user gcc-arm-none-eabi libstdc++-arm-none-eabi-newlib qemu-system-arm) ;;
     --fuzz) pkgs+=(libclang-rt-14-dev) ;;
+    --mpi) pkgs+=(libopenmpi-dev openmpi-bin) ;;
     --chromium) browser=1 ;;
     --no-browser) browser=0 ;;
-    *) echo "setup.sh: unknown option $arg (expected --golden, --cross, --fuzz, --chromium, --no-browser)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown option $arg (expected --golden, --cross, --fuzz, --mpi, --chromium, --no-browser)" >&2; exit 2 ;;
   esac
 done
 if ((browser)); then pkgs+=(chromium); fi

@@ -13,6 +13,7 @@
 #include <handemo/micro.hpp>
 #include <handemo/autodiff.hpp>
 #include <handemo/nn.hpp>
+#include <handemo/dist.hpp>
 #include <handemo/metrics.hpp>
 #include <handemo/stargan.hpp>
 #include <handemo/eval.hpp>

@@ -30,6 +30,7 @@ int main(int argc, char** argv)
         return app.exit(e) == 0 ? 0 : 1;
     } catch (const std::exception& e) {
         std::cerr << "handemo: error: " << e.what() << "\n";
+        if (const auto& mpi = handemo::cli::mpi(); mpi.abort) mpi.abort();  // `train --mpi`: end the other processes too
         return 1;
     }
     return 0;

@@ -13,6 +13,9 @@
 namespace handemo::eval {
 class method_extension;
 }
+namespace handemo::dist {
+class shard_exchange;
+}
 
 namespace handemo::cli {
 
@@ -46,5 +49,19 @@ inline std::vector<eval_extension_entry>& eval_extensions()
 struct add_eval_extension {
     explicit add_eval_extension(eval_extension_entry e) { eval_extensions().push_back(std::move(e)); }
 };
+
+/// `handemo train --mpi`: set by cmd_mpi.cpp, the one unit that includes MPI, when the CLI is built with MPI (target
+/// handemo::mpi); empty otherwise. `start` initialises MPI once and returns the processes' exchange; `abort` ends
+/// every process after an error in one of them (the others may wait for it in a collective).
+struct mpi_hooks {
+    std::function<handemo::dist::shard_exchange*()> start;
+    std::function<void()> abort;
+};
+
+inline mpi_hooks& mpi()
+{
+    static mpi_hooks h;
+    return h;
+}
 
 }  // namespace handemo::cli

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <iostream>
+#include <ostream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,6 +21,7 @@ struct train_cli {
     std::string data, out, config = "hand-embedded";
     std::vector<std::string> exclude;
     bool resume = false;
+    bool mpi = false;  ///< --mpi: one half of each batch per MPI process (cmd_mpi.cpp)
     handemo::cli::train_overrides ov;
     handemo::stargan::train_options opt;
 };
@@ -30,16 +32,29 @@ inline void run_train(train_cli& o)
     using namespace handemo::stargan;
     namespace fs = std::filesystem;
     finish_train_options(o.opt, o.ov);
+    if (o.mpi) {
+        o.opt.exchange = handemo::cli::mpi().start();
+        // every configuration trains batches of the same size, cut into at most max_shards() parts: one per process
+        using any_trainer = trainer<hand_tiny>;
+        if (o.opt.exchange->ranks() > any_trainer::max_shards())
+            throw value_error("train: --mpi: " + std::to_string(o.opt.exchange->ranks()) + " processes, but a batch of " +
+                              std::to_string(any_trainer::N) + " is cut into at most " + std::to_string(any_trainer::max_shards()) +
+                              " parts, one per process");
+    }
+    const bool writer = writes_files(o.opt);  // with several processes: rank 0 writes and prints, the others are silent
+    if (!writer) o.opt.progress_out = nullptr;
+    std::ostream silent(nullptr);
+    std::ostream& out = writer ? std::cout : silent;
     load_options lo;
     lo.exclude_contents = o.exclude;
     const auto clips = load_folder(o.data, lo);
-    std::cout << "train: " << clips.size() << " clips from " << o.data;
+    out << "train: " << clips.size() << " clips from " << o.data;
     if (!o.exclude.empty()) {
-        std::cout << " (left out:";
-        for (const auto& e : o.exclude) std::cout << " " << e;
-        std::cout << ")";
+        out << " (left out:";
+        for (const auto& e : o.exclude) out << " " << e;
+        out << ")";
     }
-    std::cout << ", configuration " << o.config << ", preset " << o.ov.preset << ", " << o.opt.iters << " iterations\n";
+    out << ", configuration " << o.config << ", preset " << o.ov.preset << ", " << o.opt.iters << " iterations\n";
     with_config(o.config, [&]<stargan_config Config>(const config_info& info) {
         std::optional<angle_range> range;
         if (o.resume) {
@@ -51,25 +66,25 @@ inline void run_train(train_cli& o)
         const auto trp = train_model<Config>(clips, info, o.opt, o.out, o.resume, range, &gate);
         auto& tr = *trp;
         const std::string svg = plot_losses_svg(loss_log_csv(tr.log()), {.title = "handemo train " + info.name + " (" + o.data + ")"});
-        write_file_atomic(fs::path(o.out) / "losses.svg", svg);
-        std::cout << "train: " << tr.step() << " iterations done; wrote " << (fs::path(o.out) / "checkpoint.safetensors").string()
+        if (writer) write_file_atomic(fs::path(o.out) / "losses.svg", svg);
+        out << "train: " << tr.step() << " iterations done; wrote " << (fs::path(o.out) / "checkpoint.safetensors").string()
                   << " (G, D, Adam, RNG, range, tempo), generator.safetensors (PyTorch names), log.csv, losses.svg, range.json\n";
         if (o.opt.amplitude) {
-            std::cout << "train: amplitude factors (excursion relative to " << info.neutral << "):";
-            for (std::size_t k = 0; k < info.domains; ++k) std::cout << " " << info.domain_names[k] << " " << tr.data().amplitude[k];
-            std::cout << " (leave-one-content-out on the training clips: RMSE " << tr.data().amplitude_check.second << " deg scaled vs "
+            out << "train: amplitude factors (excursion relative to " << info.neutral << "):";
+            for (std::size_t k = 0; k < info.domains; ++k) out << " " << info.domain_names[k] << " " << tr.data().amplitude[k];
+            out << " (leave-one-content-out on the training clips: RMSE " << tr.data().amplitude_check.second << " deg scaled vs "
                       << tr.data().amplitude_check.first << " unscaled" << (tr.data().amplitude_check.second < tr.data().amplitude_check.first ? ")" : "; not used)") << "\n";
         }
         if (!gate.rows.empty()) {
-            std::cout << "train: change gate (weight of G's posture / motion change / posture prior per target, chosen on held-out "
+            out << "train: change gate (weight of G's posture / motion change / posture prior per target, chosen on held-out "
                          "training contents; "
                       << (fs::path(o.out) / "gate" / "gate.csv").string() << "):";
-            for (const auto& r : gate.rows) std::cout << " " << r.target << " " << r.posture << "/" << r.motion << "/" << r.prior;
-            std::cout << "\n";
+            for (const auto& r : gate.rows) out << " " << r.target << " " << r.posture << "/" << r.motion << "/" << r.prior;
+            out << "\n";
         }
-        std::cout << "train: tempo factors (duration relative to " << info.neutral << "):";
-        for (std::size_t k = 0; k < info.domains; ++k) std::cout << " " << info.domain_names[k] << " " << tr.data().tempo[k];
-        std::cout << "\n";
+        out << "train: tempo factors (duration relative to " << info.neutral << "):";
+        for (std::size_t k = 0; k < info.domains; ++k) out << " " << info.domain_names[k] << " " << tr.data().tempo[k];
+        out << "\n";
     });
 }
 
@@ -86,6 +101,10 @@ static handemo::cli::add_command reg_train{40, [](CLI::App& app) {
     sub->add_option("--exclude-content", o->exclude, "Leave this content (motion type) out of training; repeatable");
     sub->add_option("--seed", t.seed, "Random seed; the same seed and threads (or --shards 2 and up to 3 threads) give bitwise the same weights")->capture_default_str();
     sub->add_flag("--resume", o->resume, "Continue from MODEL/checkpoint.safetensors");
+    if (handemo::cli::mpi().start)
+        sub->add_flag("--mpi", o->mpi,
+                      "Run as one of 2 MPI processes (mpirun -np 2, srun): each computes one half of every batch, the same model "
+                      "as --shards 2 byte for byte; rank 0 prints and writes the files");
     handemo::cli::add_train_options(sub, t, o->ov);
     sub->add_option("--checkpoint-every", t.checkpoint_every, "Iterations between checkpoints")->capture_default_str();
     sub->add_option("--log-every", t.log_every, "Iterations between rows of log.csv")->capture_default_str();

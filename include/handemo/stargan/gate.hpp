@@ -307,6 +307,8 @@ std::pair<safetensors_file, checkpoint_info> inner_gate_model(const std::vector<
     {
         trainer<Config> tr(info, prepare_data<Config>(train, info, inner), inner);
         tr.run(dir);
+        // a process that writes no files (train_options::exchange) holds the same model in memory
+        if (!writes_files(inner)) return parse_checkpoint(tr.checkpoint(ck_path.string()));
     }
     return read_checkpoint(ck_path);
 }
@@ -442,7 +444,8 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
     const gate_settings set{opt.gate_prior};
     const bool use_emotion = opt.gate_margin > -1;  // margins in (-1, 0) ask for more than the real rate
     std::vector<std::vector<gate_tally>> tallies(F, std::vector<gate_tally>(info.domains, gate_tally::zeros(set.size())));
-    make_directories(work_dir);
+    const bool writer = writes_files(opt);
+    if (writer) make_directories(work_dir);
     std::size_t reused_folds = 0;
     for (std::size_t f = 0; f < F; ++f) {
         std::vector<labelled_clip> train;
@@ -474,7 +477,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         std::vector<gate_cross> pooled;
         const std::size_t pick = choose_gate_margin(tallies, candidates, opt.gate_margin, pooled);
         margin = candidates[pick];
-        write_file_atomic(work_dir / "gate_margins.csv", detail::gate_margins_csv(candidates, pooled, pick));
+        if (writer) write_file_atomic(work_dir / "gate_margins.csv", detail::gate_margins_csv(candidates, pooled, pick));
         if (opt.progress_out) {
             const auto& p = pooled[pick];
             const double n = std::max(1.0, p.pairs);
@@ -493,7 +496,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                          "recognised %.0f%%, G's whole change %.0f%%, real %.0f%%; %zu pairs)\n",
                          r.target.c_str(), r.posture, r.motion, r.prior, r.rmse_gated, r.rmse_full, r.rmse_none, 100 * r.emotion_gated,
                          100 * r.emotion_full, 100 * r.emotion_real, r.pairs);
-    write_file_atomic(work_dir / "gate.csv", g.csv());
+    if (writer) write_file_atomic(work_dir / "gate.csv", g.csv());
     return g;
 }
 

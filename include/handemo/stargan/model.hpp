@@ -191,6 +191,14 @@ public:
         if (pool) parallel_blocks(*pool, p_.total(), add);
         else add(0, p_.total());
     }
+    /// @brief Gradient shard `k`'s flat buffer (set_grad_shards; 0: the gradients for_each_parameter gives), every
+    /// entry padded to 16 values: what data parallelism across processes shares before reduce_grad_shards().
+    std::span<T> grad_shard(std::size_t k)
+    {
+        if (k > shards_.size())
+            throw value_error("grad_shard: shard " + std::to_string(k) + " of " + std::to_string(shards_.size() + 1) + " (set_grad_shards)");
+        return k == 0 ? std::span<T>(p_.grads(), p_.total()) : std::span<T>(shards_[k - 1].data(), p_.total());
+    }
     /// @brief Whether forward() makes parameters trainable leaves (false: constants, no weight grads).
     void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
     /// @brief Number of scalar parameters.

@@ -16,6 +16,7 @@
 #include <handemo/core/io.hpp>
 #include <handemo/core/progress.hpp>
 #include <handemo/core/thread_pool.hpp>
+#include <handemo/dist/exchange.hpp>
 #include <handemo/motion/bvh.hpp>
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/detail_layer.hpp>
@@ -63,6 +64,12 @@ struct train_options {
     long log_every = 10;
     long stop_at = -1;          ///< stop (after a checkpoint) at this step, as if interrupted; -1: never
     std::FILE* progress_out = stderr;
+    /// data parallelism across processes (dist/exchange.hpp, e.g. dist::mpi_exchange): with 2 processes each
+    /// computes the part of the batch its rank numbers (the same halves as shards 2), the parts are shared and
+    /// added in part order, so 2 processes train bit for bit what one process with shards 2 trains; only rank 0
+    /// writes files. The change gate's inner trainings are shared the same way. nullptr or 1 process: off. Not
+    /// stored in checkpoints (a run option, as threads)
+    dist::shard_exchange* exchange = nullptr;
     // ---- beyond the paper (all off by default, which is the paper's and StarGAN's setup; see handemo_options())
     bool residual = false;      ///< G outputs x + tanh(last conv), the last conv zero-initialised: G is the identity at init
     double lambda_id = 0.0;     ///< identity loss mean |G(x, c_org) - x| (CycleGAN's)
@@ -140,6 +147,10 @@ struct train_options {
         return j;
     }
 };
+
+/// @brief Whether this process writes the training's files: always, unless it is one of several processes of
+/// train_options::exchange and not rank 0.
+inline bool writes_files(const train_options& o) noexcept { return !o.exchange || o.exchange->writes_files(); }
 
 /// @brief StarGAN exactly as the paper and the reference train it (Eq. 3's one range, G = tanh(...), the
 /// three losses of Eq. 4-5 with StarGAN's weights).
@@ -727,10 +738,12 @@ public:
     trainer(config_info info, prepared_data data, train_options opt)
         : info_(std::move(info)), data_(std::move(data)), opt_(validated(opt)),
           shards_(resolve_shards(opt_)),
-          pool_(shards_ == 1 ? all_threads(opt_.threads) : std::min(all_threads(opt_.threads), unsigned(shards_))),
+          pool_(shards_ == 1 || distributed(opt_) ? all_threads(opt_.threads) : std::min(all_threads(opt_.threads), unsigned(shards_))),
           gen_(opt.seed)
     {
-        if (shards_ == 1) {  // the whole batch on one tape, its convolutions split over every thread
+        if (distributed(opt_)) {  // this process's part only, its convolutions split over the process's threads
+            tapes_[opt_.exchange->rank()] = std::make_unique<autodiff::tape<float>>(std::size_t{1} << 22, pool_.size() > 1 ? &pool_ : nullptr);
+        } else if (shards_ == 1) {  // the whole batch on one tape, its convolutions split over every thread
             tapes_[0] = std::make_unique<autodiff::tape<float>>(std::size_t{1} << 22, pool_.size() > 1 ? &pool_ : nullptr);
         } else {  // a tape per half; with 4 or more threads each half splits its convolutions again
             const unsigned per_shard = all_threads(opt_.threads) / unsigned(shards_);
@@ -849,6 +862,7 @@ private:
             part_[s] = {d_real.item(), d_fake.item(), d_cls.item(), gp.item(), ld.item()};
             t.backward(ld);
         });
+        share_parts<N / B, B>(d_, true);
         const auto dl = sum_parts<N / B>();
         check_finite({{"D/real", dl[0]}, {"D/fake", dl[1]}, {"D/cls", dl[2]}, {"D/gp", dl[3]}});
         for (std::size_t k = 0; k < 5; ++k) last_[k] = dl[k];
@@ -893,6 +907,7 @@ private:
                 part_[s] = p;
                 t.backward(lg);
             });
+            share_parts<N / B, B>(g_, false);
             const auto gl = sum_parts<N / B>();
             check_finite({{"G/fake", gl[0]}, {"G/cls", gl[1]}, {"G/rec", gl[2]}, {"G/id", gl[4]}, {"G/pair", gl[5]},
                           {"G/total", gl[3]}});
@@ -911,7 +926,8 @@ public:
     void run(const std::filesystem::path& out_dir, bool resume = false)
     {
         namespace fs = std::filesystem;
-        make_directories(out_dir);
+        const bool writer = writes_files(opt_);
+        if (writer) make_directories(out_dir);
         const fs::path ck = out_dir / "checkpoint.safetensors";
         if (resume) {
             if (!path_exists(ck)) throw io_error("train: --resume: no checkpoint at " + ck.string());
@@ -925,17 +941,29 @@ public:
             std::snprintf(status, sizeof status, "D %.3f (cls %.3f gp %.3f acc %.0f%%) G %.3f (cls %.3f rec %.4f)", last_[4],
                           last_[2], last_[3], 100 * last_[5], last_[9], last_[7], last_[8]);
             bar.update(step_, status);
-            if (step_ % opt_.checkpoint_every == 0 || step_ == end) save(out_dir);
+            if (writer && (step_ % opt_.checkpoint_every == 0 || step_ == end)) save(out_dir);
         }
         bar.finish();
     }
 
-    /// @brief Writes checkpoint.safetensors (everything), generator.safetensors (G only, PyTorch names),
-    /// range.json and log.csv into `out_dir`, each atomically.
+    /// @brief Writes checkpoint.safetensors (everything, checkpoint()), generator.safetensors (G only, PyTorch
+    /// names), range.json and log.csv into `out_dir`, each atomically.
     void save(const std::filesystem::path& out_dir)
     {
+        const safetensors_file f = checkpoint((out_dir / "checkpoint.safetensors").string());
+        write_safetensors(out_dir / "checkpoint.safetensors", f);
+        save_parameters(out_dir / "generator.safetensors", inference_gen(),
+                        {{"format", "pytorch-state-dict"}, {"config", info_.name}, {"step", std::to_string(step_)},
+                         {"residual", opt_.residual ? "true" : "false"}, {"ema", ema_ ? "true" : "false"}});
+        save_range(out_dir / "range.json", data_.range);
+        write_file_atomic(out_dir / "log.csv", loss_log_csv(log_));
+    }
+
+    /// @brief The checkpoint save() writes, in memory (`source`: the file it is named as in error messages).
+    safetensors_file checkpoint(const std::string& source)
+    {
         safetensors_file f;
-        f.source = (out_dir / "checkpoint.safetensors").string();
+        f.source = source;
         add_parameters(f, g_, "G.");
         add_parameters(f, d_, "D.");
         if (ema_) add_parameters(f, *ema_, "G_ema.");
@@ -974,12 +1002,7 @@ public:
         f.metadata["handemo"] = j.dump();
         if (!data_.skel.joints.empty()) f.metadata["skeleton"] = to_bvh_string(clip::make(data_.skel, 1, 30), -1);
         f.metadata["checksum"] = detail::checkpoint_checksum(f);
-        write_safetensors(out_dir / "checkpoint.safetensors", f);
-        save_parameters(out_dir / "generator.safetensors", inference_gen(),
-                        {{"format", "pytorch-state-dict"}, {"config", info_.name}, {"step", std::to_string(step_)},
-                         {"residual", opt_.residual ? "true" : "false"}, {"ema", ema_ ? "true" : "false"}});
-        save_range(out_dir / "range.json", data_.range);
-        write_file_atomic(out_dir / "log.csv", loss_log_csv(log_));
+        return f;
     }
 
     /// @brief Restores every piece of state from a checkpoint written by save().
@@ -1133,8 +1156,30 @@ private:
             f(*tapes_[std::size_t(s)], std::size_t(s));
         };
         if constexpr (P == 1) one(0);
+        else if (distributed(opt_)) one(int(opt_.exchange->rank()));
         else pool_.parallel_for(0, int(P), one);
     }
+    /// Data parallelism across processes: each process's part of the phase (its loss terms, with `logits` D's
+    /// class logits of its samples, and m's gradient shard) copied to every process, bit for bit, so that
+    /// sum_parts() and reduce_grad_shards() then add the same values in the same part order as one process.
+    template <std::size_t P, std::size_t B, class Model>
+    void share_parts(Model& m, bool logits)
+    {
+        if constexpr (P > 1) {
+            if (!distributed(opt_)) return;
+            std::array<float*, P> at{};
+            for (std::size_t s = 0; s < P; ++s) at[s] = part_[s].data();
+            opt_.exchange->share(at, part_[0].size());
+            if (logits) {
+                for (std::size_t s = 0; s < P; ++s) at[s] = logits_.data() + s * B * C;
+                opt_.exchange->share(at, B * C);
+            }
+            for (std::size_t s = 0; s < P; ++s) at[s] = m.grad_shard(s).data();
+            opt_.exchange->share(at, m.grad_shard(0).size());
+        }
+    }
+    /// Whether the parts of a batch are computed by several processes (train_options::exchange).
+    static bool distributed(const train_options& o) noexcept { return o.exchange && o.exchange->ranks() > 1; }
     /// The loss terms of parts 0..P-1 added up in part order.
     template <std::size_t P>
     std::array<double, 7> sum_parts() const noexcept
@@ -1157,6 +1202,14 @@ private:
     /// train_options::shards (validated: 0, 1 or 2) resolved: 0 = 1 on one thread, else max_shards().
     static std::size_t resolve_shards(const train_options& o)
     {
+        if (distributed(o)) {  // one part per process
+            const std::size_t p = o.exchange->ranks();
+            if (p > S)
+                throw value_error("train: " + std::to_string(p) + " processes for a batch of " + std::to_string(N) + ", which is cut into at most " +
+                                  std::to_string(S) + " parts (one per process)");
+            if (o.shards == 1) throw value_error("train: shards 1 across " + std::to_string(p) + " processes (each computes one part)");
+            return p;
+        }
         if (o.shards == 2 && S == 1)
             throw value_error("train: shards 2 for a batch of " + std::to_string(N) + " (2 needs an even batch)");
         if (o.shards) return o.shards;
