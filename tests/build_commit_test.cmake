@@ -7,7 +7,9 @@ find_package(Git QUIET)
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR}/not_a_checkout)
 
-# the script on a folder that is no checkout: "unknown"; run again on the same text, the file is not rewritten
+# the script on a folder that is no checkout of its own (here inside the build folder, which may itself be inside
+# the source checkout, as a vendored copy inside another repository would be): "unknown"; run again on the same
+# text, the file is not rewritten
 set(out ${WORK_DIR}/commit.hpp)
 execute_process(COMMAND ${CMAKE_COMMAND} -DSRC=${WORK_DIR}/not_a_checkout -DOUT=${out} -P ${SRC}/cmake/build_commit.cmake RESULT_VARIABLE rc)
 file(READ ${out} text)
