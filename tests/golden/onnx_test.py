@@ -125,10 +125,8 @@ def main(argv):
         print(__doc__)
         return 2
     helper, root = argv
-    missing = import_torch()
-    if missing:
-        print(f"SKIP: {missing}")
-        return SKIP
+    # node and onnxruntime-node first: they are what is most often missing, and finding them out costs no
+    # torch import (seconds)
     node = shutil.which("node")
     if not node:
         print("SKIP: node is not on PATH (Debian's nodejs; ONNX Runtime runs in it as the npm package onnxruntime-node)")
@@ -138,6 +136,10 @@ def main(argv):
     if check.returncode != 0:
         print((check.stdout + check.stderr).strip() or f"SKIP: onnxruntime_bench.js check exited {check.returncode}")
         return SKIP if check.returncode == SKIP else 1
+    missing = import_torch()
+    if missing:
+        print(f"SKIP: {missing}")
+        return SKIP
     import torch
 
     torch.set_num_threads(1)
