@@ -13,7 +13,7 @@
 #        ./setup.sh --fuzz        also clang 14's runtime libraries (libFuzzer, sanitizers), for the
 #                                 libFuzzer harnesses (-DHANDEMO_FUZZ=ON, tests/fuzz/)
 #        ./setup.sh --mpi         also Debian's Open MPI (libopenmpi-dev, openmpi-bin): training across processes
-#                                 (target handemo::mpi, handemo_mpi, CTest label mpi; docs/scale-out.md)
+#                                 (target handemo::mpi, `handemo train --mpi`, CTest label mpi; docs/scale-out.md)
 # clang-14 itself is in the default set: the test clang_syntax compiles the library with it.
 set -euo pipefail
 # libgif-dev: giflib, the animated GIFs of `handemo render --animate` and the demo (target handemo::gif).
