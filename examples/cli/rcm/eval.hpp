@@ -1,11 +1,12 @@
 // `handemo rcm eval --data DIR [--by content|take] [--csv OUT.csv] [--svg OUT.svg]`: leave-one-content-out
 // (or leave-one-take-out) accuracy of the analysis: mean circumplex distance between the predicted point and
 // the label's coordinates, share of predictions in the label's quadrant, next to a constant predictor (the
-// training labels' mean point).
+// training labels' mean point). `--relative on|auto` reads features against the same content's neutral clips.
 #pragma once
 
 #include "common.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -15,7 +16,7 @@ namespace handemo::cli::rcm_cmd {
 
 struct eval_run {
     fit_cli f;
-    std::string by = "content", csv, svg;
+    std::string by = "content", csv, svg, relative = "off", neutral;
 };
 
 inline void run_eval(eval_run& o)
@@ -31,7 +32,15 @@ inline void run_eval(eval_run& o)
         else if (o.by == "take") group.push_back(it.take);
         else throw handemo::value_error("rcm eval: --by " + o.by + " is not 'content' or 'take'");
     }
-    const auto r = handemo::rcm::evaluate_loo(set.clips, group, table, o.f.labels, o.f.opt);
+    handemo::rcm::loo_options lo;
+    lo.relative = handemo::rcm::parse_relative_features(o.relative);
+    lo.neutral = o.neutral;
+    if (lo.neutral.empty())  // the label called neutral, else Bandai's normal
+        for (const char* n : {"neutral", "normal"})
+            if (lo.neutral.empty() && std::any_of(set.clips.begin(), set.clips.end(), [&](const auto& c) { return c.emotion == n; })) lo.neutral = n;
+    if (lo.relative != handemo::rcm::relative_features::off && lo.neutral.empty())
+        throw handemo::value_error("rcm eval: --relative " + o.relative + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
+    const auto r = handemo::rcm::evaluate_loo(set.clips, group, table, o.f.labels, o.f.opt, lo);
     char buf[512];
     std::snprintf(buf, sizeof buf,
                   "rcm eval: leave-one-%s-out on %s: %zu folds, %zu clips, %zu folds failed\n"
@@ -40,6 +49,12 @@ inline void run_eval(eval_run& o)
                   o.by.c_str(), o.f.data.c_str(), r.folds.size(), r.samples.size(), r.failed_folds.size(), r.mean_distance,
                   100 * r.quadrant_accuracy, r.baseline_distance, 100 * r.baseline_quadrant_accuracy, r.mean_selected, r.mean_pca_dims);
     std::cout << buf;
+    if (!lo.neutral.empty()) {
+        std::snprintf(buf, sizeof buf, "rcm eval: non-%s clips: mean distance %.3f (constant mean-label predictor: %.3f); relative features in %zu of %zu folds\n",
+                      lo.neutral.c_str(), r.emotional_distance, r.emotional_baseline_distance, r.relative_folds,
+                      r.folds.size() - r.failed_folds.size());
+        std::cout << buf;
+    }
     for (const auto& f : r.failed_folds) std::cout << "rcm eval: fold " << f << "\n";
     std::map<std::string, std::pair<double, double>> per;  // label -> (distance sum, quadrant hits)
     std::map<std::string, int> cnt;
@@ -81,6 +96,12 @@ inline void add_eval(CLI::App& rcm)
     sub->add_option("--by", o->by, "Hold out one 'content' or one 'take' per fold")->capture_default_str();
     sub->add_option("--csv", o->csv, "Per-clip predictions (CSV)");
     sub->add_option("--svg", o->svg, "Circumplex with every held-out prediction");
+    sub->add_option("--relative", o->relative,
+                    "Features as the change from the same content's neutral clips: off (the paper), on, or auto (chosen per fold "
+                    "by an inner leave-one-out on its training clips; docs/circumplex.md)")
+        ->check(CLI::IsMember({"off", "on", "auto"}))
+        ->capture_default_str();
+    sub->add_option("--neutral", o->neutral, "The neutral label (default: neutral, else normal, when the data has it)");
     sub->callback([o] { run_eval(*o); });
 }
 

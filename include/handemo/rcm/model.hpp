@@ -612,6 +612,8 @@ struct eval_sample {
     double distance = 0;  ///< Euclidean distance on the circumplex
     bool quadrant_ok = false;
     double baseline_distance = 0;  ///< distance of the training set's mean label point (a constant predictor)
+    bool neutral = false;          ///< a clip of the neutral label (loo_options::neutral)
+    bool relative = false;         ///< analysed with features relative to its content's neutral clips
 };
 
 /// @brief The leave-one-group-out evaluation.
@@ -621,18 +623,135 @@ struct eval_report {
     std::vector<std::string> failed_folds;  ///< folds whose fit failed, with the reason
     double mean_distance = 0, quadrant_accuracy = 0, baseline_distance = 0, baseline_quadrant_accuracy = 0;
     double mean_selected = 0, mean_pca_dims = 0;
+    /// over the non-neutral held-out clips only (the measure of --relative: a neutral clip read against its own
+    /// content's neutral mean is no test of the analysis)
+    double emotional_distance = 0, emotional_baseline_distance = 0;
+    std::size_t relative_folds = 0;  ///< folds analysed with relative features
 };
 
+/// @brief How evaluate_loo() reads a clip's features: as they are (the paper), as the change from the mean
+/// features of the neutral clips of the same performer or content (`on`), or either, chosen per fold by an inner
+/// leave-one-group-out over the fold's training groups (`automatic`: relative when its inner mean distance over the
+/// non-neutral clips is lower). docs/circumplex.md gives the rule.
+enum class relative_features { off, on, automatic };
+
+/// @brief Options of evaluate_loo() beyond the fit's.
+struct loo_options {
+    relative_features relative = relative_features::off;
+    std::string neutral;  ///< the neutral label (needed unless relative is off; counted as neutral in the report)
+};
+
+/// @brief `off`, `on` or `auto` as relative_features; value_error naming the text otherwise.
+inline relative_features parse_relative_features(const std::string& s)
+{
+    if (s == "off") return relative_features::off;
+    if (s == "on") return relative_features::on;
+    if (s == "auto") return relative_features::automatic;
+    throw value_error("rcm eval: --relative " + s + " is not off, on or auto");
+}
+
+namespace detail {
+
+/// Every clip's mean features minus the mean of the neutral clips of its performer (content).
+/// @throws value_error naming a performer without a neutral clip.
+inline std::vector<clip_feature_data> relative_to_neutral(const std::vector<training_clip>& clips,
+                                                          const std::vector<clip_feature_data>& feats, const std::string& neutral)
+{
+    std::map<std::string, std::pair<vector, double>> ref;  // performer -> (sum, count)
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        if (clips[i].emotion != neutral) continue;
+        auto [it, fresh] = ref.try_emplace(clips[i].performer, xt::zeros<double>({feats[i].mean.size()}), 0.0);
+        it->second.first += feats[i].mean;
+        it->second.second += 1;
+    }
+    std::vector<clip_feature_data> out;
+    out.reserve(feats.size());
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        const auto it = ref.find(clips[i].performer);
+        if (it == ref.end())
+            throw value_error("rcm eval: relative features: '" + clips[i].performer + "' has no '" + neutral + "' clip to read " +
+                              clips[i].name + " against");
+        clip_feature_data d;
+        d.mean = feats[i].mean - it->second.first / it->second.second;
+        d.window_length = feats[i].window_length;
+        out.push_back(std::move(d));
+    }
+    return out;
+}
+
+/// Fits on `train` and analyses the clips of `test` (indices into clips and feats).
+inline std::vector<analysis> fit_and_analyse(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
+                                             const std::vector<std::size_t>& train, const std::vector<std::size_t>& test,
+                                             feature_set fs, const circumplex_table& table, const std::string& table_name,
+                                             const fit_options& opt, rcm_model* fitted = nullptr)
+{
+    const rcm_model m = fit_from_features(clips, feats, train, fs, table, table_name, opt);
+    std::vector<analysis> out;
+    for (std::size_t i : test) {
+        const vector all = m.normaliser.apply(feats[i].mean);
+        vector s = xt::zeros<double>({m.selected.size()});
+        for (std::size_t k = 0; k < m.selected.size(); ++k) s(k) = all(m.selected[k]);
+        out.push_back(m.analyse_features(s));
+    }
+    if (fitted) *fitted = m;
+    return out;
+}
+
+/// The inner choice of relative_features::automatic for an outer fold's training clips: leave one group of them out
+/// at a time, with absolute and with relative features; true when relative features' mean distance over the held-out
+/// non-neutral clips is lower (over the inner folds both fits succeed on).
+inline bool choose_relative(const std::vector<training_clip>& clips, const std::vector<std::string>& group,
+                            const std::vector<clip_feature_data>& absolute, const std::vector<clip_feature_data>& relative,
+                            const std::vector<std::size_t>& train, feature_set fs, const circumplex_table& table,
+                            const std::string& table_name, const fit_options& opt, const std::string& neutral)
+{
+    std::vector<std::string> inner_groups;
+    for (std::size_t i : train) inner_groups.push_back(group[i]);
+    double sum_abs = 0, sum_rel = 0;
+    for (const auto& g : sorted_unique(inner_groups)) {
+        std::vector<std::size_t> in_train, in_test;
+        for (std::size_t i : train) {
+            if (group[i] != g) in_train.push_back(i);
+            else if (clips[i].emotion != neutral) in_test.push_back(i);
+        }
+        if (in_test.empty()) continue;
+        std::vector<analysis> a, r;
+        try {
+            a = fit_and_analyse(clips, absolute, in_train, in_test, fs, table, table_name, opt);
+            r = fit_and_analyse(clips, relative, in_train, in_test, fs, table, table_name, opt);
+        } catch (const error&) {
+            continue;  // an inner fold one of the two cannot fit is left out of both sums
+        }
+        for (std::size_t k = 0; k < in_test.size(); ++k) {
+            const auto& l = table.at(clips[in_test[k]].emotion, table_name);
+            sum_abs += std::hypot(a[k].valence - l.valence, a[k].arousal - l.arousal);
+            sum_rel += std::hypot(r[k].valence - l.valence, r[k].arousal - l.arousal);
+        }
+    }
+    return sum_rel < sum_abs;
+}
+
+}  // namespace detail
+
 /// @brief Leave-one-group-out evaluation of the analysis: for each value of `group` (content or take), fit on
-/// the other clips (no pose clusters: analysis does not use them) and analyse the held-out ones.
+/// the other clips (no pose clusters: analysis does not use them) and analyse the held-out ones. With
+/// lo.relative, features are read against the neutral clips of the same performer or content (a held-out one
+/// against its own neutral clips), always (`on`) or when an inner leave-one-group-out inside the fold's training
+/// clips says so (`automatic`).
+/// @throws value_error for no clips, a missing neutral label with relative features, or a performer without a
+///         neutral clip to read its clips against.
 inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const std::vector<std::string>& group,
-                                const circumplex_table& table, const std::string& table_name, const fit_options& opt)
+                                const circumplex_table& table, const std::string& table_name, const fit_options& opt,
+                                const loo_options& lo = {})
 {
     if (clips.empty()) throw value_error("rcm eval: no clips");
     if (group.size() != clips.size()) throw shape_error("rcm eval: one group per clip needed");
+    if (lo.relative != relative_features::off && lo.neutral.empty())
+        throw value_error("rcm eval: relative features need the neutral label");
     feature_set fs{};
     const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
     const auto feats = compute_features(clips, r, fs, opt.lma, opt.show_progress);
+    const auto rel = lo.relative == relative_features::off ? std::vector<clip_feature_data>{} : detail::relative_to_neutral(clips, feats, lo.neutral);
     eval_report rep;
     rep.folds = detail::sorted_unique(group);
     progress bar("rcm eval folds", static_cast<long>(rep.folds.size()), opt.show_progress ? stderr : nullptr);
@@ -640,15 +759,20 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
     for (std::size_t f = 0; f < rep.folds.size(); ++f) {
         std::vector<std::size_t> train, test;
         for (std::size_t i = 0; i < clips.size(); ++i) (group[i] == rep.folds[f] ? test : train).push_back(i);
+        const bool relative = lo.relative == relative_features::on ||
+                              (lo.relative == relative_features::automatic &&
+                               detail::choose_relative(clips, group, feats, rel, train, fs, table, table_name, opt, lo.neutral));
         rcm_model m;
+        std::vector<analysis> an;
         try {
-            m = fit_from_features(clips, feats, train, fs, table, table_name, opt);
+            an = detail::fit_and_analyse(clips, relative ? rel : feats, train, test, fs, table, table_name, opt, &m);
         } catch (const error& e) {
             rep.failed_folds.push_back(rep.folds[f] + ": " + e.what());
             bar.update(static_cast<long>(f + 1));
             continue;
         }
         ++fitted;
+        rep.relative_folds += relative ? 1 : 0;
         rep.mean_selected += static_cast<double>(m.selected.size());
         rep.mean_pca_dims += static_cast<double>(m.pca.dims());
         double bv = 0, ba = 0;
@@ -657,11 +781,9 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
             bv += l.valence / static_cast<double>(train.size());
             ba += l.arousal / static_cast<double>(train.size());
         }
-        for (std::size_t i : test) {
-            const vector all = m.normaliser.apply(feats[i].mean);
-            vector s = xt::zeros<double>({m.selected.size()});
-            for (std::size_t k = 0; k < m.selected.size(); ++k) s(k) = all(m.selected[k]);
-            const analysis a = m.analyse_features(s);
+        for (std::size_t k = 0; k < test.size(); ++k) {
+            const std::size_t i = test[k];
+            const analysis& a = an[k];
             const auto& l = table.at(clips[i].emotion, table_name);
             eval_sample es;
             es.name = clips[i].name;
@@ -672,17 +794,22 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
             es.distance = std::hypot(a.valence - l.valence, a.arousal - l.arousal);
             es.quadrant_ok = a.quadrant == quadrant(l.valence, l.arousal);
             es.baseline_distance = std::hypot(bv - l.valence, ba - l.arousal);
+            es.neutral = !lo.neutral.empty() && clips[i].emotion == lo.neutral;
+            es.relative = relative;
             qbase += quadrant(bv, ba) == quadrant(l.valence, l.arousal) ? 1 : 0;
             rep.samples.push_back(es);
         }
         bar.update(static_cast<long>(f + 1));
     }
     const double n = static_cast<double>(rep.samples.size());
+    double ne = 0;
     for (const auto& s : rep.samples) {
         rep.mean_distance += s.distance / n;
         rep.quadrant_accuracy += (s.quadrant_ok ? 1.0 : 0.0) / n;
         rep.baseline_distance += s.baseline_distance / n;
+        if (!s.neutral) rep.emotional_distance += s.distance, rep.emotional_baseline_distance += s.baseline_distance, ne += 1;
     }
+    if (ne > 0) rep.emotional_distance /= ne, rep.emotional_baseline_distance /= ne;
     rep.baseline_quadrant_accuracy = n > 0 ? static_cast<double>(qbase) / n : 0;
     if (fitted) rep.mean_selected /= static_cast<double>(fitted), rep.mean_pca_dims /= static_cast<double>(fitted);
     return rep;
