@@ -253,3 +253,104 @@ TEST_CASE("model: leave-one-content-out evaluation runs every fold")
     CHECK(r.mean_selected >= 12);
     CHECK(r.mean_pca_dims >= 1);
 }
+
+TEST_CASE("model: relative features are read against the same content's neutral clips")
+{
+    const auto& sh = shared();
+    rcm::feature_set fs{};
+    const auto roles = rcm::training_roles(sh.clips.front().motion->skel, nlohmann::json::object(), &fs);
+    const auto feats = rcm::compute_features(sh.clips, roles, fs, sh.opt.lma, false);
+    const auto rel = rcm::detail::relative_to_neutral(sh.clips, feats, "neutral");
+    REQUIRE(rel.size() == feats.size());
+    for (std::size_t i = 0; i < sh.clips.size(); ++i) {
+        CAPTURE(sh.clips[i].name);
+        // one neutral take per content here: its relative features are exactly zero, every other clip's are its
+        // features minus that take's
+        std::size_t ref = sh.clips.size();
+        for (std::size_t j = 0; j < sh.clips.size(); ++j)
+            if (sh.clips[j].performer == sh.clips[i].performer && sh.clips[j].emotion == "neutral") ref = j;
+        REQUIRE(ref < sh.clips.size());
+        for (std::size_t d = 0; d < feats[i].mean.size(); ++d) CHECK(rel[i].mean(d) == feats[i].mean(d) - feats[ref].mean(d));
+    }
+    // two neutral takes of a content: the reference is their mean
+    auto two = sh.clips;
+    auto feats2 = feats;
+    for (std::size_t i = 0; i < sh.clips.size(); ++i)
+        if (sh.clips[i].emotion == "neutral") {
+            two.push_back(sh.clips[i]);
+            feats2.push_back(feats[i]);
+            feats2.back().mean = feats[i].mean + 2.0;
+            break;
+        }
+    const auto rel2 = rcm::detail::relative_to_neutral(two, feats2, "neutral");
+    CHECK(rel2.back().mean(0) == Approx(1.0));  // (x + 2) - mean(x, x + 2)
+    // a content without a neutral clip is named
+    std::vector<rcm::training_clip> none;
+    for (const auto& c : sh.clips)
+        if (!(c.performer == sh.clips.front().performer && c.emotion == "neutral")) none.push_back(c);
+    std::vector<rcm::clip_feature_data> feats3;
+    for (std::size_t i = 0; i < sh.clips.size(); ++i)
+        if (!(sh.clips[i].performer == sh.clips.front().performer && sh.clips[i].emotion == "neutral")) feats3.push_back(feats[i]);
+    const std::string missing = "'" + sh.clips.front().performer + "' has no 'neutral' clip";
+    CHECK_THROWS_WITH_AS(rcm::detail::relative_to_neutral(none, feats3, "neutral"), doctest::Contains(missing.c_str()), value_error);
+    CHECK(rcm::parse_relative_features("auto") == rcm::relative_features::automatic);
+    CHECK_THROWS_WITH_AS(rcm::parse_relative_features("yes"), doctest::Contains("--relative yes"), value_error);
+}
+
+TEST_CASE("model: leave-one-content-out with relative features: every fold, the non-neutral means, the choice")
+{
+    const auto& sh = shared();
+    std::vector<std::string> group;
+    for (const auto& c : sh.clips) group.push_back(c.performer);
+    auto opt = sh.opt;
+    opt.cluster = false;
+    CHECK_THROWS_WITH_AS(rcm::evaluate_loo(sh.clips, group, sh.table, "circumplex.json", opt, {rcm::relative_features::on, ""}),
+                         doctest::Contains("need the neutral label"), value_error);
+    const auto off = rcm::evaluate_loo(sh.clips, group, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral"});
+    const auto on = rcm::evaluate_loo(sh.clips, group, sh.table, "circumplex.json", opt, {rcm::relative_features::on, "neutral"});
+    const auto aut = rcm::evaluate_loo(sh.clips, group, sh.table, "circumplex.json", opt, {rcm::relative_features::automatic, "neutral"});
+    // off is the paper's analysis: the numbers of the call without loo_options
+    const auto plain = rcm::evaluate_loo(sh.clips, group, sh.table, "circumplex.json", opt);
+    CHECK(off.mean_distance == plain.mean_distance);
+    CHECK(off.relative_folds == 0);
+    REQUIRE(on.failed_folds.empty());
+    CHECK(on.relative_folds == 7);
+    CHECK(on.mean_distance != off.mean_distance);
+    for (const auto* r : {&off, &on, &aut}) {
+        double d = 0, b = 0, n = 0;
+        for (const auto& s : r->samples) {
+            CHECK(s.neutral == (s.emotion == "neutral"));
+            if (s.neutral) continue;
+            d += s.distance, b += s.baseline_distance, n += 1;
+        }
+        REQUIRE(n == 28);
+        CHECK(r->emotional_distance == Approx(d / n));
+        CHECK(r->emotional_baseline_distance == Approx(b / n));
+    }
+    // auto takes, fold by fold, exactly the samples of off or of on
+    std::size_t relative_folds = 0;
+    for (const auto& f : aut.folds) {
+        bool rel = false, seen = false;
+        for (std::size_t i = 0; i < aut.samples.size(); ++i) {
+            if (aut.samples[i].held_out != f) continue;
+            const auto& same = aut.samples[i].relative ? on.samples[i] : off.samples[i];
+            CHECK(aut.samples[i].valence == same.valence);
+            CHECK(aut.samples[i].arousal == same.arousal);
+            if (seen) CHECK(aut.samples[i].relative == rel);
+            rel = aut.samples[i].relative, seen = true;
+        }
+        relative_folds += rel ? 1 : 0;
+        // the rule: relative when an inner leave-one-content-out on the fold's training clips (itself an
+        // evaluate_loo on them) gives relative features the lower mean distance over the non-neutral clips
+        std::vector<rcm::training_clip> inner;
+        std::vector<std::string> inner_group;
+        for (const auto& c : sh.clips)
+            if (c.performer != f) inner.push_back(c), inner_group.push_back(c.performer);
+        const auto io = rcm::evaluate_loo(inner, inner_group, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral"});
+        const auto ir = rcm::evaluate_loo(inner, inner_group, sh.table, "circumplex.json", opt, {rcm::relative_features::on, "neutral"});
+        REQUIRE((io.failed_folds.empty() && ir.failed_folds.empty()));
+        CAPTURE(f);
+        CHECK(rel == (ir.emotional_distance < io.emotional_distance));
+    }
+    CHECK(aut.relative_folds == relative_folds);
+}
