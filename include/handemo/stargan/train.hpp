@@ -1163,7 +1163,7 @@ private:
     /// class logits of its samples, and m's gradient shard) copied to every process, bit for bit, so that
     /// sum_parts() and reduce_grad_shards() then add the same values in the same part order as one process.
     template <std::size_t P, std::size_t B, class Model>
-    void share_parts(Model& m, bool logits)
+    void share_parts([[maybe_unused]] Model& m, [[maybe_unused]] bool logits)
     {
         if constexpr (P > 1) {
             if (!distributed(opt_)) return;
