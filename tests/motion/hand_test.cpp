@@ -7,7 +7,7 @@
 using namespace handemo;
 
 namespace {
-double dist(const vec3& a, const vec3& b)
+double point_distance(const vec3& a, const vec3& b)
 {
     return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
@@ -63,12 +63,12 @@ TEST_CASE("hand skeleton: rest geometry is anatomically plausible")
     const vec3 wrist = p.joints[hand_index::wrist];
     // Middle finger tip to wrist is the hand length (Buchholz's definition), within 5 %.
     const vec3 middle_tip = p.end_sites[hand_index::finger_joint(2, 3)];
-    CHECK(dist(middle_tip, wrist) == doctest::Approx(L).epsilon(0.05));
+    CHECK(point_distance(middle_tip, wrist) == doctest::Approx(L).epsilon(0.05));
     // Every finger tip lies 0.55..1.05 hand lengths from the wrist; fingers point +Y, spread in X.
     double prev_x = 1e9;
     for (std::size_t f = 0; f < 5; ++f) {
         const vec3 tip = p.end_sites[hand_index::finger_joint(f, 3)];
-        const double d = dist(tip, wrist);
+        const double d = point_distance(tip, wrist);
         CHECK(d > 0.5 * L);
         CHECK(d < 1.05 * L);
         CHECK(tip[1] > wrist[1]);
@@ -82,7 +82,7 @@ TEST_CASE("hand skeleton: rest geometry is anatomically plausible")
     CHECK(thumb_tip[0] > p.end_sites[hand_index::finger_joint(1, 3)][0]);
     CHECK(thumb_tip[2] > 0.0);
     // Index tip is shorter than middle, pinky shortest of the four fingers.
-    CHECK(dist(p.end_sites[hand_index::finger_joint(4, 3)], wrist) < dist(p.end_sites[hand_index::finger_joint(1, 3)], wrist));
+    CHECK(point_distance(p.end_sites[hand_index::finger_joint(4, 3)], wrist) < point_distance(p.end_sites[hand_index::finger_joint(1, 3)], wrist));
 }
 
 TEST_CASE("hand skeleton: flexing a finger moves its tip toward the palm")
@@ -99,11 +99,11 @@ TEST_CASE("hand skeleton: flexing a finger moves its tip toward the palm")
         const auto fist = forward_kinematics(s, b.data());
         const vec3 t0 = rest.end_sites[hand_index::finger_joint(f, 3)];
         const vec3 t1 = fist.end_sites[hand_index::finger_joint(f, 3)];
-        CHECK(dist(t1, palm) < 0.6 * dist(t0, palm));
+        CHECK(point_distance(t1, palm) < 0.6 * point_distance(t0, palm));
         CHECK(t1[2] > t0[2]);  // toward the palm side (+Z)
         // Other fingers did not move.
         const std::size_t g = f == 1 ? 2 : 1;
-        CHECK(dist(fist.end_sites[hand_index::finger_joint(g, 3)], rest.end_sites[hand_index::finger_joint(g, 3)]) < 1e-12);
+        CHECK(point_distance(fist.end_sites[hand_index::finger_joint(g, 3)], rest.end_sites[hand_index::finger_joint(g, 3)]) < 1e-12);
     }
     // Wrist flexion moves the middle tip toward +Z as well; extension toward -Z.
     std::vector<double> w = a;
