@@ -9,7 +9,9 @@
 //     within 1 px and lies inside the clip's grid cell, and the canvas pixel read back at each centre is
 //     opaque (ink where a joint was drawn).
 // The pages: two clips in one row, and ten clips in 5 columns, where clip 7 must be drawn in row 1, column 2
-// (its cell's corners written out here, not taken from the helper that projects the joints).
+// (its cell's corners written out here, not taken from the helper that projects the joints); and a page with a V/A
+// grid opened at `?va=0.3,-0.2`, which must draw the input and the output of the nearest grid point in the two
+// cells (under node, also a click on the dial and an arrow key, which must pick the expected grid point).
 // Returns 77 (CTest SKIP_RETURN_CODE) when no Chromium is installed: set HANDEMO_CHROMIUM to a browser binary
 // or install Debian's chromium (./setup.sh does). With the arguments `node SCRIPT` it runs the page's script
 // under Node with the fake DOM in SCRIPT (viewer_fake_dom.js) instead (77 when there is no node), which
@@ -53,6 +55,9 @@ struct page {
     std::string name;
     std::vector<clip> clips;
     viewer_options options;
+    std::string query;                 ///< appended to ?t=...: "&va=V,A" picks a point on a grid page's dial
+    std::vector<std::size_t> shown;    ///< the clip drawn in each cell (empty: clip i in cell i)
+    std::string events, pick;          ///< under node: events sent to the dial, and the data-pick they must give
 };
 
 /// Opens one page in the browser (or under node) at time t and checks what it drew; "ok: ..." or what failed.
@@ -69,11 +74,11 @@ std::string check_page(const page& pg, const std::string& browser, bool node, co
     const fs::path file = dir / "view.html", log = dir / "chromium.log";
     write_file_atomic(file, html);
     const std::string cmd =
-        node ? "'" + browser + "' '" + script + "' '" + file.string() + "' 2>&1"
+        node ? "'" + browser + "' '" + script + "' '" + file.string() + "' '?t=0" + pg.query + "' '" + pg.events + "' 2>&1"
              : "timeout 25 '" + browser + "' --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
                "--disable-background-networking --disable-component-update --disable-sync --user-data-dir='" +
                    (dir / "profile").string() + "' --enable-logging=stderr --v=0 --virtual-time-budget=2000 --dump-dom 'file://" +
-                   file.string() + "?t=" + std::to_string(t) + "' 2>'" + log.string() + "'";
+                   file.string() + "?t=" + std::to_string(t) + pg.query + "' 2>'" + log.string() + "'";
     const auto t0 = std::chrono::steady_clock::now();
     const std::string dom = run(cmd);
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -93,7 +98,10 @@ std::string check_page(const page& pg, const std::string& browser, bool node, co
     const std::string tag = dom.substr(at, tag_end - at);
     if (tag.find("data-status=\"ok\"") == std::string::npos)
         return "the page did not finish drawing cleanly: " + tag + " " + dom.substr(tag_end + 1, 300);
+    if (!pg.pick.empty() && tag.find("data-pick=\"" + pg.pick) == std::string::npos)
+        return "the dial picked another grid point: " + tag + " (expected data-pick \"" + pg.pick + "...\")";
     const std::string text = dom.substr(tag_end + 1, dom.find("</pre>", tag_end) - tag_end - 1);
+    const std::size_t cells = pg.shown.empty() ? clips.size() : pg.shown.size();
     const auto d = test::viewer_data(html);
     std::istringstream lines(text);
     std::string line;
@@ -107,17 +115,19 @@ std::string check_page(const page& pg, const std::string& browser, bool node, co
             continue;
         }
         // "clip i frame f: p:x,y ..."
+        // cell ci shows clip cl
         std::size_t ci_read = 0, f = 0;
-        if (std::sscanf(line.c_str(), "clip %zu frame %zu:", &ci_read, &f) != 2 || ci_read != ci || ci >= clips.size())
-            return "unexpected check line '" + line.substr(0, 80) + "'";
-        const std::size_t want_f = std::min(clips[ci].frames - 1, static_cast<std::size_t>(std::floor(t * clips[ci].fps + 1e-9)));
+        const std::size_t cl = ci < cells && !pg.shown.empty() ? pg.shown[ci] : ci;
+        if (std::sscanf(line.c_str(), "clip %zu frame %zu:", &ci_read, &f) != 2 || ci_read != cl || ci >= cells)
+            return "unexpected check line '" + line.substr(0, 80) + "' (expected clip " + std::to_string(cl) + ")";
+        const std::size_t want_f = std::min(clips[cl].frames - 1, static_cast<std::size_t>(std::floor(t * clips[cl].fps + 1e-9)));
         if (f != want_f)
             return "clip " + std::to_string(ci) + ": the page drew frame " + std::to_string(f) + " at t = " + std::to_string(t) +
                    " s, expected " + std::to_string(want_f);
-        const auto expect = test::viewer_expected_pixels(clips[ci], ci, d, f);
+        const auto expect = test::viewer_expected_pixels(clips[cl], cl, d, f, ci);
         const test::viewer_cell cell = test::viewer_cell_of(d, ci);
         std::size_t visible = 0;
-        for (const auto& h : d["clips"][ci]["hidden"]) visible += h.get<int>() ? 0 : 1;
+        for (const auto& h : d["clips"][cl]["hidden"]) visible += h.get<int>() ? 0 : 1;
         std::istringstream pts(line.substr(line.find(": ") + 2));
         std::string item;
         std::size_t drawn = 0;
@@ -140,11 +150,11 @@ std::string check_page(const page& pg, const std::string& browser, bool node, co
             return "clip " + std::to_string(ci) + ": " + std::to_string(drawn) + " joints drawn, expected " + std::to_string(visible);
         ++ci;
     }
-    if (ci != clips.size() || !ink_line || worst > 1.0)
-        return std::to_string(ci) + " clips checked of " + std::to_string(clips.size()) + (ink_line ? "" : ", no ink line") +
+    if (ci != cells || !ink_line || worst > 1.0)
+        return std::to_string(ci) + " clips checked of " + std::to_string(cells) + (ink_line ? "" : ", no ink line") +
                ", largest pixel difference " + std::to_string(worst);
     std::ostringstream ok;
-    ok << "ok: " << checked << " drawn joints of " << clips.size() << " clips at t = " << t << " s within " << worst
+    ok << "ok: " << checked << " drawn joints of " << cells << " clips at t = " << t << " s within " << worst
        << " px of handemo's forward kinematics, each in its cell, ink under every one, no console output (" << secs << " s)";
     return ok.str();
 }
@@ -179,7 +189,24 @@ int main(int argc, char** argv)
     go.columns = 5;
     go.width = 1000;
     go.height = 300;
-    const page pages[] = {{"one row", {test::flexing_hand(30), test::stick_body(20)}, {}}, {"grid", grid, go}};
+    // a V/A grid page: the input, then the outputs at va_grid(5)'s 13 points (stand-ins of distinct frame counts);
+    // ?va=0.3,-0.2 must play the output at the nearest grid point, (0.5, 0): clip 1 + 7. Under node, a click on the
+    // dial where (0.3, 0.1) lies (viewer_dial_size, viewer_dial_radius) then an arrow up (0.5) must pick (0.3, 0.6),
+    // whose nearest grid point is (0.5, 0.5), index 11.
+    const auto points = va_grid(5);
+    std::vector<clip> va{test::stick_body(20)};
+    for (std::size_t k = 0; k < points.size(); ++k) va.push_back(test::flexing_hand(20 + k));
+    viewer_options vo;
+    vo.va_grid = viewer_va_grid{1, 5, points, {{"neutral", 0.1, -0.1}, {"happy", 0.8, 0.5}}};
+    const std::size_t want = nearest_va_point(points, 0.3, -0.2);
+    page vpage{"V/A grid", va, vo, "&va=0.3,-0.2", {0, 1 + want}, "", ""};
+    if (node) {
+        const double r = viewer_dial_radius * viewer_dial_size, c = viewer_dial_size / 2;
+        const auto px = [&](double v, double a) { return std::to_string(c + v * r) + "," + std::to_string(c - a * r); };
+        vpage.events = "mousedown:" + px(0.3, 0.1) + ";keydown:ArrowUp";
+        vpage.pick = std::to_string(nearest_va_point(points, 0.3, 0.6)) + " 0.3000 0.6000";
+    }
+    const page pages[] = {{"one row", {test::flexing_hand(30), test::stick_body(20)}, {}, "", {}, "", ""}, {"grid", grid, go, "", {}, "", ""}, vpage};
     const double t = node ? 0.0 : 0.4;  // 0.4 s: frame 12 of the 30 fps clips
     std::string report;
     for (const page& pg : pages) {

@@ -43,11 +43,12 @@ inline viewer_cell viewer_cell_of(const nlohmann::json& d, std::size_t ci)
 
 /// Pixel positions of frame `frame` of clip `ci` at the initial camera, computed from handemo's forward
 /// kinematics with the projection the page documents (viewer.hpp): [points] of (x, y), joints then end sites.
+/// `cell`: the cell the clip is drawn in (a V/A grid page's output), by default cell ci.
 inline std::vector<std::array<double, 2>> viewer_expected_pixels(const clip& c, std::size_t ci, const nlohmann::json& d,
-                                                                 std::size_t frame = 0)
+                                                                 std::size_t frame = 0, std::size_t cell = static_cast<std::size_t>(-1))
 {
     const auto& cj = d["clips"][ci];
-    const viewer_cell b = viewer_cell_of(d, ci);
+    const viewer_cell b = viewer_cell_of(d, cell == static_cast<std::size_t>(-1) ? ci : cell);
     const double s = viewer_fill * std::min(b.w, b.h) / (2.0 * d["radius"].get<double>());
     const vec3 right = d["view"]["right"].get<vec3>(), up = d["view"]["up"].get<vec3>(), center = cj["center"].get<vec3>();
     const pose_positions P = clip_pose(c, frame);

@@ -206,3 +206,60 @@ TEST_CASE("viewer: bad input is refused")
     CHECK_THROWS_WITH_AS(render_viewer_html(std::vector<clip>(40, test::flexing_hand(2)), g), doctest::Contains("16960 pixels tall"), value_error);
     CHECK_NOTHROW(render_viewer_html(std::vector<clip>(38, test::flexing_hand(2)), g));  // 38 (24 + 400) = 16112
 }
+
+TEST_CASE("va_grid: the points of an n x n grid over [-1, 1]^2 that lie in the unit disc, row by row from the lowest arousal")
+{
+    using P = std::pair<double, double>;
+    CHECK(va_grid(3) == std::vector<P>{{0, -1}, {-1, 0}, {0, 0}, {1, 0}, {0, 1}});
+    const auto g5 = va_grid(5);
+    CHECK(g5.size() == 13);  // arousal +-1: 1 point each, +-0.5: 3 each, 0: 5
+    CHECK(g5.front() == P{0, -1});
+    CHECK(g5[6] == P{0, 0});
+    CHECK(g5.back() == P{0, 1});
+    const auto g4 = va_grid(4);  // no centre, no axis: the four points (+-1/3, +-1/3)
+    REQUIRE(g4.size() == 4);
+    CHECK(g4[0].first == doctest::Approx(-1.0 / 3));
+    CHECK(g4[3].second == doctest::Approx(1.0 / 3));
+    for (const auto& [v, a] : va_grid(21)) CHECK(v * v + a * a <= 1.0 + 1e-12);
+    CHECK_THROWS_AS(va_grid(2), value_error);
+    CHECK_THROWS_AS(va_grid(102), value_error);
+    CHECK(nearest_va_point(g5, 0.3, -0.2) == 7);   // (0.5, 0)
+    CHECK(nearest_va_point(g5, -0.1, 0.4) == 10);  // (0, 0.5)
+}
+
+TEST_CASE("viewer: a page with a V/A grid embeds the grid's points and labels and lays out the shown cells")
+{
+    const auto points = va_grid(3);
+    std::vector<clip> clips{test::stick_body(20)};  // the input, then one output per point
+    for (std::size_t k = 0; k < points.size(); ++k) clips.push_back(test::flexing_hand(10 + k));
+    viewer_options o;
+    o.va_grid = viewer_va_grid{1, 3, points, {{"neutral", 0.1, -0.2}, {"angry", -0.6, 0.7}}};
+    const std::string html = render_viewer_html(clips, o);
+    const auto d = test::viewer_data(html);
+    REQUIRE(d.contains("grid"));
+    CHECK(d["grid"]["first"] == 1);
+    CHECK(d["grid"]["n"] == 3);
+    REQUIRE(d["grid"]["points"].size() == points.size());
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        CHECK(d["grid"]["points"][k][0].get<double>() == points[k].first);
+        CHECK(d["grid"]["points"][k][1].get<double>() == points[k].second);
+        CHECK(d["clips"][k + 1]["frames"] == 10 + k);  // clip first + k is the output at point k
+    }
+    CHECK(d["grid"]["labels"][1][0] == "angry");
+    CHECK(d["grid"]["labels"][1][2].get<double>() == 0.7);
+    CHECK(d["columns"] == 2);  // two cells shown: the input and the picked output
+    CHECK(d["clips"].size() == clips.size());
+    CHECK(html.find("@HANDEMO_") == std::string::npos);
+    CHECK(html.find("id=\"dial\"") != std::string::npos);
+    CHECK_FALSE(test::viewer_data(render_viewer_html(std::vector<clip>(clips.begin(), clips.begin() + 2))).contains("grid"));
+    // a point count other than the grid's clips, a point outside the disc, a label outside it
+    auto bad = o;
+    bad.va_grid->points.pop_back();
+    CHECK_THROWS_WITH_AS(render_viewer_html(clips, bad), doctest::Contains("one clip per grid point"), value_error);
+    bad = o;
+    bad.va_grid->points[0] = {0.9, 0.9};
+    CHECK_THROWS_WITH_AS(render_viewer_html(clips, bad), doctest::Contains("outside the circumplex"), value_error);
+    bad = o;
+    bad.va_grid->labels[1].valence = 2;
+    CHECK_THROWS_WITH_AS(render_viewer_html(clips, bad), doctest::Contains("label 'angry'"), value_error);
+}

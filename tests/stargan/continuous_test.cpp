@@ -65,10 +65,13 @@ public:
         return std::make_unique<toy_model>(std::move(info));
     }
 
+    mutable std::size_t generator_runs = 0;  ///< G runs so far (the grid's test counts them)
+
 private:
     std::unique_ptr<workspace::scratch> new_scratch() const override { return std::make_unique<workspace::scratch>(); }
     void run_generator(const float* x, std::size_t target, float* out, workspace::scratch&) const override
     {
+        ++generator_runs;
         const std::size_t K = keyframes(), J = joints(), plane = K * J;
         std::copy(x, x + 3 * plane, out);
         for (std::size_t k = 0; k < K; ++k)
@@ -316,4 +319,32 @@ TEST_CASE("continuous control: errors name the point, the label and the table")
     stargan::capture_options o;
     o.detail = true;
     CHECK_THROWS_WITH_AS(stargan::transfer_capture(control, in, std::pair{0.1, 0.1}, {}, o), doctest::Contains("detail layer is per emotion"), value_error);
+}
+
+TEST_CASE("continuous transfer: a grid of points runs G once per label and gives each point's transfer, bit for bit (toy)")
+{
+    const auto toy = toy_model::make();
+    const auto table = continuous_table();
+    const stargan::continuous_control control(*toy, table);
+    auto points = va_grid(3);
+    const auto& sad = table.at("sad");
+    points.emplace_back(sad.valence, sad.arousal);
+    const std::size_t D = toy->info().domains.size();
+    const clip in = continuous_neutral(hand_motion::pointing);
+    const clip cap = test::random_motion(test::make_rig(test::openxr_names('r', false), {}), 60, 4, 15);
+    for (const clip* c : {&in, &cap}) {
+        toy->generator_runs = 0;
+        const auto out = stargan::transfer_capture_points(control, *c, points);
+        CHECK(toy->generator_runs == D);  // one prepare(): G once per label, not once per point
+        REQUIRE(out.size() == points.size());
+        for (std::size_t k = 0; k < points.size(); ++k) {
+            CAPTURE(k);
+            const auto one = stargan::transfer_capture(control, *c, points[k]).motion;
+            REQUIRE(out[k].frames == one.frames);
+            CHECK(out[k].angles == one.angles);
+            CHECK(out[k].positions == one.positions);
+            CHECK(out[k].skel.size() == c->skel.size());  // written back onto the capture's own skeleton
+        }
+    }
+    CHECK_THROWS_WITH_AS(stargan::transfer_capture_points(control, in, {{0.9, 0.9}}), doctest::Contains("outside the circumplex"), value_error);
 }

@@ -5,6 +5,8 @@
 // folder under the same names, with a progress bar; a file that fails is named and skipped, and the command fails at the end when any did. Instead of --emotion, a point of the
 // circumplex (--valence V --arousal A), or a target that moves over the clip (--path "neutral,sad,angry" with
 // --duration, or --curve FILE of time,valence,arousal rows): the continuous control of stargan/continuous.hpp.
+// --grid N --out view.html: the transfers at the points of an N x N grid over the unit disc (G once per label,
+// then a blend per point), in one offline viewer page whose V/A dial picks the output played.
 #pragma once
 
 #include "../registry.hpp"
@@ -13,6 +15,7 @@
 #include <handemo/image.hpp>
 #include <handemo/image/keyframe_image.hpp>
 #include <handemo/render/circumplex_strip.hpp>
+#include <handemo/render/viewer.hpp>
 #include <handemo/retarget.hpp>
 #include <handemo/stargan.hpp>
 #include "../retarget_common.hpp"
@@ -76,6 +79,8 @@ struct transfer_cli {
     // a filmstrip along the --path: one column per point (--steps per segment), a small circumplex above each
     std::string filmstrip;
     std::size_t steps = 4, rows = 5;
+    // a grid of points over the unit disc, written into one viewer page (--out view.html)
+    std::size_t grid = 0;
 };
 
 /// What a transfer goes to: an emotion, or the continuous control with a point or a curve.
@@ -90,9 +95,11 @@ struct transfer_target {
 /// --duration spans `clip_seconds` (the input's duration; 0 when the input is a folder: then --duration is needed).
 inline transfer_target target_of(const transfer_cli& o, const stargan::emotion_model& model)
 {
-    const int kinds = (o.emotion.empty() ? 0 : 1) + (o.valence || o.arousal ? 1 : 0) + (o.path.empty() ? 0 : 1) + (o.curve.empty() ? 0 : 1);
-    if (kinds == 0) throw value_error("transfer: no target: give --emotion, or --valence and --arousal, or --path, or --curve");
-    if (kinds > 1) throw value_error("transfer: give one target: --emotion, --valence/--arousal, --path or --curve");
+    const int kinds = (o.emotion.empty() ? 0 : 1) + (o.valence || o.arousal ? 1 : 0) + (o.path.empty() ? 0 : 1) + (o.curve.empty() ? 0 : 1) +
+                      (o.grid ? 1 : 0);
+    if (kinds == 0) throw value_error("transfer: no target: give --emotion, or --valence and --arousal, or --path, or --curve, or --grid");
+    if (kinds > 1) throw value_error("transfer: give one target: --emotion, --valence/--arousal, --path, --curve or --grid");
+    if (o.grid) va_grid(o.grid);  // a grid size out of range stops here
     if (o.duration && o.path.empty()) throw value_error("transfer: --duration is the time of a --path");
     transfer_target t;
     if (!o.emotion.empty()) {
@@ -117,9 +124,11 @@ inline transfer_target target_of(const transfer_cli& o, const stargan::emotion_m
         // without --duration, the path spans the input (set per clip by curve_for())
         t.curve = path_curve(waypoints, o.duration ? *o.duration : 1.0, "transfer: --path");
         t.title = "path " + o.path;
-    } else {
+    } else if (!o.curve.empty()) {
         t.curve = read_va_curve(o.curve);
         t.title = "curve " + o.curve;
+    } else {
+        t.title = "V/A grid " + std::to_string(o.grid) + " x " + std::to_string(o.grid);
     }
     return t;
 }
@@ -191,6 +200,38 @@ inline stargan::capture_options capture_options_of(const transfer_cli& o, const 
     co.detail = o.detail;
     if (!o.map.empty()) co.slots = retarget::read_map(o.map, in.skel);
     return co;
+}
+
+/// --grid N: the input, then the transfer at every point of va_grid(N) (G run once per label on the clip the model
+/// sees, prepare(); then one blend per point), in one viewer page with the V/A dial (viewer_va_grid).
+inline void write_grid_view(const transfer_cli& o, const transfer_target& t, const clip& in, const stargan::capture_options& co)
+{
+    if (!has_ext(o.out, ".html")) throw value_error("transfer: --grid writes a viewer page: --out " + o.out + " must be a .html file");
+    const auto points = va_grid(o.grid);
+    const auto source = o.from.empty() ? std::optional<std::string_view>() : std::optional<std::string_view>(o.from);
+    const stargan::continuous_control& control = *t.control;
+    std::vector<clip> clips{in};
+    for (auto& c : stargan::transfer_capture_points(control, in, points, source, co)) clips.push_back(std::move(c));
+    viewer_options vo;
+    vo.titles.push_back("input");
+    for (const auto& [v, a] : points) {
+        char b[64];
+        std::snprintf(b, sizeof b, "valence %.2f arousal %.2f", v, a);
+        vo.titles.push_back(b);
+    }
+    viewer_va_grid g;
+    g.first = 1;
+    g.n = o.grid;
+    g.points = points;
+    const auto& labels = control.interpolation().labels();  // the model's, neutral first
+    g.labels.push_back(labels[control.interpolation().neutral()]);
+    for (std::size_t i = 0; i < labels.size(); ++i)
+        if (i != control.interpolation().neutral()) g.labels.push_back(labels[i]);
+    vo.va_grid = std::move(g);
+    vo.page_title = "handemo transfer: " + std::filesystem::path(o.in).filename().string() + " over the circumplex";
+    write_file_atomic(o.out, render_viewer_html(clips, vo));
+    std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << t.title << " (" << points.size()
+              << " points in the unit disc) -> " << o.out << "\n";
 }
 
 /// --in DIR: every .bvh of the folder (not its subfolders), sorted by name, to --out DIR under the same name.
@@ -312,10 +353,18 @@ inline void run_transfer(const transfer_cli& o)
     const auto& info = model->info();
     const transfer_target target = target_of(o, *model);
     if (is_folder(o.in)) {
+        if (o.grid) throw value_error("transfer: --grid shows one input: --in " + o.in + " is a folder");
         run_folder(o, *model, target);
         return;
     }
     if (o.threads) throw value_error("transfer: --threads is for a folder --in (" + o.in + " is a file)");
+    if (o.grid) {
+        if (!has_ext(o.in, ".bvh")) throw value_error("transfer: --grid: --in " + o.in + ": expected a .bvh file");
+        if (!o.filmstrip.empty()) throw value_error("transfer: --filmstrip draws the points of a --path, not a --grid");
+        const clip in = read_bvh(o.in);
+        write_grid_view(o, target, in, capture_options_of(o, in));
+        return;
+    }
     const bool in_image = has_ext(o.in, ".bmp", ".png"), out_image = has_ext(o.out, ".bmp", ".png");
     if (!in_image && !has_ext(o.in, ".bvh"))
         throw value_error("transfer: --in " + o.in + ": expected a .bvh, .bmp or .png file");
@@ -392,10 +441,14 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     sub->add_option("--filmstrip", o->filmstrip,
                     "With --path: also draw a filmstrip (.png/.bmp), the input then one column per point of the path, each with its "
                     "point on a small circumplex");
+    sub->add_option("--grid", o->grid,
+                    "Continuous targets over the whole circumplex: the transfers at the points of an N x N grid in the unit disc "
+                    "(3..101), written into one viewer page (--out view.html) whose V/A dial picks the output played");
     sub->add_option("--steps", o->steps, "Columns of the --filmstrip per path segment (each waypoint is a column)")->capture_default_str();
     sub->add_option("--rows", o->rows, "Frames per column of the --filmstrip")->capture_default_str();
     sub->add_option("--circumplex", o->circumplex, "The labels' circumplex coordinates (default: the shipped data/rcm/circumplex.json)");
-    sub->add_option("--out", o->out, "Output: .bvh (full-rate motion), .bmp/.png (motion image), or a folder for a folder --in")->required();
+    sub->add_option("--out", o->out,
+                    "Output: .bvh (full-rate motion), .bmp/.png (motion image), a folder for a folder --in, or .html for --grid")->required();
     sub->add_option("--threads", o->threads, "Threads for a folder --in, sharing the one loaded model (default: the machine's cores)");
     sub->add_option("--hand", o->hand, "Which hand of the capture to transfer with a hand model: left or right (needed when it has two)")
         ->check(CLI::IsMember({"left", "right"}));

@@ -368,6 +368,23 @@ private:
     std::vector<spoke> spokes_;
 };
 
+/// @brief The points of an n x n grid over [-1, 1]^2 that lie in the closed unit disc (inside()): valence
+/// v_j = (2 j - (n - 1)) / (n - 1) and arousal a_i likewise, for i, j in 0..n-1, row by row from the lowest arousal,
+/// valence increasing within a row. The axis ends (+-1, 0), (0, +-1) are exact, and an odd n holds the centre.
+/// @throws value_error for n outside 3..101 (n = 2 would hold only the four corners, none in the disc).
+inline std::vector<std::pair<double, double>> va_grid(std::size_t n)
+{
+    if (n < 3 || n > 101) throw value_error("va_grid: grid size " + std::to_string(n) + " is not in 3..101");
+    const double m = static_cast<double>(n - 1);
+    std::vector<std::pair<double, double>> out;
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < n; ++j) {
+            const double v = (2.0 * static_cast<double>(j) - m) / m, a = (2.0 * static_cast<double>(i) - m) / m;
+            if (circumplex_interpolation::inside(v, a)) out.emplace_back(v, a);
+        }
+    return out;
+}
+
 /// @brief A target that moves over time: (valence, arousal) at increasing times in seconds, linear between
 /// rows and held before the first and after the last.
 struct va_curve {

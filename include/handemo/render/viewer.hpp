@@ -5,15 +5,20 @@
 // (no library, no network, nothing fetched). Clips play in a grid of cells, row by row (at most 5 per row
 // unless asked otherwise), in sync at their own frame rates or in normalised time (a transferred clip and its
 // input, which may differ in tempo, stay aligned); play/pause, scrub, speed, orbit (drag), zoom (wheel) and
-// joint names on hover. For headless checks the page writes,
+// joint names on hover. With a V/A grid (viewer_va_grid: outputs at grid points of the circumplex) the page
+// also shows a small circumplex where a click, a drag or the arrow keys pick a point, and plays the output of
+// the grid point nearest to it beside the clips before the grid's. For headless checks the page writes,
 // into a hidden <pre id="check">, the frame it drew for every clip and the pixel centres of the joints it
 // drew (recorded from the drawing calls themselves) at the initial camera, at time 0 or at the time given
 // as `view.html?t=SECONDS` (which also starts paused there), and the canvas pixel read back at each centre;
 // data-status becomes "ok" once it has drawn with ink at every joint centre and nothing on the console,
-// "error: ..." on a script error, console.error/console.warn call or a joint drawn without ink.
+// "error: ..." on a script error, console.error/console.warn call or a joint drawn without ink. On a grid page
+// `view.html?va=V,A` picks that point first, the check lists the clips drawn, and data-pick holds "index V A" of
+// the last pick.
 #pragma once
 
 #include <handemo/core/error.hpp>
+#include <handemo/motion/circumplex.hpp>
 #include <handemo/motion/clip.hpp>
 #include <handemo/render/figure.hpp>
 #include <handemo/render/viewer_page.hpp>  // generated from viewer_page.html at build time
@@ -22,6 +27,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -29,6 +35,17 @@
 #include <vector>
 
 namespace handemo {
+
+/// @brief A grid of outputs over the circumplex for the page's V/A dial: the clips from `first` on are the
+/// outputs at `points` (clips[first + k] at points[k], e.g. va_grid()'s points), the clips before `first` (the
+/// input, say) are always shown. The page then shows those and one output, the grid point nearest to the point
+/// picked on the dial.
+struct viewer_va_grid {
+    std::size_t first = 0;                         ///< clips shown beside the picked output
+    std::size_t n = 0;                             ///< points per side of the grid (an arrow key moves 2 / (n - 1))
+    std::vector<std::pair<double, double>> points; ///< (valence, arousal) of each output, in the unit disc
+    std::vector<label_point> labels;               ///< drawn on the dial, the first darker (neutral)
+};
 
 /// @brief Options of render_viewer_html.
 struct viewer_options {
@@ -39,6 +56,7 @@ struct viewer_options {
     std::size_t columns = 0;             ///< clips per row; 0: ceil(n / rows) with rows = ceil(n / 5)
     std::string page_title = "handemo view";
     figure_options figure;               ///< kind (hand / body) and camera angles, as for filmstrips
+    std::optional<viewer_va_grid> va_grid;  ///< a grid of outputs picked on a V/A dial (the cells: `first` + 1)
 };
 
 /// @brief Layout constants of the page. The n clips fill a grid of C columns (viewer_columns) and
@@ -53,6 +71,25 @@ inline constexpr double viewer_title_height = 24.0;
 inline constexpr double viewer_fill = 0.9;
 inline constexpr std::size_t viewer_auto_row = 5;          ///< clips per row at most with automatic columns
 inline constexpr std::size_t viewer_max_columns = 10000;  ///< a larger viewer_options::columns is refused
+/// @brief The V/A dial of a page with a grid: a square canvas of viewer_dial_size CSS pixels whose unit circle has
+/// radius viewer_dial_radius * size about its centre: a click at (x, y) picks valence (x - size / 2) / r and
+/// arousal (size / 2 - y) / r (brought onto the circle from outside), r = viewer_dial_radius * size.
+inline constexpr double viewer_dial_size = 200.0;
+inline constexpr double viewer_dial_radius = 0.42;
+
+/// @brief The index into `points` of the point nearest to (valence, arousal) (Euclidean; the first of equals),
+/// as the page picks it. @throws value_error for no points.
+inline std::size_t nearest_va_point(const std::vector<std::pair<double, double>>& points, double valence, double arousal)
+{
+    if (points.empty()) throw value_error("nearest_va_point: no points");
+    std::size_t best = 0;
+    double bd = 1e300;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const double dv = points[k].first - valence, da = points[k].second - arousal, d = dv * dv + da * da;
+        if (d < bd) bd = d, best = k;
+    }
+    return best;
+}
 
 /// @brief The number of columns of the page's grid for n clips: `columns` clamped to n, or for 0 (automatic)
 /// ceil(n / rows) with rows = ceil(n / viewer_auto_row), so at most 5 clips share a row and the rows are
@@ -133,7 +170,8 @@ inline std::vector<vec3> viewer_points(const pose_positions& P, std::span<const 
 /// @brief The data the page draws, as JSON:
 /// `{"format":"handemo-view/2","width","height","columns","normalised","view":{"right","up","toward"},"radius",
 ///   "clips":[{"title","fps","frames","joints","points","names","parents","colors","hidden","stub","center",
-///   "positions"}]}`. `points` = joints + end sites; `positions` is [frames, points, 3] flattened (world units,
+///   "positions"}]}`, plus `"grid":{"first","n","points":[[v,a],...],"labels":[[name,v,a],...]}` with a V/A grid
+/// (viewer_va_grid; `columns` then lays out its first + 1 cells). `points` = joints + end sites; `positions` is [frames, points, 3] flattened (world units,
 /// 7 significant digits) from forward_kinematics; `width` is the canvas width, `height` the height of one row's
 /// cells and `columns` the resolved column count (viewer_columns), laid out as viewer_title_height documents;
 /// `hidden` points get no ball and no bone to them from
@@ -151,8 +189,19 @@ inline std::string viewer_json(std::span<const clip> clips, const viewer_options
     if (opt.width < 64 || opt.height < 64 || opt.width > 16384 || opt.height > 16384)
         throw value_error(fn + ": width " + std::to_string(opt.width) + " x cell height " + std::to_string(opt.height) +
                           " is not in 64..16384 per side");
-    const std::size_t columns = viewer_columns(clips.size(), opt.columns);
-    const std::size_t rows = (clips.size() + columns - 1) / columns;
+    // with a V/A grid the page shows the clips before the grid's and one output
+    const std::size_t cells = opt.va_grid ? opt.va_grid->first + 1 : clips.size();
+    if (opt.va_grid) {
+        const viewer_va_grid& g = *opt.va_grid;
+        if (g.points.empty() || g.first + g.points.size() != clips.size())
+            throw value_error(fn + ": a V/A grid of " + std::to_string(g.points.size()) + " points after " + std::to_string(g.first) + " clips for " +
+                              std::to_string(clips.size()) + " clips (expected one clip per grid point, at least one)");
+        if (g.n < 2) throw value_error(fn + ": V/A grid size " + std::to_string(g.n) + " is not at least 2");
+        for (const auto& [v, a] : g.points) circumplex_interpolation::check_point(v, a, fn + ": V/A grid");
+        for (const auto& l : g.labels) circumplex_interpolation::check_point(l.valence, l.arousal, fn + ": V/A grid label '" + l.name + "'");
+    }
+    const std::size_t columns = viewer_columns(cells, opt.columns);
+    const std::size_t rows = (cells + columns - 1) / columns;
     const double canvas_height = static_cast<double>(rows) * (viewer_title_height + static_cast<double>(opt.height));
     if (canvas_height > 16384.0)
         throw value_error(fn + ": " + std::to_string(rows) + " rows of height " + std::to_string(opt.height) + " under their titles make a canvas " +
@@ -265,6 +314,28 @@ inline std::string viewer_json(std::span<const clip> clips, const viewer_options
     detail::json_vec(j, view.toward);
     j += "},\"radius\":";
     detail::json_num(j, radius);
+    if (opt.va_grid) {
+        const viewer_va_grid& g = *opt.va_grid;
+        j += ",\n\"grid\":{\"first\":" + std::to_string(g.first) + ",\"n\":" + std::to_string(g.n) + ",\"points\":[";
+        for (std::size_t k = 0; k < g.points.size(); ++k) {
+            j += k ? ",[" : "[";
+            detail::json_num(j, g.points[k].first);
+            j += ',';
+            detail::json_num(j, g.points[k].second);
+            j += ']';
+        }
+        j += "],\"labels\":[";
+        for (std::size_t k = 0; k < g.labels.size(); ++k) {
+            j += k ? ",[" : "[";
+            detail::json_string(j, g.labels[k].name);
+            j += ',';
+            detail::json_num(j, g.labels[k].valence);
+            j += ',';
+            detail::json_num(j, g.labels[k].arousal);
+            j += ']';
+        }
+        j += "]}";
+    }
     j += ",\n\"clips\":[\n" + clips_json + "]}";
     return j;
 }
@@ -289,7 +360,9 @@ inline std::string render_viewer_html(std::span<const clip> clips, const viewer_
     const std::pair<std::string_view, std::string> fields[] = {{"@HANDEMO_TITLE@", title},
                                                                {"@HANDEMO_DATA@", data},
                                                                {"@HANDEMO_TITLE_HEIGHT@", std::to_string(viewer_title_height)},
-                                                               {"@HANDEMO_FILL@", std::to_string(viewer_fill)}};
+                                                               {"@HANDEMO_FILL@", std::to_string(viewer_fill)},
+                                                               {"@HANDEMO_DIAL_SIZE@", std::to_string(viewer_dial_size)},
+                                                               {"@HANDEMO_DIAL_RADIUS@", std::to_string(viewer_dial_radius)}};
     std::string h;
     h.reserve(detail::viewer_page.size() + data.size() + title.size());
     std::size_t pos = 0;

@@ -298,4 +298,24 @@ capture_result transfer_capture(const continuous_control& control, const clip& i
     });
 }
 
+/// @brief transfer_capture() of `in` at each of `points` (va_grid()'s, say) with one prepare(): G runs once per label
+/// on the clip the model sees (retargeted when needed), then each point costs one blend. out[k] is the motion of
+/// transfer_capture(control, in, points[k], source, o).
+/// @throws value_error for o.detail or a point outside the unit circle; what transfer_capture() throws.
+inline std::vector<clip> transfer_capture_points(const continuous_control& control, const clip& in, const std::vector<std::pair<double, double>>& points,
+                                                 std::optional<std::string_view> source = {}, const capture_options& o = {})
+{
+    if (o.detail) throw value_error("transfer: the detail layer is per emotion: it is not available with a continuous target");
+    for (const auto& [v, a] : points) circumplex_interpolation::check_point(v, a, "continuous transfer");
+    std::optional<label_keyframes> lk;  // prepared on the first point's clip: every point's is the same
+    std::vector<clip> out;
+    out.reserve(points.size());
+    for (const auto& [v, a] : points)
+        out.push_back(transfer_capture_with(control.model(), in, o, [&](const clip& c) -> transfer_result {
+                          if (!lk) lk = control.prepare(c, source);
+                          return control.transfer(c, *lk, v, a);
+                      }).motion);
+    return out;
+}
+
 }  // namespace handemo::stargan
