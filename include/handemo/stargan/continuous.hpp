@@ -310,10 +310,10 @@ inline std::vector<clip> transfer_capture_points(const continuous_control& contr
     std::optional<label_keyframes> lk;  // prepared on the first point's clip: every point's is the same
     std::vector<clip> out;
     out.reserve(points.size());
-    for (const auto& [v, a] : points)
+    for (const auto& p : points)  // not a structured binding: clang 14 cannot capture one in the lambda
         out.push_back(transfer_capture_with(control.model(), in, o, [&](const clip& c) -> transfer_result {
                           if (!lk) lk = control.prepare(c, source);
-                          return control.transfer(c, *lk, v, a);
+                          return control.transfer(c, *lk, p.first, p.second);
                       }).motion);
     return out;
 }
