@@ -22,6 +22,8 @@ import os
 import subprocess
 import sys
 
+from verdict import verdict
+
 SKIP = 77
 TOL = 1e-4
 
@@ -101,13 +103,7 @@ def main(argv):
                                   f"(element {i}: {mine[i].item():.7g} against {y[i].item():.7g})")
     print(f"hand-embedded G_ema, {domains} targets, float64 reference: max |handemo - reference| "
           f"{worst['infer']:.3g} (generator::infer), {worst['frozen']:.3g} (frozen_generator); tolerance {TOL:g}")
-    for e in errors:
-        print("FAIL:", e)
-    failed = bool(errors)
-    if plant:
-        print(f"planted fault '{plant}': {'caught' if failed else 'NOT caught'}")
-        return 0 if failed else 1
-    return 1 if failed else 0
+    return verdict(errors, plant)
 
 
 if __name__ == "__main__":

@@ -24,6 +24,8 @@ import os
 import shutil
 import subprocess
 import sys
+
+from verdict import verdict
 import tempfile
 
 SKIP = 77
@@ -154,13 +156,7 @@ def main(argv):
             errors += e
             if line:
                 print(line)
-    for e in errors:
-        print("FAIL:", e)
-    failed = bool(errors)
-    if plant:
-        print(f"planted fault '{plant}': {'caught' if failed else 'NOT caught'}")
-        return 0 if failed else 1
-    return 1 if failed else 0
+    return verdict(errors, plant)
 
 
 if __name__ == "__main__":
