@@ -22,7 +22,7 @@ import os
 import subprocess
 import sys
 
-from verdict import verdict
+from golden_common import import_torch, verdict
 
 SKIP = 77
 TOL = 1e-4
@@ -36,19 +36,11 @@ def main(argv):
         print(__doc__)
         return 2
     helper, root = argv
-    try:
-        if os.environ.get("HANDEMO_TEST_NO_TORCH"):
-            raise ImportError("HANDEMO_TEST_NO_TORCH is set")
-        import torch
-    except ImportError as e:
-        # Debian's python3-torch belongs to the system interpreter, which another python3 on PATH may hide
-        system = "/usr/bin/python3"
-        if (not os.environ.get("HANDEMO_TEST_NO_TORCH") and os.path.exists(system)
-                and os.path.realpath(sys.executable) != os.path.realpath(system)
-                and subprocess.run([system, "-c", "import torch"], capture_output=True).returncode == 0):
-            os.execv(system, [system, os.path.abspath(__file__)] + sys.argv[1:])
-        print(f"SKIP: python3 cannot import torch ({e}; ./setup.sh --golden installs python3-torch)")
+    missing = import_torch()
+    if missing:
+        print(f"SKIP: {missing}")
         return SKIP
+    import torch
     sys.path.insert(0, os.path.join(root, "scripts"))
     import reference_stargan as ref
 

@@ -24,9 +24,9 @@ import os
 import shutil
 import subprocess
 import sys
-
-from verdict import verdict
 import tempfile
+
+from golden_common import import_torch, verdict
 
 SKIP = 77
 TOL = 1e-5
@@ -48,22 +48,6 @@ def read_f32(path):
     if sys.byteorder != "little":
         a.byteswap()
     return a
-
-
-def import_torch():
-    """None when torch imports, else the reason (after trying Debian's /usr/bin/python3, which this re-execs)."""
-    try:
-        if os.environ.get("HANDEMO_TEST_NO_TORCH"):
-            raise ImportError("HANDEMO_TEST_NO_TORCH is set")
-        import torch  # noqa: F401
-        return None
-    except ImportError as e:
-        system = "/usr/bin/python3"
-        if (not os.environ.get("HANDEMO_TEST_NO_TORCH") and os.path.exists(system)
-                and os.path.realpath(sys.executable) != os.path.realpath(system)
-                and subprocess.run([system, "-c", "import torch"], capture_output=True).returncode == 0):
-            os.execv(system, [system, os.path.abspath(__file__)] + sys.argv[1:])
-        return f"python3 cannot import torch ({e}; ./setup.sh --golden installs python3-torch)"
 
 
 def check_config(ref, torch, config, helper, runner, node, work, plant):
