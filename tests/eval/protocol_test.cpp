@@ -5,11 +5,15 @@
 #include "../stargan/helpers.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <stdlib.h>
 #include <string>
+#include <thread>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -546,4 +550,130 @@ TEST_CASE("end to end: an emotion effect that depends on the content, which the 
     CHECK(sum.find("all,statistics,duration_error,") != std::string::npos);
     CHECK(sum.find("all,identity,duration_error,") != std::string::npos);
     fs::remove_all(dir);
+}
+
+TEST_CASE("shared gate plan: every fold's groups partition its training contents, N + 1 inner models shared by the folds")
+{
+    for (std::size_t N : {3u, 4u, 7u, 12u}) {
+        CAPTURE(N);
+        std::vector<std::string> contents;
+        for (std::size_t i = 0; i < N; ++i) contents.push_back(std::string(1, char('a' + i)) + "-content");
+        std::map<fs::path, std::pair<std::set<std::string>, std::uint64_t>> models;  // dir -> (contents trained on, seed)
+        for (const auto& held : contents) {
+            CAPTURE(held);
+            const auto plan = shared_gate_plan(contents, held, "inner", 5);
+            REQUIRE(plan.has_value());
+            REQUIRE(plan->groups.size() == 2);
+            REQUIRE(plan->dirs.size() == 2);
+            REQUIRE(plan->seeds.size() == 2);
+            std::set<std::string> all_listed;
+            for (const auto& g : plan->groups) {
+                CHECK(!g.empty());
+                for (const auto& c : g) CHECK(all_listed.insert(c).second);  // no content twice
+            }
+            std::set<std::string> train(contents.begin(), contents.end());
+            train.erase(held);
+            CHECK(all_listed == train);  // a partition of the fold's training contents
+            const auto a = plan->groups[0].size(), b = plan->groups[1].size();
+            CHECK(std::max(a, b) - std::min(a, b) <= 1);  // as even as dealing them round
+            for (std::size_t f = 0; f < 2; ++f) {
+                // group f is scored by the G trained on the other group: the same model wherever the same dir is named
+                std::set<std::string> on(plan->groups[1 - f].begin(), plan->groups[1 - f].end());
+                const auto [it, fresh] = models.emplace(plan->dirs[f], std::pair{on, plan->seeds[f]});
+                if (!fresh) {
+                    CHECK(it->second.first == on);
+                    CHECK(it->second.second == plan->seeds[f]);
+                }
+            }
+        }
+        CHECK(models.size() == N + 1);  // against 2 N with per-fold groups
+        std::set<std::uint64_t> seeds;
+        for (const auto& [dir, m] : models) seeds.insert(m.second);
+        CHECK(seeds.size() == models.size());
+    }
+    CHECK(!shared_gate_plan({"a", "b"}, "a", "inner", 1).has_value());  // one training content: no two groups
+    CHECK_THROWS_WITH_AS(shared_gate_plan({"a", "b", "c"}, "d", "inner", 1), doctest::Contains("'d'"), value_error);
+    CHECK(parse_gate_groups("per-fold") == gate_groups::per_fold);
+    CHECK_THROWS_WITH_AS(parse_gate_groups("random"), doctest::Contains("--gate-groups 'random'"), value_error);
+}
+
+TEST_CASE("training jobs: a job starts only after those it waits on; the first error is rethrown")
+{
+    std::atomic<int> first_done{0};
+    std::atomic<int> saw_first{-1};
+    std::vector<training_job> jobs;
+    jobs.push_back({"first", [&] {
+                        std::this_thread::sleep_for(std::chrono::milliseconds(60));
+                        first_done = 1;
+                    },
+                    {}, 0});
+    jobs.push_back({"second", [&] { saw_first = first_done.load(); }, {0}, 0});
+    jobs.push_back({"third", [] {}, {}, 0});
+    run_training_jobs(jobs, 2, nullptr, "test");
+    CHECK(saw_first == 1);
+    for (const auto& j : jobs) CHECK(j.seconds >= 0);
+    CHECK(jobs[0].seconds >= 0.05);
+
+    std::atomic<int> ran_after_error{0};
+    std::vector<training_job> failing;
+    failing.push_back({"fails", [] { throw value_error("train: planted failure"); }, {}, 0});
+    failing.push_back({"after it", [&] { ++ran_after_error; }, {0}, 0});
+    CHECK_THROWS_WITH_AS(run_training_jobs(failing, 2, nullptr, "test"), doctest::Contains("planted failure"), value_error);
+    CHECK(ran_after_error == 0);
+
+    std::vector<training_job> backwards;
+    backwards.push_back({"waits on a later job", [] {}, {1}, 0});
+    backwards.push_back({"later", [] {}, {}, 0});
+    CHECK_THROWS_WITH_AS(run_training_jobs(backwards, 2, nullptr, "test"), doctest::Contains("waits on a job that is not before it"),
+                         value_error);
+}
+
+TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner model trained once; other groups refit the gate")
+{
+    const auto clips = toy_set(3);
+    const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
+    eval_options o = {};
+    o.train = default_train_options();
+    o.train.iters = 8;
+    o.train.threads = 1;
+    o.progress_out = nullptr;
+    o.retargeted = false;
+    o.folds = {"gripping", "patting"};
+    const fs::path base = fs::temp_directory_path() / ("handemo_eval_jobs_" + std::to_string(::getpid()));
+    fs::remove_all(base);
+    const auto one = run_eval<hand_tiny>(clips, info, o, base / "one");
+    o.jobs = 2;
+    const auto two = run_eval<hand_tiny>(clips, info, o, base / "two");
+    REQUIRE(one.samples.size() == two.samples.size());
+    for (std::size_t i = 0; i < one.samples.size(); ++i) CHECK(one.samples[i].rmse_real == two.samples[i].rmse_real);
+    REQUIRE(two.folds.size() == 2);
+    for (const auto& fs_ : two.folds) {
+        const std::string f = fs_.held_out;
+        CHECK(read_file(base / "one" / "folds" / f / "checkpoint.safetensors") == read_file(base / "two" / "folds" / f / "checkpoint.safetensors"));
+        CHECK(!fs::exists(base / "two" / "folds" / f / "gate" / "inner1"));  // the shared models, not the fold's own
+        CHECK(fs_.train_seconds > 0);
+        CHECK(!fs_.reused_model);
+    }
+    // 3 contents, A = {gripping}, C = {patting, pointing}: holding out gripping needs G on C \ {patting} (model2) and G on
+    // (A \ {gripping}) + {patting} (model4); holding out patting needs G on C \ {patting} again and G on A (model1)
+    for (int m : {1, 2, 4})
+        CHECK(read_file(base / "one" / "inner" / ("model" + std::to_string(m)) / "checkpoint.safetensors") ==
+              read_file(base / "two" / "inner" / ("model" + std::to_string(m)) / "checkpoint.safetensors"));
+    for (const char* absent : {"model3", "model5"}) CHECK(!fs::exists(base / "two" / "inner" / absent));
+    CHECK(two.options_text.find("gate groups shared\ntrainings at once 2\n") != std::string::npos);
+
+    // the same models with per-fold groups: G is reused, the gate fitted again around the fold's own inner models
+    o.jobs = 1;
+    o.reuse_models = true;
+    o.gate_grouping = gate_groups::per_fold;
+    const auto per_fold = run_eval<hand_tiny>(clips, info, o, base / "two");
+    CHECK(per_fold.folds[0].reused_model);
+    CHECK(fs::exists(base / "two" / "folds" / "gripping" / "gate" / "inner1" / "checkpoint.safetensors"));
+    std::vector<labelled_clip> train;
+    for (const auto& c : clips)
+        if (c.content != "gripping") train.push_back(c);
+    auto to = o.train;
+    to.seed = o.train.seed;  // gripping is the first content
+    CHECK(read_file(base / "two" / "folds" / "gripping" / "gate" / "groups.txt") == gate_groups_text(train, to, nullptr));
+    fs::remove_all(base);
 }

@@ -74,6 +74,15 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
                   "Reuse each fold's model already in the report folder when it was trained with the same options and steps "
                   "(when only the change gate's options differ, the gate is fitted again from the stored inner models)");
     handemo::cli::add_train_options(sub, t, o->ov);
+    sub->add_option("--jobs", o->opt.jobs,
+                    "Trainings at once, each with --threads threads (1 when --threads is 0): above 1 every model is trained first, "
+                    "the folds then scored one by one; the models are bit for bit those of --jobs 1")
+        ->capture_default_str()
+        ->check(CLI::Range(std::size_t{1}, std::size_t{64}));
+    sub->add_option_function<std::string>(
+           "--gate-groups", [o](const std::string& v) { o->opt.gate_grouping = handemo::eval::parse_gate_groups(v); },
+           "The change gate's inner groups: shared (inner models shared by the folds: 8 trainings instead of 14 for 7 contents) "
+           "or per-fold (each fold's own, as `handemo train` forms them); default shared");
     auto* seed_opt = sub->add_option("--synth-seed", o->synth_seed,
                                      "Seed of a synthetic hand set (`handemo synth --seed`): adds the 'oracle' method, the input "
                                      "take re-synthesised in the target's style");

@@ -19,6 +19,7 @@
 #include <handemo/metrics/compare.hpp>
 #include <handemo/eval/report.hpp>
 #include <handemo/eval/retargeted.hpp>
+#include <handemo/eval/schedule.hpp>
 #include <handemo/motion/detail_layer.hpp>
 #include <handemo/motion/synth.hpp>
 #include <handemo/render/svg.hpp>
@@ -79,6 +80,13 @@ struct eval_options {
     /// (eval/continuous.hpp: equality at the labels' points, monotone paths, the Lipschitz bound, halfway points)
     /// and report it. Empty: not measured.
     std::string continuous;
+    /// How the change gate's inner groups are formed (schedule.hpp): shared (N + 1 inner trainings for N folds) or
+    /// per fold (2 N, as `handemo train` forms them). Shared needs gate_folds 2 (the default); other gate_folds
+    /// form per-fold groups.
+    gate_groups gate_grouping = gate_groups::shared;
+    /// Trainings run at once (each with train.threads threads, 1 when that is 0): above 1 every model is trained
+    /// before the first fold is scored (schedule.hpp, train_all()), bit for bit the models of 1.
+    std::size_t jobs = 1;
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
@@ -146,6 +154,7 @@ inline std::string options_text(const eval_options& o)
     for (auto it = j.begin(); it != j.end(); ++it) s += it.key() + " " + it.value().dump() + "\n";
     s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nshards " + std::to_string(o.train.shards) +
          " (0: one on one thread, else two halves of the batch)\nfold seed train.seed + fold index\n";
+    s += std::string("gate groups ") + to_string(o.gate_grouping) + "\ntrainings at once " + std::to_string(o.jobs) + "\n";
     s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
     s += std::string("inference weights ") + kernels::weight_storage_name(o.inference_weights) + "\n";
     if (o.synth_seed) s += "synthetic set seed " + std::to_string(*o.synth_seed) + " at " + std::to_string(o.synth_fps) + " fps (oracle row)\n";
@@ -283,24 +292,36 @@ inline stargan::train_options fold_train_options(const eval_options& opt, const 
     return to;
 }
 
+/// The change gate's plan of the fold holding out `held`: the shared plan (schedule.hpp) under <out_dir>/inner,
+/// or nothing (per-fold groups, no gate, or too few contents).
+inline std::optional<stargan::gate_plan> fold_gate_plan(const eval_options& opt, const std::vector<std::string>& contents,
+                                                        const std::string& held, const std::filesystem::path& out_dir)
+{
+    if (opt.gate_grouping != gate_groups::shared || opt.train.gate_folds != 2) return std::nullopt;
+    return shared_gate_plan(contents, held, out_dir / "inner", opt.train.seed);
+}
+
 /// --reuse-models: takes the fold's model in `fold_dir` (refitting its change gate when only the gate's options
 /// differ) and its training numbers from log.csv.
 /// @throws value_error when the checkpoint was trained for another configuration, step count or options.
 template <stargan::stargan_config Config>
 void reuse_fold_model(const std::vector<labelled_clip>& train, const stargan::config_info& info,
                       const stargan::train_options& to, const eval_options& opt, const std::filesystem::path& fold_dir,
-                      fold_summary& fsum)
+                      fold_summary& fsum, const stargan::gate_plan* plan)
 {
     namespace fs = std::filesystem;
     const fs::path ck_path = fold_dir / "checkpoint.safetensors";
     const auto ck = stargan::read_checkpoint(ck_path).second;
-    // only the gate's options differ: G is the same, the gate is fitted again (inner models reused)
-    const bool regate = ck.config == info.name && ck.options != to.to_json() && stargan::detail::trained_same_g(ck, to);
+    // the gate's inner groups the model was fitted with (gate/groups.txt) against those this run forms
+    const fs::path groups_path = fold_dir / "gate" / "groups.txt";
+    const bool other_groups = to.gate_folds > 0 && (!path_exists(groups_path) || read_file(groups_path) != stargan::gate_groups_text(train, to, plan));
+    // only the gate's options or groups differ: G is the same, the gate is fitted again (inner models reused)
+    const bool regate = ck.config == info.name && (ck.options != to.to_json() || other_groups) && stargan::detail::trained_same_g(ck, to);
     if (regate) {
         if (opt.progress_out)
-            std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate or tempo options: refitting the gate and the tempo\n",
-                         ck_path.string().c_str());
-        stargan::refit_gate<Config>(train, info, to, fold_dir);  // rewrites the checkpoint's options to `to`
+            std::fprintf(opt.progress_out, "eval: --reuse-models: %s differs only in the gate's options or groups or the tempo options: "
+                         "refitting the gate and the tempo\n", ck_path.string().c_str());
+        stargan::refit_gate<Config>(train, info, to, fold_dir, plan);  // rewrites the checkpoint's options to `to`
     }
     if (ck.config != info.name || ck.step != to.iters || (!regate && ck.options != to.to_json()))
         throw value_error("eval: --reuse-models: " + ck_path.string() + " is a " + ck.config + " model of " +
@@ -317,14 +338,102 @@ void reuse_fold_model(const std::vector<labelled_clip>& train, const stargan::co
 template <stargan::stargan_config Config>
 void train_fold_model(const std::vector<labelled_clip>& train, const stargan::config_info& info,
                       const stargan::train_options& to, const std::string& held, const std::filesystem::path& fold_dir,
-                      fold_summary& fsum)
+                      fold_summary& fsum, const stargan::gate_plan* plan)
 {
-    const auto trp = stargan::train_model<Config>(train, info, to, fold_dir);
+    const auto trp = stargan::train_model<Config>(train, info, to, fold_dir, false, {}, nullptr, plan);
     auto& tr = *trp;
     fsum.train_d_acc = tail_mean(tr.log(), 5);
     fsum.train_g_cls = tail_mean(tr.log(), 7);
     write_file_atomic(fold_dir / "losses.svg",
                       plot_losses_svg(stargan::loss_log_csv(tr.log()), {.title = "eval " + info.name + ": fold without " + held}));
+}
+
+/// @brief Trains every model the folds need, opt.jobs at a time (schedule.hpp): the shared plan's inner models,
+/// then each fold's final G (its gate fitted around the inner models it names, which are reused). With
+/// opt.reuse_models a fold whose checkpoint exists is left to the fold loop. Each training runs with
+/// train.threads threads (1 when that is 0) and no progress bar of its own; one line per finished training.
+/// @return per fold, the seconds its final G took (-1: left to the fold loop, reused)
+template <stargan::stargan_config Config, std::size_t K>
+std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const stargan::config_info& info, const eval_options& opt,
+                              const std::vector<std::string>& contents, const std::vector<std::string>& folds,
+                              const std::filesystem::path& out_dir)
+{
+    namespace fs = std::filesystem;
+    struct fold_job {
+        std::vector<labelled_clip> train;
+        stargan::train_options to;
+        std::optional<stargan::gate_plan> plan;
+        fs::path dir;
+        std::string held;
+        fold_summary sum;
+    };
+    std::vector<fold_job> fj(folds.size());
+    std::vector<std::vector<labelled_clip>> inner_train;  // the clips of each inner job, kept alive for its run
+    std::vector<stargan::train_options> inner_opts;
+    std::vector<fs::path> inner_dirs;
+    std::vector<training_job> jobs;
+    std::vector<double> seconds(folds.size(), -1.0);
+    std::vector<std::size_t> final_job(folds.size(), SIZE_MAX);
+    inner_train.reserve(2 * folds.size()), inner_opts.reserve(2 * folds.size()), inner_dirs.reserve(2 * folds.size());
+    for (std::size_t fi = 0; fi < folds.size(); ++fi) {
+        auto& f = fj[fi];
+        f.held = folds[fi];
+        f.train = split_fold(all, f.held).train;
+        f.to = fold_train_options(opt, contents, f.held);
+        f.to.progress_out = nullptr;
+        if (f.to.threads == 0) f.to.threads = 1;
+        f.plan = fold_gate_plan(opt, contents, f.held, out_dir);
+        f.dir = out_dir / "folds" / f.held;
+    }
+    for (std::size_t fi = 0; fi < folds.size(); ++fi) {
+        auto& f = fj[fi];
+        if (opt.reuse_models && path_exists(f.dir / "checkpoint.safetensors")) continue;  // the fold loop reuses it
+        final_job[fi] = 0;  // to train; its index is known once every inner job is listed
+        if (!f.plan) continue;  // per-fold groups: train_model() trains the fold's inner models itself
+        for (std::size_t g = 0; g < f.plan->groups.size(); ++g) {
+            if (std::find(inner_dirs.begin(), inner_dirs.end(), f.plan->dirs[g]) != inner_dirs.end()) continue;  // shared
+            // the clips fit_change_gate() trains group g's model on: the fold's, in order, without group g's contents
+            std::vector<labelled_clip> tr;
+            for (const auto& c : f.train)
+                if (std::find(f.plan->groups[g].begin(), f.plan->groups[g].end(), c.content) == f.plan->groups[g].end()) tr.push_back(c);
+            inner_train.push_back(std::move(tr));
+            inner_opts.push_back(stargan::inner_gate_options(f.to, f.plan->seeds[g]));
+            inner_dirs.push_back(f.plan->dirs[g]);
+        }
+    }
+    for (std::size_t i = 0; i < inner_dirs.size(); ++i) {
+        std::string names;
+        for (const auto& c : contents)
+            if (std::any_of(inner_train[i].begin(), inner_train[i].end(), [&](const labelled_clip& x) { return x.content == c; }))
+                names += (names.empty() ? "" : ", ") + c;
+        jobs.push_back({"gate model " + inner_dirs[i].filename().string() + " (on " + names + ")",
+                        [&, i] {
+                            bool reused = false;
+                            stargan::detail::inner_gate_model<Config>(inner_train[i], info, inner_opts[i], inner_dirs[i], true, "", reused);
+                        },
+                        {}, 0});
+    }
+    for (std::size_t fi = 0; fi < folds.size(); ++fi) {
+        if (final_job[fi] == SIZE_MAX) continue;
+        auto& f = fj[fi];
+        std::vector<std::size_t> after;
+        if (f.plan)
+            for (const auto& d : f.plan->dirs) after.push_back(static_cast<std::size_t>(std::find(inner_dirs.begin(), inner_dirs.end(), d) - inner_dirs.begin()));
+        final_job[fi] = jobs.size();
+        jobs.push_back({"fold without " + f.held, [&, fi] {
+                            auto& g = fj[fi];
+                            train_fold_model<Config>(g.train, info, g.to, g.held, g.dir, g.sum, g.plan ? &*g.plan : nullptr);
+                        },
+                        std::move(after), 0});
+    }
+    if (opt.progress_out)
+        std::fprintf(opt.progress_out, "eval: training %zu models (%zu for the change gates, %zu folds), %zu at a time\n", jobs.size(),
+                     inner_dirs.size(), jobs.size() - inner_dirs.size(), opt.jobs),
+            std::fflush(opt.progress_out);
+    run_training_jobs(jobs, opt.jobs, opt.progress_out, "eval " + info.name + ": training");
+    for (std::size_t fi = 0; fi < folds.size(); ++fi)
+        if (final_job[fi] != SIZE_MAX) seconds[fi] = jobs[final_job[fi]].seconds;
+    return seconds;
 }
 
 /// The fold's trained model and its two ablations, built from one checkpoint.
@@ -693,6 +802,9 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
         continuous_table = load_circumplex(opt.continuous);
         for (const auto& d : info.domain_names) continuous_table->at(d, opt.continuous);
     }
+    // with jobs > 1, every model first (schedule.hpp), then the folds are scored with them one by one
+    std::vector<double> pretrained_seconds;
+    if (opt.jobs > 1) pretrained_seconds = detail::train_all<Config>(all, info, opt, contents, folds, out_dir);
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         const std::string& held = folds[fi];
         const auto split = detail::split_fold(all, held);
@@ -709,11 +821,16 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
         const fs::path fold_dir = out_dir / "folds" / held;
         auto t0 = clock::now();
         const auto to = detail::fold_train_options(opt, contents, held);
-        if (opt.reuse_models && path_exists(fold_dir / "checkpoint.safetensors"))
-            detail::reuse_fold_model<Config>(train, info, to, opt, fold_dir, fsum);
+        const auto plan = detail::fold_gate_plan(opt, contents, held, out_dir);
+        if (!pretrained_seconds.empty() || (opt.reuse_models && path_exists(fold_dir / "checkpoint.safetensors")))
+            detail::reuse_fold_model<Config>(train, info, to, opt, fold_dir, fsum, plan ? &*plan : nullptr);
         else
-            detail::train_fold_model<Config>(train, info, to, held, fold_dir, fsum);
+            detail::train_fold_model<Config>(train, info, to, held, fold_dir, fsum, plan ? &*plan : nullptr);
         fsum.train_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+        if (!pretrained_seconds.empty()) {  // trained by train_all(), not reused from an earlier run
+            fsum.reused_model = pretrained_seconds[fi] < 0;
+            if (pretrained_seconds[fi] >= 0) fsum.train_seconds = pretrained_seconds[fi];
+        }
         t0 = clock::now();
         auto [ckf, ckinfo] = stargan::read_checkpoint(fold_dir / "checkpoint.safetensors");
         const detail::fold_models<Config> models(ckf, ckinfo, opt.inference_weights);

@@ -39,6 +39,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -48,6 +49,17 @@
 #include <vector>
 
 namespace handemo::stargan {
+
+/// @brief Inner groups and models chosen by the caller instead of fit_change_gate()'s own (the evaluation's
+/// shared plan, eval/protocol.hpp: inner models that several folds share). groups[f] lists the contents of
+/// inner group f (together, every content of the clips, each once); group f is scored with the G trained on the
+/// clips of the other groups with seed seeds[f], kept in dirs[f] and reused from there whenever it holds the G
+/// those options train. Two groups' entries may name the same directory only for the same training clips and seed.
+struct gate_plan {
+    std::vector<std::vector<std::string>> groups;
+    std::vector<std::filesystem::path> dirs;
+    std::vector<std::uint64_t> seeds;
+};
 
 /// @brief The outcome of fit_change_gate().
 struct gate_fit {
@@ -273,8 +285,14 @@ namespace detail {
 struct content_groups {
     std::vector<std::string> contents;
     std::size_t F = 0;
+    const gate_plan* plan = nullptr;  ///< explicit groups, else content i of the sorted contents is in group i % F
     std::size_t of(const std::string& content) const
     {
+        if (plan) {
+            for (std::size_t f = 0; f < plan->groups.size(); ++f)
+                if (std::find(plan->groups[f].begin(), plan->groups[f].end(), content) != plan->groups[f].end()) return f;
+            return F;  // checked by fit_change_gate: every content has a group
+        }
         return static_cast<std::size_t>(std::find(contents.begin(), contents.end(), content) - contents.begin()) % F;
     }
     std::string names(std::size_t f) const
@@ -285,6 +303,33 @@ struct content_groups {
         return s;
     }
 };
+
+/// The inner groups of fit_change_gate(): the plan's, else the sorted contents dealt round max(gate_folds, 2).
+/// @throws value_error for a plan without 2 groups, a directory and a seed per group, or one that does not list
+/// every content of the clips exactly once.
+inline content_groups make_content_groups(const std::vector<labelled_clip>& clips, const train_options& opt, const gate_plan* plan)
+{
+    content_groups groups;
+    groups.F = plan ? plan->groups.size() : static_cast<std::size_t>(std::max(opt.gate_folds, 2));
+    groups.plan = plan;
+    for (const auto& c : clips)
+        if (std::find(groups.contents.begin(), groups.contents.end(), c.content) == groups.contents.end()) groups.contents.push_back(c.content);
+    std::sort(groups.contents.begin(), groups.contents.end());
+    if (plan) {
+        if (plan->groups.size() < 2 || plan->dirs.size() != plan->groups.size() || plan->seeds.size() != plan->groups.size())
+            throw value_error("train: a gate plan needs at least 2 groups, each with a directory and a seed (" +
+                              std::to_string(plan->groups.size()) + " groups, " + std::to_string(plan->dirs.size()) + " directories, " +
+                              std::to_string(plan->seeds.size()) + " seeds)");
+        std::size_t listed = 0;
+        for (const auto& g : plan->groups) listed += g.size();
+        for (const auto& c : groups.contents)
+            if (groups.of(c) == groups.F) throw value_error("train: content '" + c + "' is in no group of the gate plan");
+        if (listed != groups.contents.size())
+            throw value_error("train: the gate plan lists " + std::to_string(listed) + " contents, the clips have " +
+                              std::to_string(groups.contents.size()));
+    }
+    return groups;
+}
 
 /// The checkpoint of inner group f: trained on `train` with the inner options, or reused from dir when `reuse`
 /// and it holds the G those options train. `reused` tells which.
@@ -415,25 +460,49 @@ inline gate_fit gate_from_tallies(const std::vector<std::vector<gate_tally>>& ta
     return g;
 }
 
+/// @brief The options an inner model of the change gate is trained with: `opt` without the gate, with its own
+/// seed, one checkpoint at the end.
+inline train_options inner_gate_options(const train_options& opt, std::uint64_t seed)
+{
+    auto inner = opt;
+    inner.gate_folds = 0;
+    inner.seed = seed;
+    inner.checkpoint_every = inner.iters;
+    inner.stop_at = -1;
+    return inner;
+}
+
+/// @brief The inner groups fit_change_gate() forms from `clips` with `opt` and `plan`, one line per group with
+/// its contents and seed: what it writes to work_dir/groups.txt, so that a reused model's gate can be checked
+/// against the groups a run would form now (`handemo eval --reuse-models`).
+/// @throws the errors of detail::make_content_groups().
+inline std::string gate_groups_text(const std::vector<labelled_clip>& clips, const train_options& opt, const gate_plan* plan)
+{
+    const auto groups = detail::make_content_groups(clips, opt, plan);
+    std::string s;
+    for (std::size_t f = 0; f < groups.F; ++f)
+        s += "group " + std::to_string(f + 1) + ": " + groups.names(f) + " (scored by G trained with seed " +
+             std::to_string(plan ? plan->seeds[f] : opt.seed + 7919 * (f + 1)) + " on the other groups)\n";
+    return s;
+}
+
 /// @brief Chooses the change gate of a residual G by leave-content-group-out inside `clips` (see the header
 /// comment). Inner models are written to work_dir/inner<i>/ and the table to work_dir/gate.csv.
 /// @param opt the options the final G is trained with (gate_folds inner trainings of them, each with its own seed)
 /// @param reuse keep an inner model already in work_dir/inner<i>/ when it was trained with the same options
 ///        (the gate's own aside) and steps, instead of training it again (`handemo eval --reuse-models`)
+/// @param plan the inner groups, their models' directories and seeds (see gate_plan; its models are always reused
+///        when they match), instead of the sorted contents dealt round the gate_folds groups under work_dir
 /// @return all-1 weights (and no rows) when the clips have fewer contents than opt.gate_folds or no neutral take
 ///         with a real target in a held-out group.
 /// @throws value_error when opt is not residual; the errors of training and transfer otherwise.
 template <stargan_config Config>
 gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
-                         const std::filesystem::path& work_dir, bool reuse = false)
+                         const std::filesystem::path& work_dir, bool reuse = false, const gate_plan* plan = nullptr)
 {
     constexpr std::size_t K = Config::keyframes;
     if (!opt.residual) throw value_error("train: the change gate needs a residual G (--residual true)");
-    detail::content_groups groups;
-    groups.F = static_cast<std::size_t>(std::max(opt.gate_folds, 2));
-    for (const auto& c : clips)
-        if (std::find(groups.contents.begin(), groups.contents.end(), c.content) == groups.contents.end()) groups.contents.push_back(c.content);
-    std::sort(groups.contents.begin(), groups.contents.end());
+    const auto groups = detail::make_content_groups(clips, opt, plan);
     const std::size_t F = groups.F;
     if (groups.contents.size() < F) {
         if (opt.progress_out)
@@ -455,14 +524,11 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                 held.push_back(&c);
             else
                 train.push_back(c);
-        auto inner = opt;
-        inner.gate_folds = 0;
-        inner.seed = opt.seed + 7919 * (f + 1);
-        inner.checkpoint_every = inner.iters;
-        inner.stop_at = -1;
+        const auto inner = inner_gate_options(opt, plan ? plan->seeds[f] : opt.seed + 7919 * (f + 1));
         bool reused = false;
         const auto label = "gate " + std::to_string(f + 1) + "/" + std::to_string(F) + " (without " + groups.names(f) + ")";
-        const auto ck = detail::inner_gate_model<Config>(train, info, inner, work_dir / ("inner" + std::to_string(f + 1)), reuse, label, reused);
+        const auto dir = plan ? plan->dirs[f] : work_dir / ("inner" + std::to_string(f + 1));
+        const auto ck = detail::inner_gate_model<Config>(train, info, inner, dir, reuse || plan, label, reused);
         reused_folds += reused;
         auto ck_info = ck.second;
         // a reused inner model may have been fitted with another tempo option: the tempo training would store now
@@ -496,7 +562,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                          "recognised %.0f%%, G's whole change %.0f%%, real %.0f%%; %zu pairs)\n",
                          r.target.c_str(), r.posture, r.motion, r.prior, r.rmse_gated, r.rmse_full, r.rmse_none, 100 * r.emotion_gated,
                          100 * r.emotion_full, 100 * r.emotion_real, r.pairs);
-    if (writer) write_file_atomic(work_dir / "gate.csv", g.csv());
+    if (writer) write_file_atomic(work_dir / "gate.csv", g.csv()), write_file_atomic(work_dir / "groups.txt", gate_groups_text(clips, opt, plan));
     return g;
 }
 
@@ -507,7 +573,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
 /// @throws value_error when the checkpoint was trained with other options (the gate's aside) or steps.
 template <stargan_config Config>
 gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
-                    const std::filesystem::path& out_dir)
+                    const std::filesystem::path& out_dir, const gate_plan* plan = nullptr)
 {
     const auto ck_path = out_dir / "checkpoint.safetensors";
     auto [f, stored] = read_checkpoint(ck_path);
@@ -515,7 +581,7 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
         throw value_error("train: " + ck_path.string() + " was not trained with these options (the gate's aside) and " +
                           std::to_string(opt.iters) + " steps: its gate cannot be refitted");
     gate_fit g;
-    if (opt.gate_folds > 0) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", true);
+    if (opt.gate_folds > 0) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", true, plan);
     auto j = nlohmann::json::parse(f.metadata.at("handemo"));
     const std::size_t C = info.domains;
     j["gate"] = {{"posture", g.posture.empty() ? std::vector<double>(C, 1.0) : g.posture},
@@ -536,14 +602,16 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
 /// out_dir/gate/), then G on every clip, with the gate stored in its checkpoint. A resumed run keeps the
 /// checkpoint's range and gate.
 /// @param gate_out receives the gate fit (rows empty when no gate was fitted)
+/// @param plan the change gate's inner groups and models (fit_change_gate()), else its own
 /// @throws the errors of prepare_data(), fit_change_gate() and trainer::run().
 template <stargan_config Config>
 std::unique_ptr<trainer<Config>> train_model(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
                                              const std::filesystem::path& out_dir, bool resume = false,
-                                             std::optional<angle_range> range = {}, gate_fit* gate_out = nullptr)
+                                             std::optional<angle_range> range = {}, gate_fit* gate_out = nullptr,
+                                             const gate_plan* plan = nullptr)
 {
     gate_fit g;
-    if (opt.gate_folds > 0 && !resume) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate");
+    if (opt.gate_folds > 0 && !resume) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", false, plan);
     auto data = prepare_data<Config>(clips, info, opt, range);
     if (!g.posture.empty()) data.gate_posture = g.posture, data.gate_motion = g.motion, data.gate_prior = g.prior;
     if (opt.gate_prior && opt.gate_folds > 0 && !resume) data.prior_posture = posture_prior<Config::keyframes>(clips, info);
