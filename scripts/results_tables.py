@@ -21,8 +21,10 @@ METHODS = [
     ("oracle", "oracle (the floor per-take variation leaves)"),
     ("real", "real (reference)"),
 ]
-COLUMNS = [("rmse_real", "RMSE to real (deg)", True), ("emotion_acc", "emotion (%)", True), ("content_acc", "content kept (%)", False),
-           ("rmse_input", "RMSE to input", False), ("rom_error", "ROM err", False), ("speed_error", "speed err", False)]
+COLUMNS = [("rmse_real", "RMSE to real (deg)", True), ("emotion_acc", "emotion, centroid judge (%)", True),
+           ("emotion_acc_full", "emotion, full-rate judge (%)", True), ("content_acc", "content kept (%)", False),
+           ("rmse_input", "RMSE to input", False), ("rom_error", "ROM err", False), ("speed_error", "speed err", False),
+           ("duration_error", "duration err", False)]
 
 
 def table(report_dir, title):

@@ -22,16 +22,26 @@ using namespace handemo::eval;
 using namespace handemo::stargan;
 using handemo::test::toy_set;
 
+namespace {
+/// The options of the end-to-end tests: the evaluation's training defaults with `iters` steps on `threads` threads,
+/// no progress output.
+eval_options tiny_options(long iters, unsigned threads)
+{
+    eval_options o = {};
+    o.train = default_train_options();
+    o.train.iters = iters;
+    o.train.threads = threads;
+    o.progress_out = nullptr;
+    return o;
+}
+}  // namespace
+
 TEST_CASE("end to end: hand-tiny, two folds, report written")
 {
     const auto clips = toy_set(3);
     const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
-    eval_options o = {};
-    o.train = default_train_options();
-    o.train.iters = 12;
-    o.train.threads = 2;
+    eval_options o = tiny_options(12, 2);
     o.folds = {"patting", "gripping"};
-    o.progress_out = nullptr;
     o.command = "test";
     o.data = "toy";
     const fs::path dir = fs::temp_directory_path() / ("handemo_eval_test_" + std::to_string(::getpid()));
@@ -632,11 +642,7 @@ TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner 
 {
     const auto clips = toy_set(3);
     const auto info = make_info<hand_tiny>("hand-tiny", hand_domains(), "neutral");
-    eval_options o = {};
-    o.train = default_train_options();
-    o.train.iters = 8;
-    o.train.threads = 1;
-    o.progress_out = nullptr;
+    eval_options o = tiny_options(8, 1);
     o.retargeted = false;
     o.folds = {"gripping", "patting"};
     const fs::path base = fs::temp_directory_path() / ("handemo_eval_jobs_" + std::to_string(::getpid()));

@@ -125,7 +125,7 @@ std::string png_chunk(const std::string& type, const std::string& body)
     std::string c;
     put_be32(c, static_cast<std::uint32_t>(body.size()));
     c += type + body;
-    put_be32(c, detail::crc32(type + body));
+    put_be32(c, handemo::detail::crc32(type + body));
     return c;
 }
 
@@ -250,7 +250,7 @@ TEST_CASE("PNG: a 60000 x 60000 header, a zlib bomb and bad CRC or Adler-32 are 
     std::string z = "\x78\x01";  // stored block
     z += std::string("\x01\x0e\x00\xf1\xff", 5) + rows;
     std::string adler;
-    put_be32(adler, detail::adler32(reinterpret_cast<const unsigned char*>(rows.data()), rows.size()));
+    put_be32(adler, handemo::detail::adler32(reinterpret_cast<const unsigned char*>(rows.data()), rows.size()));
     const std::string good = png_signature + png_ihdr(2, 2) + png_chunk("IDAT", z + adler) + iend;
     const rgb_image im = decode_image(good, "good.png");
     CHECK(im.pixels == std::vector<std::uint8_t>{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12});
