@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -668,13 +669,31 @@ TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner 
     for (const char* absent : {"model3", "model5"}) CHECK(!fs::exists(base / "two" / "inner" / absent));
     CHECK(two.options_text.find("gate groups shared\ntrainings at once 2\n") != std::string::npos);
 
-    // the same models with per-fold groups: G is reused, the gate fitted again around the fold's own inner models
-    o.jobs = 1;
+    // the same models with per-fold groups: G is reused, the gate fitted again around the fold's own inner models,
+    // which --jobs 2 trains first, two at a time, bit for bit those the fold loop trains one by one
     o.reuse_models = true;
     o.gate_grouping = gate_groups::per_fold;
+    o.jobs = 1;
+    const auto per_fold_one = run_eval<hand_tiny>(clips, info, o, base / "one");
+    o.jobs = 2;
+    std::FILE* log = std::tmpfile();
+    REQUIRE(log != nullptr);
+    o.progress_out = log;
     const auto per_fold = run_eval<hand_tiny>(clips, info, o, base / "two");
+    o.progress_out = nullptr;
+    std::string printed(static_cast<std::size_t>(std::ftell(log)), '\0');
+    std::rewind(log);
+    CHECK(std::fread(printed.data(), 1, printed.size(), log) == printed.size());
+    std::fclose(log);
+    // G reused in both folds; the two folds' own inner models (2 each) trained first, two at a time
+    CHECK(printed.find("eval: training 4 models (4 for the change gates, 0 folds), 2 at a time") != std::string::npos);
     CHECK(per_fold.folds[0].reused_model);
-    CHECK(fs::exists(base / "two" / "folds" / "gripping" / "gate" / "inner1" / "checkpoint.safetensors"));
+    REQUIRE(per_fold.samples.size() == per_fold_one.samples.size());
+    for (std::size_t i = 0; i < per_fold.samples.size(); ++i) CHECK(per_fold.samples[i].rmse_real == per_fold_one.samples[i].rmse_real);
+    for (const char* f : {"gripping", "patting"})
+        for (const char* inner : {"inner1", "inner2"})
+            CHECK(read_file(base / "one" / "folds" / f / "gate" / inner / "checkpoint.safetensors") ==
+                  read_file(base / "two" / "folds" / f / "gate" / inner / "checkpoint.safetensors"));
     std::vector<labelled_clip> train;
     for (const auto& c : clips)
         if (c.content != "gripping") train.push_back(c);

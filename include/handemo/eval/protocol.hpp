@@ -338,9 +338,9 @@ void reuse_fold_model(const std::vector<labelled_clip>& train, const stargan::co
 template <stargan::stargan_config Config>
 void train_fold_model(const std::vector<labelled_clip>& train, const stargan::config_info& info,
                       const stargan::train_options& to, const std::string& held, const std::filesystem::path& fold_dir,
-                      fold_summary& fsum, const stargan::gate_plan* plan)
+                      fold_summary& fsum, const stargan::gate_plan* plan, bool reuse_inner = false)
 {
-    const auto trp = stargan::train_model<Config>(train, info, to, fold_dir, false, {}, nullptr, plan);
+    const auto trp = stargan::train_model<Config>(train, info, to, fold_dir, false, {}, nullptr, plan, reuse_inner);
     auto& tr = *trp;
     fsum.train_d_acc = tail_mean(tr.log(), 5);
     fsum.train_g_cls = tail_mean(tr.log(), 7);
@@ -348,9 +348,10 @@ void train_fold_model(const std::vector<labelled_clip>& train, const stargan::co
                       plot_losses_svg(stargan::loss_log_csv(tr.log()), {.title = "eval " + info.name + ": fold without " + held}));
 }
 
-/// @brief Trains every model the folds need, opt.jobs at a time (schedule.hpp): the shared plan's inner models,
-/// then each fold's final G (its gate fitted around the inner models it names, which are reused). With
-/// opt.reuse_models a fold whose checkpoint exists is left to the fold loop. Each training runs with
+/// @brief Trains every model the folds need, opt.jobs at a time (schedule.hpp): the change gates' inner models
+/// (the shared plan's, or each fold's own), then each fold's final G once its inner models exist (its gate is
+/// fitted around them, reused). With opt.reuse_models a fold whose checkpoint exists is left to the fold loop,
+/// and only the inner models of a stored gate fitted with other groups are trained here. Each training runs with
 /// train.threads threads (1 when that is 0) and no progress bar of its own; one line per finished training.
 /// @return per fold, the seconds its final G took (-1: left to the fold loop, reused)
 template <stargan::stargan_config Config, std::size_t K>
@@ -374,7 +375,8 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
     std::vector<training_job> jobs;
     std::vector<double> seconds(folds.size(), -1.0);
     std::vector<std::size_t> final_job(folds.size(), SIZE_MAX);
-    inner_train.reserve(2 * folds.size()), inner_opts.reserve(2 * folds.size()), inner_dirs.reserve(2 * folds.size());
+    const std::size_t most = 16 * folds.size();  // gate_folds <= 16: the jobs keep pointers into these
+    inner_train.reserve(most), inner_opts.reserve(most), inner_dirs.reserve(most);
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         auto& f = fj[fi];
         f.held = folds[fi];
@@ -385,20 +387,34 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
         f.plan = fold_gate_plan(opt, contents, f.held, out_dir);
         f.dir = out_dir / "folds" / f.held;
     }
+    std::vector<std::vector<std::size_t>> fold_inner(folds.size());  // the inner jobs each fold's gate needs
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         auto& f = fj[fi];
-        if (opt.reuse_models && path_exists(f.dir / "checkpoint.safetensors")) continue;  // the fold loop reuses it
-        final_job[fi] = 0;  // to train; its index is known once every inner job is listed
-        if (!f.plan) continue;  // per-fold groups: train_model() trains the fold's inner models itself
-        for (std::size_t g = 0; g < f.plan->groups.size(); ++g) {
-            if (std::find(inner_dirs.begin(), inner_dirs.end(), f.plan->dirs[g]) != inner_dirs.end()) continue;  // shared
+        const bool stored = opt.reuse_models && path_exists(f.dir / "checkpoint.safetensors");  // the fold loop reuses G
+        if (!stored) final_job[fi] = 0;  // to train; its index is known once every inner job is listed
+        if (f.to.gate_folds <= 0) continue;
+        const stargan::gate_plan* plan = f.plan ? &*f.plan : nullptr;
+        if (stored) {  // the fold loop refits a stored gate fitted with other groups: its inner models first
+            const fs::path groups_path = f.dir / "gate" / "groups.txt";
+            if (path_exists(groups_path) && read_file(groups_path) == stargan::gate_groups_text(f.train, f.to, plan)) continue;
+        }
+        // the inner groups fit_change_gate() forms, and the model that scores each: the plan's or the fold's own
+        const auto groups = stargan::detail::make_content_groups(f.train, f.to, plan);
+        for (std::size_t g = 0; g < groups.F; ++g) {
+            const fs::path dir = plan ? plan->dirs[g] : f.dir / "gate" / ("inner" + std::to_string(g + 1));
+            const auto it = std::find(inner_dirs.begin(), inner_dirs.end(), dir);
+            if (it != inner_dirs.end()) {  // shared with an earlier fold
+                fold_inner[fi].push_back(static_cast<std::size_t>(it - inner_dirs.begin()));
+                continue;
+            }
             // the clips fit_change_gate() trains group g's model on: the fold's, in order, without group g's contents
             std::vector<labelled_clip> tr;
             for (const auto& c : f.train)
-                if (std::find(f.plan->groups[g].begin(), f.plan->groups[g].end(), c.content) == f.plan->groups[g].end()) tr.push_back(c);
+                if (groups.of(c.content) != g) tr.push_back(c);
             inner_train.push_back(std::move(tr));
-            inner_opts.push_back(stargan::inner_gate_options(f.to, f.plan->seeds[g]));
-            inner_dirs.push_back(f.plan->dirs[g]);
+            inner_opts.push_back(stargan::inner_gate_options(f.to, plan ? plan->seeds[g] : f.to.seed + 7919 * (g + 1)));
+            inner_dirs.push_back(dir);
+            fold_inner[fi].push_back(inner_dirs.size() - 1);
         }
     }
     for (std::size_t i = 0; i < inner_dirs.size(); ++i) {
@@ -406,7 +422,7 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
         for (const auto& c : contents)
             if (std::any_of(inner_train[i].begin(), inner_train[i].end(), [&](const labelled_clip& x) { return x.content == c; }))
                 names += (names.empty() ? "" : ", ") + c;
-        jobs.push_back({"gate model " + inner_dirs[i].filename().string() + " (on " + names + ")",
+        jobs.push_back({"gate model " + inner_dirs[i].lexically_relative(out_dir).string() + " (on " + names + ")",
                         [&, i] {
                             bool reused = false;
                             stargan::detail::inner_gate_model<Config>(inner_train[i], info, inner_opts[i], inner_dirs[i], true, "", reused);
@@ -416,13 +432,12 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         if (final_job[fi] == SIZE_MAX) continue;
         auto& f = fj[fi];
-        std::vector<std::size_t> after;
-        if (f.plan)
-            for (const auto& d : f.plan->dirs) after.push_back(static_cast<std::size_t>(std::find(inner_dirs.begin(), inner_dirs.end(), d) - inner_dirs.begin()));
+        std::vector<std::size_t> after = fold_inner[fi];
         final_job[fi] = jobs.size();
         jobs.push_back({"fold without " + f.held, [&, fi] {
                             auto& g = fj[fi];
-                            train_fold_model<Config>(g.train, info, g.to, g.held, g.dir, g.sum, g.plan ? &*g.plan : nullptr);
+                            // its inner models were trained by the jobs it waits on
+                            train_fold_model<Config>(g.train, info, g.to, g.held, g.dir, g.sum, g.plan ? &*g.plan : nullptr, true);
                         },
                         std::move(after), 0});
     }

@@ -603,15 +603,17 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
 /// checkpoint's range and gate.
 /// @param gate_out receives the gate fit (rows empty when no gate was fitted)
 /// @param plan the change gate's inner groups and models (fit_change_gate()), else its own
+/// @param reuse_inner keep an inner model already in its folder when it holds the G its options train (a plan's
+///        models are always kept so)
 /// @throws the errors of prepare_data(), fit_change_gate() and trainer::run().
 template <stargan_config Config>
 std::unique_ptr<trainer<Config>> train_model(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
                                              const std::filesystem::path& out_dir, bool resume = false,
                                              std::optional<angle_range> range = {}, gate_fit* gate_out = nullptr,
-                                             const gate_plan* plan = nullptr)
+                                             const gate_plan* plan = nullptr, bool reuse_inner = false)
 {
     gate_fit g;
-    if (opt.gate_folds > 0 && !resume) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", false, plan);
+    if (opt.gate_folds > 0 && !resume) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", reuse_inner, plan);
     auto data = prepare_data<Config>(clips, info, opt, range);
     if (!g.posture.empty()) data.gate_posture = g.posture, data.gate_motion = g.motion, data.gate_prior = g.prior;
     if (opt.gate_prior && opt.gate_folds > 0 && !resume) data.prior_posture = posture_prior<Config::keyframes>(clips, info);
