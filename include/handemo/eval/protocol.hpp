@@ -301,6 +301,14 @@ inline std::optional<stargan::gate_plan> fold_gate_plan(const eval_options& opt,
     return shared_gate_plan(contents, held, out_dir / "inner", opt.train.seed);
 }
 
+/// Whether the gate stored in `fold_dir` was fitted with the inner groups this run forms (its gate/groups.txt).
+inline bool stored_gate_groups_match(const std::filesystem::path& fold_dir, const std::vector<labelled_clip>& train,
+                                     const stargan::train_options& to, const stargan::gate_plan* plan)
+{
+    const auto groups_path = fold_dir / "gate" / "groups.txt";
+    return path_exists(groups_path) && read_file(groups_path) == stargan::gate_groups_text(train, to, plan);
+}
+
 /// --reuse-models: takes the fold's model in `fold_dir` (refitting its change gate when only the gate's options
 /// differ) and its training numbers from log.csv.
 /// @throws value_error when the checkpoint was trained for another configuration, step count or options.
@@ -312,9 +320,7 @@ void reuse_fold_model(const std::vector<labelled_clip>& train, const stargan::co
     namespace fs = std::filesystem;
     const fs::path ck_path = fold_dir / "checkpoint.safetensors";
     const auto ck = stargan::read_checkpoint(ck_path).second;
-    // the gate's inner groups the model was fitted with (gate/groups.txt) against those this run forms
-    const fs::path groups_path = fold_dir / "gate" / "groups.txt";
-    const bool other_groups = to.gate_folds > 0 && (!path_exists(groups_path) || read_file(groups_path) != stargan::gate_groups_text(train, to, plan));
+    const bool other_groups = to.gate_folds > 0 && !stored_gate_groups_match(fold_dir, train, to, plan);
     // only the gate's options or groups differ: G is the same, the gate is fitted again (inner models reused)
     const bool regate = ck.config == info.name && (ck.options != to.to_json() || other_groups) && stargan::detail::trained_same_g(ck, to);
     if (regate) {
@@ -366,6 +372,7 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
         std::optional<stargan::gate_plan> plan;
         fs::path dir;
         std::string held;
+        bool stored = false;  ///< --reuse-models and a checkpoint exists: the fold loop reuses G
         fold_summary sum;
     };
     std::vector<fold_job> fj(folds.size());
@@ -386,22 +393,19 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
         if (f.to.threads == 0) f.to.threads = 1;
         f.plan = fold_gate_plan(opt, contents, f.held, out_dir);
         f.dir = out_dir / "folds" / f.held;
+        f.stored = opt.reuse_models && path_exists(f.dir / "checkpoint.safetensors");
     }
     std::vector<std::vector<std::size_t>> fold_inner(folds.size());  // the inner jobs each fold's gate needs
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         auto& f = fj[fi];
-        const bool stored = opt.reuse_models && path_exists(f.dir / "checkpoint.safetensors");  // the fold loop reuses G
-        if (!stored) final_job[fi] = 0;  // to train; its index is known once every inner job is listed
         if (f.to.gate_folds <= 0) continue;
         const stargan::gate_plan* plan = f.plan ? &*f.plan : nullptr;
-        if (stored) {  // the fold loop refits a stored gate fitted with other groups: its inner models first
-            const fs::path groups_path = f.dir / "gate" / "groups.txt";
-            if (path_exists(groups_path) && read_file(groups_path) == stargan::gate_groups_text(f.train, f.to, plan)) continue;
-        }
+        // a stored gate is refitted by the fold loop only when it was fitted with other groups: its inner models first
+        if (f.stored && stored_gate_groups_match(f.dir, f.train, f.to, plan)) continue;
         // the inner groups fit_change_gate() forms, and the model that scores each: the plan's or the fold's own
         const auto groups = stargan::detail::make_content_groups(f.train, f.to, plan);
         for (std::size_t g = 0; g < groups.F; ++g) {
-            const fs::path dir = plan ? plan->dirs[g] : f.dir / "gate" / ("inner" + std::to_string(g + 1));
+            const fs::path dir = groups.dir(g, f.dir / "gate");
             const auto it = std::find(inner_dirs.begin(), inner_dirs.end(), dir);
             if (it != inner_dirs.end()) {  // shared with an earlier fold
                 fold_inner[fi].push_back(static_cast<std::size_t>(it - inner_dirs.begin()));
@@ -412,7 +416,7 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
             for (const auto& c : f.train)
                 if (groups.of(c.content) != g) tr.push_back(c);
             inner_train.push_back(std::move(tr));
-            inner_opts.push_back(stargan::inner_gate_options(f.to, plan ? plan->seeds[g] : f.to.seed + 7919 * (g + 1)));
+            inner_opts.push_back(stargan::inner_gate_options(f.to, groups.seed(g, f.to)));
             inner_dirs.push_back(dir);
             fold_inner[fi].push_back(inner_dirs.size() - 1);
         }
@@ -430,8 +434,8 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
                         {}, 0});
     }
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
-        if (final_job[fi] == SIZE_MAX) continue;
         auto& f = fj[fi];
+        if (f.stored) continue;
         std::vector<std::size_t> after = fold_inner[fi];
         final_job[fi] = jobs.size();
         jobs.push_back({"fold without " + f.held, [&, fi] {

@@ -295,6 +295,13 @@ struct content_groups {
         }
         return static_cast<std::size_t>(std::find(contents.begin(), contents.end(), content) - contents.begin()) % F;
     }
+    /// The seed of the G that scores group f: the plan's, else opt.seed + 7919 (f + 1).
+    std::uint64_t seed(std::size_t f, const train_options& opt) const { return plan ? plan->seeds[f] : opt.seed + 7919 * (f + 1); }
+    /// Where that G is kept: the plan's directory, else work_dir/inner<f + 1>.
+    std::filesystem::path dir(std::size_t f, const std::filesystem::path& work_dir) const
+    {
+        return plan ? plan->dirs[f] : work_dir / ("inner" + std::to_string(f + 1));
+    }
     std::string names(std::size_t f) const
     {
         std::string s;
@@ -482,7 +489,7 @@ inline std::string gate_groups_text(const std::vector<labelled_clip>& clips, con
     std::string s;
     for (std::size_t f = 0; f < groups.F; ++f)
         s += "group " + std::to_string(f + 1) + ": " + groups.names(f) + " (scored by G trained with seed " +
-             std::to_string(plan ? plan->seeds[f] : opt.seed + 7919 * (f + 1)) + " on the other groups)\n";
+             std::to_string(groups.seed(f, opt)) + " on the other groups)\n";
     return s;
 }
 
@@ -524,11 +531,10 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                 held.push_back(&c);
             else
                 train.push_back(c);
-        const auto inner = inner_gate_options(opt, plan ? plan->seeds[f] : opt.seed + 7919 * (f + 1));
+        const auto inner = inner_gate_options(opt, groups.seed(f, opt));
         bool reused = false;
         const auto label = "gate " + std::to_string(f + 1) + "/" + std::to_string(F) + " (without " + groups.names(f) + ")";
-        const auto dir = plan ? plan->dirs[f] : work_dir / ("inner" + std::to_string(f + 1));
-        const auto ck = detail::inner_gate_model<Config>(train, info, inner, dir, reuse || plan, label, reused);
+        const auto ck = detail::inner_gate_model<Config>(train, info, inner, groups.dir(f, work_dir), reuse || plan, label, reused);
         reused_folds += reused;
         auto ck_info = ck.second;
         // a reused inner model may have been fitted with another tempo option: the tempo training would store now
