@@ -1,8 +1,9 @@
-// The Cortex-M7 firmware: runs handemo::micro::generator on the self-test of a header written by
-// `handemo export --header` (weights in flash, activations in static RAM, no heap), checks the output against
-// the host's (x86) within 1e-5, and counts the instructions of one inference. Under `qemu-system-arm -icount
-// shift=0` virtual time advances by one step per instruction, so SysTick (clocked by the CPU clock) counts
-// instructions in units of a fixed number of instructions per tick, calibrated on a loop of known length.
+// The Cortex-M firmware (a Cortex-M7 or a Cortex-M55: HANDEMO_CORTEX_M_CPU): runs handemo::micro::generator on
+// the self-test of a header written by `handemo export --header` (weights in flash, activations in static RAM,
+// no heap), checks the output against the host's (x86) within 1e-5, and counts the instructions of one
+// inference. Under `qemu-system-arm -icount shift=0` virtual time advances by one step per instruction, so
+// SysTick (clocked by the CPU clock) counts instructions in units of a fixed number of instructions per tick,
+// calibrated on a loop of known length.
 #include HANDEMO_MODEL_HEADER
 #include <handemo/micro.hpp>
 
@@ -64,7 +65,7 @@ int main()
     // instructions = ticks x (2n+1) / calibration ticks, rounded
     const std::uint64_t cal = c1 - c0, inf = t1 - t0;
     const std::uint64_t insns = (inf * (2ull * n + 1) + cal / 2) / cal;
-    semihost::write("cortex-m7 ");
+    semihost::write(HANDEMO_CORTEX_M_CPU " ");
     semihost::write(model::config);
     semihost::write(" self-test target ");
     semihost::write(model::domain_names[model::self_test_target]);

@@ -1,6 +1,6 @@
-// Reset and exception vectors of the Cortex-M7 firmware: enable the FPU, copy .data, zero .bss, run static
-// constructors, call main; SysTick counts its wraps (the instruction counter of main.cpp); a fault reports
-// itself and exits non-zero.
+// Reset and exception vectors of the Cortex-M firmware: enable the FPU (and with it MVE on the Cortex-M55),
+// copy .data, zero .bss, run static constructors, call main; SysTick counts its wraps (the instruction counter
+// of main.cpp); a fault reports itself and exits non-zero.
 #include "semihost.hpp"
 
 #include <cstdint>
@@ -14,7 +14,8 @@ volatile std::uint32_t handemo_systick_wraps = 0;
 
 [[noreturn]] void Reset_Handler()
 {
-    // CPACR: full access to CP10/CP11 (the FPU) before any floating-point instruction
+    // CPACR: full access to CP10/CP11 (the FPU, and MVE on Armv8.1-M) before any floating-point or vector
+    // instruction
     *reinterpret_cast<volatile std::uint32_t*>(0xE000ED88) |= 0xFu << 20;
     __asm__ volatile("dsb\n isb" ::: "memory");
     for (std::uint32_t *s = &_sidata, *d = &_sdata; d < &_edata;) *d++ = *s++;
@@ -39,7 +40,8 @@ __attribute__((section(".isr_vector"), used)) const void* const vectors[16] = {
     reinterpret_cast<const void*>(&Fault_Handler),  // MemManage
     reinterpret_cast<const void*>(&Fault_Handler),  // BusFault
     reinterpret_cast<const void*>(&Fault_Handler),  // UsageFault
-    nullptr, nullptr, nullptr, nullptr,
+    reinterpret_cast<const void*>(&Fault_Handler),  // SecureFault (Armv8-M; reserved on the Cortex-M7)
+    nullptr, nullptr, nullptr,
     reinterpret_cast<const void*>(&Fault_Handler),  // SVCall
     nullptr, nullptr,
     reinterpret_cast<const void*>(&Fault_Handler),  // PendSV
