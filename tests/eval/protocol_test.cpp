@@ -82,6 +82,15 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     REQUIRE(sec != r.sections.end());
     CHECK(sec->markdown.find("| patting | ") != std::string::npos);
     CHECK(sec->markdown.find("| gripping | ") != std::string::npos);
+    // the statistics setting's check and the guard's count: each fold's 4 targets, pooled 8
+    CHECK(sec->markdown.find("| guarded | margin |") != std::string::npos);
+    for (const char* f : {"patting", "gripping"}) {
+        const auto at = sec->markdown.find(std::string("| ") + f + " | ");
+        const auto line = sec->markdown.substr(at, sec->markdown.find('\n', at) - at);
+        CHECK(line.find(" of 4 | ") != std::string::npos);
+        CHECK(line.find("n/a") == std::string::npos);
+    }
+    CHECK(sec->markdown.find(" of 8 |") != std::string::npos);
     long pairs = 0;
     for (const char* f : {"patting", "gripping"}) {
         const auto rows = handemo::eval::detail::csv_rows(read_file(dir / "folds" / f / "gate" / "gate.csv"));

@@ -28,6 +28,7 @@ train_options gate_options(long iters)
     o.threads = 2;
     o.progress_out = nullptr;
     o.checkpoint_every = 1000;
+    o.gate_guard = -1;  // the rule alone; the guard has its own test cases
     return o;
 }
 
@@ -167,6 +168,32 @@ TEST_CASE("change gate: fitted on held-out training contents, stored in the chec
             sum += metrics::keyframe_rmse(extract_keyframes<9>(inner->transfer(in->motion, row.target).motion), extract_keyframes<9>(real->motion));
         }
         CHECK(sum / 3 == doctest::Approx(row.rmse_gated).epsilon(1e-12));
+    }
+
+    // the guard on the same inner models (reused, not trained again): a row keeps the rule's setting only when its
+    // check beat the statistics setting on RMSE by 2% and on recognition; otherwise the statistics setting
+    auto og = o;
+    og.gate_guard = 0.02;
+    const gate_fit gg = fit_change_gate<hand_tiny>(clips, tiny_info(), og, d / "gate", true);
+    CHECK(gg.reused_folds == 2);
+    REQUIRE(gg.rows.size() == g.rows.size());
+    for (std::size_t i = 0; i < gg.rows.size(); ++i) {
+        const auto &a = g.rows[i], &b = gg.rows[i];
+        CHECK(b.rmse_cross == a.rmse_cross);
+        CHECK(b.rmse_cross_statistics == a.rmse_cross_statistics);
+        const bool is_statistics = a.posture == 0 && a.motion == 0 && a.prior == 1;
+        // the RMSE half of the test, from the rows (the recognition half compares posteriors the rows do not hold)
+        if (!is_statistics && !(a.rmse_cross <= 0.98 * a.rmse_cross_statistics)) CHECK(b.guarded);
+        if (is_statistics) CHECK_FALSE(b.guarded);
+        if (b.guarded) {
+            CHECK(b.posture == 0.0);
+            CHECK(b.motion == 0.0);
+            CHECK(b.prior == 1.0);
+        } else {
+            CHECK(b.posture == a.posture);
+            CHECK(b.motion == a.motion);
+            CHECK(b.prior == a.prior);
+        }
     }
 
     // older checkpoints (no gate) load with G's whole change
@@ -409,6 +436,90 @@ TEST_CASE("change gate rule: settings, the choice, the cross-check and the margi
     // when no margin passes, the one whose choices were recognised most
     for (auto& g : m) g[0].hits[0] = 0.5;
     CHECK(choose_gate_margin(m, candidates, 0.0, pooled) == 1);
+}
+
+TEST_CASE("change gate guard: the statistics setting unless the checked choices beat it on RMSE and recognition")
+{
+    const gate_settings set{true};
+    const std::size_t stat = set.statistics(), g = set.index(1, 2, 4);  // g: posture 0.75, motion 0.5, no prior
+    CHECK(set.posture(stat) == 0.0);
+    CHECK(set.motion(stat) == 0.0);
+    CHECK(set.prior_weight(stat) == 1.0);
+    CHECK(gate_settings{false}.statistics() == gate_settings{false}.none());
+    config_info one;
+    one.domains = 1;
+    one.domain_names = {"sad"};
+    // two groups of one pair each: setting g at 8 deg, the statistics setting at 10, every other at 20
+    std::vector<std::vector<gate_tally>> t(2, std::vector<gate_tally>(1, tally_of(set.size(), 1)));
+    for (auto& grp : t) grp[0].rmse[g] = 8, grp[0].rmse[stat] = 10;
+    const gate_cross c = cross_check_gate(t, 0, 0.1, false, stat);
+    CHECK(c.pairs == 2);
+    CHECK(c.rmse == doctest::Approx(16));
+    CHECK(c.base_rmse == doctest::Approx(20));
+    CHECK(gate_guard_passes(c, 0.02, false));   // 16 <= 0.98 x 20
+    CHECK(gate_guard_passes(c, 0.2, false));    // 16 <= 16
+    CHECK_FALSE(gate_guard_passes(c, 0.25, false));  // 16 > 15
+    CHECK_FALSE(gate_guard_passes(gate_cross{}, 0.0, false));  // no pair checked: no evidence for G
+    const gate_fit kept = gate_from_tallies(t, one, set, 0.1, false, 0.02);
+    REQUIRE(kept.rows.size() == 1);
+    CHECK_FALSE(kept.rows[0].guarded);
+    CHECK(kept.motion[0] == gate_grid[2]);
+    CHECK(kept.prior[0] == 0.0);
+    CHECK(kept.rows[0].rmse_cross == doctest::Approx(8));
+    CHECK(kept.rows[0].rmse_cross_statistics == doctest::Approx(10));
+    const gate_fit guarded = gate_from_tallies(t, one, set, 0.1, false, 0.25);
+    REQUIRE(guarded.rows.size() == 1);
+    CHECK(guarded.rows[0].guarded);
+    CHECK(guarded.posture[0] == 0.0);
+    CHECK(guarded.motion[0] == 0.0);
+    CHECK(guarded.prior[0] == 1.0);
+    CHECK(guarded.rows[0].rmse_gated == doctest::Approx(10));  // the row reports the setting kept
+    CHECK(guarded.rows[0].rmse_cross == doctest::Approx(8));   // and the rule's check it failed
+    CHECK(guarded.csv().ends_with(",1\n"));
+    CHECK(kept.csv().ends_with(",0\n"));
+    const gate_fit off = gate_from_tallies(t, one, set, 0.1, false, -1);
+    CHECK_FALSE(off.rows[0].guarded);
+    CHECK(off.motion[0] == gate_grid[2]);
+
+    // recognition: g is chosen under margin 0.1 (score 0.95 of 1) but recognised less than the statistics
+    // setting (1 of 1): the guard keeps the statistics setting even with a lower RMSE and no RMSE margin
+    auto r = t;
+    for (auto& grp : r) grp[0].score[g] = 0.95, grp[0].hits[g] = 1, grp[0].score[stat] = 1, grp[0].hits[stat] = 1;
+    const gate_cross rc = cross_check_gate(r, 0, 0.1, true, stat);
+    CHECK(rc.score == doctest::Approx(1.9));
+    CHECK(rc.base_score == doctest::Approx(2));
+    CHECK_FALSE(gate_guard_passes(rc, 0.0, true));
+    CHECK(gate_guard_passes(rc, 0.0, false));
+    const gate_fit rg = gate_from_tallies(r, one, set, 0.1, true, 0.0);
+    CHECK(rg.rows[0].guarded);
+    CHECK(rg.prior[0] == 1.0);
+    CHECK(rg.rows[0].emotion_cross_statistics == doctest::Approx(1));
+    // as well recognised: G's choice stays
+    for (auto& grp : r) grp[0].score[g] = 1;
+    CHECK_FALSE(gate_from_tallies(r, one, set, 0.1, true, 0.0).rows[0].guarded);
+
+    // groups that disagree: each group's best is the other's worst, so the checked choices score 20 on each
+    // pair against the statistics setting's 10, although pooled the best setting looks like 5
+    std::vector<std::vector<gate_tally>> two(2, std::vector<gate_tally>(1, tally_of(set.size(), 1)));
+    for (auto& grp : two) grp[0].rmse[stat] = 10;
+    two[0][0].rmse[3] = 0, two[1][0].rmse[5] = 0, two[0][0].rmse[5] = 20, two[1][0].rmse[3] = 20;
+    const gate_fit dis = gate_from_tallies(two, one, set, 0.1, false, 0.02);
+    CHECK(dis.rows[0].guarded);
+    CHECK(dis.rows[0].rmse_cross == doctest::Approx(20));
+    CHECK(dis.prior[0] == 1.0);
+
+    // the option: validated, in the handemo preset, stored only when on, and not part of what trained G
+    auto o = handemo_options();
+    CHECK(o.gate_guard == 0.02);
+    CHECK(o.to_json().at("gate_guard") == 0.02);
+    CHECK_FALSE(paper_options().to_json().contains("gate_guard"));
+    o.gate_guard = 1.0;
+    CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("gate_guard"), value_error);
+    o.gate_guard = std::nan("");
+    CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("gate_guard"), value_error);
+    auto a = handemo_options(), b = handemo_options();
+    b.gate_guard = -1;
+    CHECK(handemo::stargan::detail::options_without_gate(a.to_json()) == handemo::stargan::detail::options_without_gate(b.to_json()));
 }
 
 TEST_CASE("posture prior: the keyframe mean of the training pairs' difference emotion - neutral")

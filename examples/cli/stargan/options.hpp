@@ -20,7 +20,7 @@ struct train_overrides {
         lambda_delta, ema, augment;
     std::optional<int> n_critic, gate_folds;
     std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, tempo_shrink;
-    std::optional<double> gate_margin;
+    std::optional<double> gate_margin, gate_guard;
     std::optional<std::string> range;
 };
 
@@ -85,6 +85,10 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "Change gate: choose the margin inside the training set: the least strict of --gate-margin, 0.1, 0.2, 0.3 "
                     "stricter and 'most recognised' whose choices, checked across the gate's own groups, are recognised at "
                     "most --gate-margin below the real clips; no effect with --gate-margin <= -1 (handemo true)");
+    sub->add_option("--gate-guard", o.gate_guard,
+                    "Change gate: keep the statistics setting (the posture prior alone, no G) for a target unless the gate's "
+                    "choices, checked across its own groups, have an RMSE at least this share lower and recognition at least "
+                    "as high; < 0 = off (handemo 0.02)");
     sub->add_option("--tempo-shrink", o.tempo_shrink,
                     "Shrink the learned tempo factors toward keeping the duration by the weight (0, 0.25, .., 1) that best "
                     "predicts left-out training contents' durations (handemo false)");
@@ -119,6 +123,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.gate_margin = o.gate_margin.value_or(p.gate_margin);
     t.gate_posterior = o.gate_posterior.value_or(p.gate_posterior);
     t.gate_auto_margin = o.gate_auto_margin.value_or(p.gate_auto_margin);
+    t.gate_guard = o.gate_guard.value_or(p.gate_guard);
     t.tempo_shrink = o.tempo_shrink.value_or(p.tempo_shrink);
     t.validate();
 }

@@ -707,16 +707,22 @@ namespace detail {
 struct gate_check_sum {
     double pairs = 0, rmse_in = 0, emotion_in = 0, real = 0;  // sums weighted by pairs
     double cross_pairs = 0, rmse_cross = 0, emotion_cross = 0;
+    /// the statistics setting on the checked pairs (tables with its columns only), and the targets the guard set to it
+    double stat_pairs = 0, rmse_stat = 0, emotion_stat = 0, targets = 0, guarded = 0;
     void add(const gate_check_sum& o)
     {
         pairs += o.pairs, rmse_in += o.rmse_in, emotion_in += o.emotion_in, real += o.real;
         cross_pairs += o.cross_pairs, rmse_cross += o.rmse_cross, emotion_cross += o.emotion_cross;
+        stat_pairs += o.stat_pairs, rmse_stat += o.rmse_stat, emotion_stat += o.emotion_stat, targets += o.targets, guarded += o.guarded;
     }
-    /// The table cells "pairs | inside | checked | real |".
+    /// The table cells "pairs | inside | checked | real | statistics checked | guarded |".
     std::string cells() const
     {
         return std::to_string(static_cast<long>(pairs)) + " | " + fmt(rmse_in / pairs) + " / " + fmt(100 * emotion_in / pairs, 1) + "% | " +
-               fmt(rmse_cross / cross_pairs) + " / " + fmt(100 * emotion_cross / cross_pairs, 1) + "% | " + fmt(100 * real / pairs, 1) + "% |";
+               fmt(rmse_cross / cross_pairs) + " / " + fmt(100 * emotion_cross / cross_pairs, 1) + "% | " + fmt(100 * real / pairs, 1) + "% | " +
+               (stat_pairs > 0 ? fmt(rmse_stat / stat_pairs) + " / " + fmt(100 * emotion_stat / stat_pairs, 1) + "% | " +
+                                     std::to_string(static_cast<long>(guarded)) + " of " + std::to_string(static_cast<long>(targets)) + " |"
+                               : std::string("n/a | n/a |"));
     }
 };
 
@@ -747,6 +753,9 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
         };
         const std::size_t c_pairs = col("pairs"), c_rg = col("rmse_gated"), c_eg = col("emotion_gated"), c_rc = col("rmse_cross"),
                           c_ec = col("emotion_cross"), c_er = col("emotion_real");
+        const bool has_stat = std::find(head.begin(), head.end(), "guarded") != head.end();  // made before the guard: n/a
+        const std::size_t c_rs = has_stat ? col("rmse_cross_statistics") : 0, c_es = has_stat ? col("emotion_cross_statistics") : 0,
+                          c_gd = has_stat ? col("guarded") : 0;
         detail::gate_check_sum sum;
         for (std::size_t i = 1; i < lines.size(); ++i) {
             const auto& cells = lines[i];
@@ -758,6 +767,10 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
             const double n = num(c_pairs);
             sum.pairs += n, sum.rmse_in += n * num(c_rg), sum.emotion_in += n * num(c_eg), sum.real += n * num(c_er);
             if (std::isfinite(num(c_rc))) sum.cross_pairs += n, sum.rmse_cross += n * num(c_rc), sum.emotion_cross += n * num(c_ec);
+            if (has_stat) {
+                if (std::isfinite(num(c_rs))) sum.stat_pairs += n, sum.rmse_stat += n * num(c_rs), sum.emotion_stat += n * num(c_es);
+                sum.targets += 1, sum.guarded += num(c_gd);
+            }
         }
         if (sum.pairs <= 0 || sum.cross_pairs <= 0) continue;
         std::string margin = "(fixed)";
@@ -774,9 +787,12 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
         "pairs): **inside** scores the chosen settings on the inner pairs that chose them (optimistic); **checked** is the rule's "
         "choice made on one inner group's pairs and scored on the other group's; **real** is how often the inner classifier "
         "recognises the real inner held-out clips; **margin** the recognition margin used (chosen by the check with "
-        "`--gate-auto-margin`, `gate/gate_margins.csv`). Compare checked with real, and with the held-out stargan row above.\n\n"
-        "| held out | inner pairs | inside: RMSE (deg) / recognised | checked: RMSE (deg) / recognised | real recognised | margin |\n"
-        "|---|---|---|---|---|---|\n" +
+        "`--gate-auto-margin`, `gate/gate_margins.csv`); **statistics checked** is the statistics setting (the posture prior "
+        "alone, no G) on the pairs the check scored, and **guarded** how many target emotions the guard (`--gate-guard`) set to "
+        "it because the check did not beat it. Compare checked with real, and with the held-out stargan row above.\n\n"
+        "| held out | inner pairs | inside: RMSE (deg) / recognised | checked: RMSE (deg) / recognised | real recognised | "
+        "statistics checked: RMSE (deg) / recognised | guarded | margin |\n"
+        "|---|---|---|---|---|---|---|---|\n" +
         rows + "| all | " + total.cells() + " |\n";
     return sec;
 }

@@ -22,6 +22,13 @@
 // gate_margin_candidates() whose checked recognition, pooled over the targets, is at most gate_margin below
 // the real clips' (work_dir/gate_margins.csv). train_options::gate_posterior scores recognition by the
 // classifier's posterior of the target instead of hits (finer on few pairs; the reported shares stay hits).
+// With train_options::gate_guard >= 0 the simpler model is kept unless the check says G earns its place: per
+// target, the rule's checked choices must have a keyframe RMSE at least gate_guard (a share) below that of the
+// statistics setting (gate_settings::statistics(): the posture prior alone, (0, 0, 1), the evaluation's
+// `statistics` row) on the same pairs, and (with recognition) a recognition score at least as high; else the
+// target gets the statistics setting (gate_fit::row::guarded). The statistics setting involves no choice, so its
+// score on those pairs is not optimistic; the rule's checked score is the one above (the margin chosen by
+// gate_auto_margin is chosen on the same check, so the rule's side is, if anything, favoured).
 // (1, 1, 0) is G's whole change, as StarGAN; (0, 0, 0) leaves the input as it is, with the amplitude stage
 // and tempo. The final G is then trained on every training content and the gate (and the prior, from every
 // training content) is stored in its checkpoint; transfer applies it (emotion_model::transfer).
@@ -80,6 +87,11 @@ struct gate_fit {
         /// optimistic, these estimate what the rule gives on contents it did not choose on (with fewer pairs
         /// to choose from than the final gate has, so if anything pessimistic). NaN without a second group.
         double rmse_cross = std::nan(""), emotion_cross = std::nan("");
+        /// The statistics setting (gate_settings::statistics()) on the pairs the check scored: what
+        /// train_options::gate_guard compares the check with. NaN without a second group.
+        double rmse_cross_statistics = std::nan(""), emotion_cross_statistics = std::nan("");
+        /// whether train_options::gate_guard replaced the rule's setting by the statistics setting
+        bool guarded = false;
     };
     std::vector<row> rows;
     double margin = std::nan("");   ///< the recognition margin used (train_options::gate_margin, or the one gate_auto_margin chose)
@@ -87,16 +99,16 @@ struct gate_fit {
     std::size_t reused_folds = 0;   ///< inner models reused (fit_change_gate(..., reuse = true))
 
     /// @brief The rows as CSV (target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs,
-    /// rmse_cross,emotion_cross).
+    /// rmse_cross,emotion_cross,rmse_cross_statistics,emotion_cross_statistics,guarded).
     std::string csv() const
     {
-        std::string s =
-            "target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs,rmse_cross,emotion_cross\n";
-        char b[400];
+        std::string s = "target,posture,motion,prior,rmse_gated,rmse_full,rmse_none,emotion_gated,emotion_full,emotion_real,pairs,rmse_cross,"
+                        "emotion_cross,rmse_cross_statistics,emotion_cross_statistics,guarded\n";
+        char b[480];
         for (const auto& r : rows) {
-            std::snprintf(b, sizeof b, "%s,%.2f,%.2f,%.2f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%zu,%.6f,%.4f\n", r.target.c_str(), r.posture, r.motion,
-                          r.prior, r.rmse_gated, r.rmse_full, r.rmse_none, r.emotion_gated, r.emotion_full, r.emotion_real, r.pairs, r.rmse_cross,
-                          r.emotion_cross);
+            std::snprintf(b, sizeof b, "%s,%.2f,%.2f,%.2f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%zu,%.6f,%.4f,%.6f,%.4f,%d\n", r.target.c_str(), r.posture,
+                          r.motion, r.prior, r.rmse_gated, r.rmse_full, r.rmse_none, r.emotion_gated, r.emotion_full, r.emotion_real, r.pairs,
+                          r.rmse_cross, r.emotion_cross, r.rmse_cross_statistics, r.emotion_cross_statistics, r.guarded ? 1 : 0);
             s += b;
         }
         return s;
@@ -153,7 +165,7 @@ namespace detail {
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "tempo_shrink"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "tempo_shrink"}) o.erase(k);
     return o;
 }
 
@@ -180,6 +192,9 @@ struct gate_settings {
     /// G's whole change without the prior, (1, 1, 0), and no change, (0, 0, 0): gate_grid runs from 1 down to 0
     std::size_t full() const noexcept { return index(0, 0, P() - 1); }
     std::size_t none() const noexcept { return index(G - 1, G - 1, P() - 1); }
+    /// The setting train_options::gate_guard falls back to: the posture prior alone, (0, 0, 1), which with the
+    /// amplitude stage and tempo is the evaluation's statistics row; without the prior, no change (0, 0, 0).
+    std::size_t statistics() const noexcept { return prior ? index(G - 1, G - 1, 0) : none(); }
 };
 
 /// @brief What the held-out pairs of one target gave, per setting: the summed keyframe RMSE, the outputs the
@@ -236,14 +251,23 @@ inline gate_tally pool_gate_tallies(const std::vector<std::vector<gate_tally>>& 
 }
 
 /// @brief The rule checked inside the training set for one target: pooled over the groups, what the setting
-/// chosen without group f (from the other groups' pairs) gave on group f's pairs.
+/// chosen without group f (from the other groups' pairs) gave on group f's pairs, and what one fixed setting
+/// (`base`, for train_options::gate_guard) gave on the same pairs.
 struct gate_cross {
     double rmse = 0, hits = 0, real_hits = 0, pairs = 0;  ///< sums over the scored pairs
-    void add(const gate_cross& x) { rmse += x.rmse, hits += x.hits, real_hits += x.real_hits, pairs += x.pairs; }
+    double score = 0;                                     ///< the rule's recognition score (hits, or posteriors with gate_posterior)
+    double base_rmse = 0, base_hits = 0, base_score = 0;  ///< the fixed setting on the same pairs
+    void add(const gate_cross& x)
+    {
+        rmse += x.rmse, hits += x.hits, real_hits += x.real_hits, pairs += x.pairs, score += x.score;
+        base_rmse += x.base_rmse, base_hits += x.base_hits, base_score += x.base_score;
+    }
 };
 
-/// @brief gate_cross of target t under `margin` (choose_gate_setting on the other groups, scored on each group).
-inline gate_cross cross_check_gate(const std::vector<std::vector<gate_tally>>& tallies, std::size_t t, double margin, bool use_emotion)
+/// @brief gate_cross of target t under `margin` (choose_gate_setting on the other groups, scored on each group),
+/// with setting `base` scored on the same pairs (base_* stay 0 when `base` is not a setting).
+inline gate_cross cross_check_gate(const std::vector<std::vector<gate_tally>>& tallies, std::size_t t, double margin, bool use_emotion,
+                                   std::size_t base = static_cast<std::size_t>(-1))
 {
     gate_cross r;
     const std::size_t F = tallies.size();
@@ -254,9 +278,21 @@ inline gate_cross cross_check_gate(const std::vector<std::vector<gate_tally>>& t
         others[f] = false;
         const std::size_t s = choose_gate_setting(pool_gate_tallies(tallies, t, others), margin, use_emotion);
         if (s == x.rmse.size()) continue;
-        r.rmse += x.rmse[s], r.hits += x.hits[s], r.real_hits += x.real_hits, r.pairs += x.pairs;
+        r.rmse += x.rmse[s], r.hits += x.hits[s], r.real_hits += x.real_hits, r.pairs += x.pairs, r.score += x.score[s];
+        if (base < x.rmse.size()) r.base_rmse += x.rmse[base], r.base_hits += x.hits[base], r.base_score += x.score[base];
     }
     return r;
+}
+
+/// @brief train_options::gate_guard's test for one target's check (cross_check_gate() with the statistics setting
+/// as `base`): whether the rule's checked choices beat the statistics setting on the same pairs, with a keyframe
+/// RMSE at most (1 - guard) times its RMSE and, when `use_emotion`, a recognition score at least as high. False
+/// when the check scored no pair (no evidence for G).
+inline bool gate_guard_passes(const gate_cross& c, double guard, bool use_emotion)
+{
+    if (c.pairs == 0) return false;
+    if (!(c.rmse <= (1 - guard) * c.base_rmse)) return false;
+    return !use_emotion || c.score >= c.base_score - 1e-9 * c.pairs;
 }
 
 /// @brief train_options::gate_auto_margin's choice among `candidates` (gate_margin_candidates()): the least
@@ -433,9 +469,11 @@ inline std::string gate_margins_csv(const std::vector<double>& candidates, const
 
 /// @brief The gate of every target from the inner groups' tallies ([group][target]) under `margin`: the weights
 /// choose_gate_setting() picks on the pairs pooled over the groups, and a row per target with pairs (its RMSE
-/// and recognition at the chosen setting, G's whole change and no change, and the rule's cross-check).
+/// and recognition at the chosen setting, G's whole change and no change, and the rule's cross-check). With
+/// `guard` >= 0 (train_options::gate_guard) a target whose check fails gate_guard_passes() gets the statistics
+/// setting instead.
 inline gate_fit gate_from_tallies(const std::vector<std::vector<gate_tally>>& tallies, const config_info& info, const gate_settings& set,
-                                  double margin, bool use_emotion)
+                                  double margin, bool use_emotion, double guard = -1)
 {
     const std::size_t C = info.domains;
     gate_fit g;
@@ -449,8 +487,10 @@ inline gate_fit gate_from_tallies(const std::vector<std::vector<gate_tally>>& ta
         const gate_tally all = pool_gate_tallies(tallies, t, std::vector<bool>(tallies.size(), true));
         if (all.pairs == 0) continue;
         const double n = all.pairs;
-        const std::size_t best = choose_gate_setting(all, margin, use_emotion);
-        const gate_cross cross = cross_check_gate(tallies, t, margin, use_emotion);
+        std::size_t best = choose_gate_setting(all, margin, use_emotion);
+        const gate_cross cross = cross_check_gate(tallies, t, margin, use_emotion, set.statistics());
+        const bool guarded = guard >= 0 && best != set.statistics() && !gate_guard_passes(cross, guard, use_emotion);
+        if (guarded) best = set.statistics();
         g.posture[t] = set.posture(best);
         g.motion[t] = set.motion(best);
         g.prior[t] = set.prior_weight(best);
@@ -458,9 +498,11 @@ inline gate_fit gate_from_tallies(const std::vector<std::vector<gate_tally>>& ta
                         all.rmse[set.none()] / n};
         if (use_emotion) r.emotion_gated = all.hits[best] / n, r.emotion_full = all.hits[set.full()] / n, r.emotion_real = all.real_hits / n;
         r.pairs = static_cast<std::size_t>(all.pairs);
+        r.guarded = guarded;
         if (cross.pairs > 0) {
             r.rmse_cross = cross.rmse / cross.pairs;
-            if (use_emotion) r.emotion_cross = cross.hits / cross.pairs;
+            r.rmse_cross_statistics = cross.base_rmse / cross.pairs;
+            if (use_emotion) r.emotion_cross = cross.hits / cross.pairs, r.emotion_cross_statistics = cross.base_hits / cross.pairs;
         }
         g.rows.push_back(r);
     }
@@ -559,15 +601,16 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
                          margin, 100 * p.hits / n, 100 * p.real_hits / n, p.rmse / n, (work_dir / "gate_margins.csv").string().c_str());
         }
     }
-    gate_fit g = gate_from_tallies(tallies, info, set, margin, use_emotion);
+    gate_fit g = gate_from_tallies(tallies, info, set, margin, use_emotion, opt.gate_guard);
     g.reused_folds = reused_folds;
     if (opt.progress_out)
         for (const auto& r : g.rows)
             std::fprintf(opt.progress_out,
                          "gate: %-10s posture %.2f motion %.2f prior %.2f (held-out contents: %.3f deg, G's whole change %.3f, no change %.3f; "
-                         "recognised %.0f%%, G's whole change %.0f%%, real %.0f%%; %zu pairs)\n",
+                         "recognised %.0f%%, G's whole change %.0f%%, real %.0f%%; %zu pairs)%s\n",
                          r.target.c_str(), r.posture, r.motion, r.prior, r.rmse_gated, r.rmse_full, r.rmse_none, 100 * r.emotion_gated,
-                         100 * r.emotion_full, 100 * r.emotion_real, r.pairs);
+                         100 * r.emotion_full, 100 * r.emotion_real, r.pairs,
+                         r.guarded ? "; the statistics setting kept: G's checked choices did not beat it" : "");
     if (writer) write_file_atomic(work_dir / "gate.csv", g.csv()), write_file_atomic(work_dir / "groups.txt", gate_groups_text(clips, opt, plan));
     return g;
 }

@@ -108,6 +108,10 @@ struct train_options {
     /// most gate_margin below the real clips' rate is used; when none is, the best checked one. No effect
     /// when the rule is off (gate_margin <= -1)
     bool gate_auto_margin = false;
+    /// change gate: keep the statistics setting (the posture prior alone, gate_settings::statistics()) for a target
+    /// unless the rule's choices, checked across the gate's own groups, have a keyframe RMSE at least this share
+    /// below the statistics setting's on the same pairs and recognition at least as high (gate.hpp). < 0: off
+    double gate_guard = -1.0;
     /// tempo: shrink the learned duration factors toward 1 in log space by the weight in {0, 0.25, ..., 1} that
     /// predicts left-out training contents' durations best (tempo_fit(..., true), tempo_shrink_fit()); G is the
     /// same with or without it (the images are time-normalised), so a stored model takes it by refit_gate()
@@ -132,6 +136,7 @@ struct train_options {
         if (gate_folds != 0 && !residual) bad("gate_folds needs a residual G (the gate blends G's change)");
         if (shards > 2) bad("shards " + std::to_string(shards) + " is not 0, 1 or 2");
         if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; <= -1: off)");
+        if (!(gate_guard < 1) || std::isnan(gate_guard)) bad("gate_guard " + std::to_string(gate_guard) + " is not below 1 (a share; < 0: off)");
     }
     nlohmann::json to_json() const
     {
@@ -143,6 +148,7 @@ struct train_options {
                 {"augment", augment}, {"gate_folds", gate_folds}, {"gate_prior", gate_prior}, {"gate_margin", gate_margin}};
         if (gate_posterior) j["gate_posterior"] = true;
         if (gate_auto_margin) j["gate_auto_margin"] = true;  // written only when on: older checkpoints' options stay equal
+        if (gate_guard >= 0) j["gate_guard"] = gate_guard;
         if (tempo_shrink) j["tempo_shrink"] = true;
         return j;
     }
@@ -185,6 +191,7 @@ inline train_options handemo_options()
     o.gate_margin = 0.10;
     o.gate_auto_margin = true;
     o.gate_posterior = true;
+    o.gate_guard = 0.02;
     return o;
 }
 
