@@ -1,18 +1,29 @@
-// Inference-only StarGAN generator for small targets (a glove's Cortex-M7): G(x, c) of Chan, Irimia & Ho
-// 2020 (Sec. 3.3, Fig. 3) exactly as stargan::generator::infer computes it, with no exceptions, no heap,
-// no RTTI, no iostreams and no SIMD library: the weights are one flat constexpr float array in PyTorch
+// Inference-only StarGAN generator for small targets (a glove's Cortex-M7 or Cortex-M55): G(x, c) of Chan,
+// Irimia & Ho 2020 (Sec. 3.3, Fig. 3) exactly as stargan::generator::infer computes it, with no exceptions, no
+// heap, no RTTI, no iostreams and no SIMD library: the weights are one flat constexpr float array in PyTorch
 // state_dict order (written by `handemo export --header`, so they sit in flash), the activations live in a
 // workspace whose size is a compile-time constant (static storage or the stack), and the convolutions are
 // plain loops without bounds checks in the inner loop (the order of kernels/reference.hpp, whose
-// conv_geometry they use). This file needs only <cmath>, <concepts>, <cstddef> and that header, so an
-// arm-none-eabi build with -fno-exceptions -fno-rtti pulls in nothing else.
+// conv_geometry they use), or on a core with Helium (MVE floating point) the same loops on MVE vectors
+// through the compiler's <arm_mve.h>. This file needs only <cmath>, <concepts>, <cstddef>, <cstdint>, that
+// header and <arm_mve.h>, so an arm-none-eabi build with -fno-exceptions -fno-rtti pulls in nothing else.
 #pragma once
 
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <cstdint>
 
 #include <handemo/kernels/reference.hpp>
+
+// Helium (MVE with floating point, e.g. -mcpu=cortex-m55): the convolutions' register tiles become MVE vectors
+// (detail::mve below). HANDEMO_MICRO_NO_MVE keeps the plain loops (whatever the compiler vectorises itself).
+#if defined(__ARM_FEATURE_MVE) && (__ARM_FEATURE_MVE & 2) && !defined(HANDEMO_MICRO_NO_MVE)
+#define HANDEMO_MICRO_MVE 1
+#include <arm_mve.h>
+#else
+#define HANDEMO_MICRO_MVE 0
+#endif
 
 namespace handemo::micro {
 
@@ -215,6 +226,144 @@ inline void conv_transpose(const float* x, const float* w, float* y, float* xp) 
         }
 }
 
+#if HANDEMO_MICRO_MVE
+/// The convolutions of detail:: with their register tile in MVE vectors: the tile's NB <= 8 accumulators are
+/// two float32x4_t, each tap adds the weight (a scalar) times the tile's inputs with one vfma per vector, and
+/// the inputs of a strided tile come in one gather; a part of fewer than 4 lanes is predicated (vctp). The
+/// loop order and the padded copies are those of detail::conv_forward and detail::conv_transpose, so the
+/// results agree up to rounding (the Cortex-M55 firmware checks them against each other within 1e-6).
+namespace mve {
+
+/// Word offsets {0, S, 2 S, 3 S} of a tile part whose elements are S apart.
+template <int S>
+inline uint32x4_t lane_offsets() noexcept
+{
+    alignas(16) static constexpr std::uint32_t o[4] = {0, std::uint32_t(S), std::uint32_t(2 * S),
+                                                       std::uint32_t(3 * S)};
+    return vldrwq_u32(o);
+}
+
+/// x[S t] for t < L (L <= 4) in lanes 0..L-1, zeros above.
+template <int S, int L>
+inline float32x4_t load(const float* x, uint32x4_t off) noexcept
+{
+    if constexpr (S == 1 && L == 4) return vldrwq_f32(x);
+    else if constexpr (S == 1) return vldrwq_z_f32(x, vctp32q(L));
+    else if constexpr (L == 4) return vldrwq_gather_shifted_offset_f32(x, off);
+    else return vldrwq_gather_shifted_offset_z_f32(x, off, vctp32q(L));
+}
+
+/// y[S t] = lane t of v for t < L (L <= 4).
+template <int S, int L>
+inline void store(float* y, float32x4_t v, uint32x4_t off) noexcept
+{
+    if constexpr (S == 1 && L == 4) vstrwq_f32(y, v);
+    else if constexpr (S == 1) vstrwq_p_f32(y, v, vctp32q(L));
+    else if constexpr (L == 4) vstrwq_scatter_shifted_offset_f32(y, off, v);
+    else vstrwq_scatter_shifted_offset_p_f32(y, off, v, vctp32q(L));
+}
+
+/// NB <= 8 accumulators of one tile: lanes 0..L0-1 of a0 and 0..L1-1 of a1; the inputs of accumulator t are
+/// S apart (SX) and its outputs SY apart.
+template <int NB, int SX, int SY>
+struct tile {
+    static_assert(NB >= 1 && NB <= 8, "micro::mve::tile: 1 to 8 accumulators");
+    static constexpr int L0 = NB < 4 ? NB : 4, L1 = NB - L0;
+    float32x4_t a0 = vdupq_n_f32(0.f), a1 = vdupq_n_f32(0.f);
+
+    /// acc[t] += wv x[SX t], t < NB
+    void fma(float wv, const float* x, uint32x4_t off) noexcept
+    {
+        const float32x4_t x0 = load<SX, L0>(x, off);  // not inside the intrinsic: arm_mve.h's are macros
+        a0 = vfmaq_n_f32(a0, x0, wv);
+        if constexpr (L1 > 0) {
+            const float32x4_t x1 = load<SX, L1>(x + 4 * SX, off);
+            a1 = vfmaq_n_f32(a1, x1, wv);
+        }
+    }
+    /// y[SY t] = acc[t], t < NB
+    void store_to(float* y, uint32x4_t off) const noexcept
+    {
+        store<SY, L0>(y, a0, off);
+        if constexpr (L1 > 0) store<SY, L1>(y + 4 * SY, a1, off);
+    }
+};
+
+/// detail::conv_forward with MVE tiles (same arguments, same result up to rounding). Out of line: inlined into
+/// generator::infer_padded, GCC 12 spills more and the inference takes 7% more instructions.
+template <kernels::conv_geometry G>
+[[gnu::noinline]] inline void conv_forward(const float* x, const float* w, float* y, float* xp) noexcept
+{
+    constexpr int Cin = G.in_channels, KH = G.kernel_h, KW = G.kernel_w, S = G.stride, P = G.pad;
+    constexpr int Hp = G.in_h + 2 * P, Wp = G.in_w + 2 * P, oh = G.out_h(), ow = G.out_w(), NB = row_tile(ow);
+    static_assert(G.batch == 1 && G.valid(), "micro::mve::conv_forward: batch-1 geometry");
+    pad_copy<Cin, G.in_h, G.in_w, P, P>(x, xp);
+    const uint32x4_t off = lane_offsets<S>();
+    for (int o = 0; o < G.out_channels; ++o) {
+        const float* wo = w + o * Cin * KH * KW;
+        for (int i = 0; i < oh; ++i)
+            for (int j0 = 0; j0 < ow; j0 += NB) {
+                tile<NB, S, 1> acc;
+                const float* wk = wo;
+                for (int c = 0; c < Cin; ++c)
+#pragma GCC unroll 7
+                    for (int u = 0; u < KH; ++u) {
+                        const float* xr = xp + (c * Hp + i * S + u) * Wp + j0 * S;
+#pragma GCC unroll 7
+                        for (int v = 0; v < KW; ++v) acc.fma(*wk++, xr + v, off);
+                    }
+                acc.store_to(y + (o * oh + i) * ow + j0, off);
+            }
+    }
+}
+
+/// detail::conv_transpose with MVE tiles (same arguments, same result up to rounding): a tile's inputs are
+/// consecutive, its outputs G.stride apart. When the stride divides the kernel (G's 4 x 4, stride 2), every
+/// output takes kernel / stride taps along each axis whatever its residue class, so those loops have a
+/// compile-time count and unroll; other geometries run detail::conv_transpose.
+template <kernels::conv_geometry G>
+[[gnu::noinline]] inline void conv_transpose(const float* x, const float* w, float* y, float* xp) noexcept
+{
+    constexpr int Co = G.out_channels, Cy = G.in_channels, KH = G.kernel_h, KW = G.kernel_w, S = G.stride, P = G.pad;
+    constexpr int oh = G.out_h(), ow = G.out_w(), MH = convt_margin(KH, S), MW = convt_margin(KW, S);
+    constexpr int Hp = oh + 2 * MH, Wp = ow + 2 * MW, cnt = G.in_w / S, NB = row_tile(cnt);
+    static_assert(G.batch == 1 && G.valid() && G.in_w % S == 0,
+                  "micro::mve::conv_transpose: batch-1 geometry, width a multiple of the stride");
+    if constexpr (KH % S != 0 || KW % S != 0) {
+        detail::conv_transpose<G>(x, w, y, xp);
+    } else {
+        pad_copy<Co, oh, ow, MH, MW>(x, xp);
+        const uint32x4_t off = lane_offsets<S>();
+        for (int c = 0; c < Cy; ++c)
+            for (int h = 0; h < G.in_h; ++h) {
+                const int rh = (h + P) % S;
+                for (int rw = 0; rw < S; ++rw) {
+                    const int q0 = ((rw - P) % S + S) % S;  // first output column with (q + P) mod S == rw
+                    // tap (rh + S mu, rw + S mv) reads input row (h + P - rh) / S - mu and column
+                    // (q0 + P - rw) / S - mv of the tile's first output: both divisions are exact
+                    const float* xc = xp + ((h + P - rh) / S + MH) * Wp + MW + (q0 + P - rw) / S;
+                    const float* wc = w + (c * KH + rh) * KW + rw;
+                    for (int t0 = 0; t0 < cnt; t0 += NB) {
+                        tile<NB, 1, S> acc;
+                        for (int o = 0; o < Co; ++o) {
+                            const float* xo = xc + o * Hp * Wp + t0;
+                            const float* wo = wc + o * Cy * KH * KW;
+#pragma GCC unroll 4
+                            for (int mu = 0; mu < KH / S; ++mu)
+#pragma GCC unroll 4
+                                for (int mv = 0; mv < KW / S; ++mv)
+                                    acc.fma(wo[S * mu * KW + S * mv], xo - mu * Wp - mv, off);
+                        }
+                        acc.store_to(y + (c * G.in_h + h) * G.in_w + q0 + S * t0, off);
+                    }
+                }
+            }
+    }
+}
+
+}  // namespace mve
+#endif
+
 }  // namespace detail
 
 /// @brief In-place InstanceNorm (affine, biased variance, eps 1e-5) and optional ReLU over [ch, m], two-pass
@@ -326,8 +475,13 @@ private:
     static void conv(const float* in, const float*& p, float* o, float* pad) noexcept
     {
         constexpr kernels::conv_geometry g = layout::geometry(gi);
+#if HANDEMO_MICRO_MVE
+        if constexpr (detail::transposed_layer(gi)) detail::mve::conv_transpose<g>(in, p, o, pad);
+        else detail::mve::conv_forward<g>(in, p, o, pad);
+#else
         if constexpr (detail::transposed_layer(gi)) detail::conv_transpose<g>(in, p, o, pad);
         else detail::conv_forward<g>(in, p, o, pad);
+#endif
         p += g.w_size();
     }
 };

@@ -46,6 +46,70 @@ void spin(std::uint32_t n)
     __asm__ volatile("1: subs %0, %0, #1\n bne 1b" : "+r"(n)::"cc");
 }
 
+#if HANDEMO_MICRO_MVE
+// The MVE convolutions (micro::detail::mve) against the plain ones (micro::detail, which test_micro checks
+// against the reference kernels) on the generator's layers and on geometries it does not use: tiles of 1 to
+// 8 pixels (a predicated part of 1 to 3 lanes), gathers of stride 2 and 3, the transposed fallback.
+float cx[4608], cw[9216], cy_plain[4608], cy_mve[4608], cpad[4608];
+std::uint32_t lcg = 12345;
+
+float uniform()
+{
+    lcg = lcg * 1664525u + 1013904223u;
+    return float(lcg >> 8) / 8388608.f - 1.f;
+}
+
+/// max |mve - plain| / max |plain| of convolution G (transposed when T) on uniform(-1, 1) data.
+template <handemo::kernels::conv_geometry G, bool T>
+float mve_error()
+{
+    namespace d = handemo::micro::detail;
+    constexpr std::size_t nx = T ? G.y_size() : G.x_size(), ny = T ? G.x_size() : G.y_size();
+    static_assert(nx <= 4608 && ny <= 4608 && G.w_size() <= 9216 && d::conv_pad_elements(G) <= 4608 &&
+                  (!T || d::convt_pad_elements(G) <= 4608), "mve_error: the geometry does not fit the buffers");
+    for (std::size_t i = 0; i < nx; ++i) cx[i] = uniform();
+    for (std::size_t i = 0; i < G.w_size(); ++i) cw[i] = uniform();
+    for (std::size_t i = 0; i < ny; ++i) cy_plain[i] = cy_mve[i] = 1e9f;
+    if constexpr (T) {
+        d::conv_transpose<G>(cx, cw, cy_plain, cpad);
+        d::mve::conv_transpose<G>(cx, cw, cy_mve, cpad);
+    } else {
+        d::conv_forward<G>(cx, cw, cy_plain, cpad);
+        d::mve::conv_forward<G>(cx, cw, cy_mve, cpad);
+    }
+    float worst = 0.f, scale = 0.f;
+    for (std::size_t i = 0; i < ny; ++i) {
+        worst = std::fmax(worst, std::fabs(cy_mve[i] - cy_plain[i]));
+        scale = std::fmax(scale, std::fabs(cy_plain[i]));
+    }
+    return scale > 0.1f ? worst / scale : 1.f;
+}
+
+float mve_errors()
+{
+    using handemo::kernels::conv_geometry;
+    const float e[] = {
+        mve_error<conv_geometry{1, 8, 12, 24, 8, 7, 7, 1, 3}, false>(),
+        mve_error<conv_geometry{1, 8, 12, 24, 16, 4, 4, 2, 1}, false>(),
+        mve_error<conv_geometry{1, 32, 3, 6, 32, 3, 3, 1, 1}, false>(),
+        mve_error<conv_geometry{1, 8, 12, 24, 3, 7, 7, 1, 3}, false>(),
+        mve_error<conv_geometry{1, 3, 5, 11, 4, 3, 3, 1, 1}, false>(),
+        mve_error<conv_geometry{1, 2, 9, 15, 3, 3, 3, 2, 1}, false>(),
+        mve_error<conv_geometry{1, 3, 6, 9, 2, 2, 3, 1, 0}, false>(),
+        mve_error<conv_geometry{1, 2, 7, 14, 5, 5, 1, 1, 2}, false>(),
+        mve_error<conv_geometry{1, 3, 9, 18, 2, 3, 3, 3, 1}, false>(),
+        mve_error<conv_geometry{1, 16, 6, 12, 32, 4, 4, 2, 1}, true>(),
+        mve_error<conv_geometry{1, 8, 12, 24, 16, 4, 4, 2, 1}, true>(),
+        mve_error<conv_geometry{1, 3, 10, 8, 4, 3, 3, 2, 1}, true>(),
+        mve_error<conv_geometry{1, 2, 9, 12, 3, 3, 3, 3, 0}, true>(),
+        mve_error<conv_geometry{1, 4, 8, 16, 2, 4, 2, 2, 0}, true>(),
+    };
+    float worst = 0.f;
+    for (float v : e) worst = std::fmax(worst, v);
+    return worst;
+}
+#endif
+
 }  // namespace
 
 int main()
@@ -81,5 +145,14 @@ int main()
     semihost::write(" ticks for ");
     semihost::write(2ull * n + 1);
     semihost::write(" instructions)\n");
+#if HANDEMO_MICRO_MVE
+    const float mve = mve_errors();
+    const bool mve_ok = mve <= 1e-6f;
+    semihost::write("MVE convolutions against the plain ones (14 geometries): max relative difference ");
+    semihost::write(std::uint64_t(mve * 1e9f));
+    semihost::write(mve_ok ? " e-9: ok\n" : " e-9: FAILED\n");
+    return ok && mve_ok ? 0 : 1;
+#else
     return ok ? 0 : 1;
+#endif
 }
