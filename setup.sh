@@ -8,8 +8,9 @@
 #        ./setup.sh --golden      also python3-torch, to regenerate the PyTorch golden fixtures and run
 #                                 the side-by-side benchmark (bench/compare.sh)
 #        ./setup.sh --cross       also the cross toolchains and emulators of the CTest label `cross`: aarch64
-#                                 (g++-aarch64-linux-gnu, qemu-user) and Cortex-M7 (gcc-arm-none-eabi,
-#                                 libstdc++-arm-none-eabi-newlib, qemu-system-arm)
+#                                 (g++-aarch64-linux-gnu, qemu-user) and Cortex-M (gcc-arm-none-eabi,
+#                                 libstdc++-arm-none-eabi-newlib, qemu-system-arm: the same packages build and
+#                                 run the Cortex-M7 and the Cortex-M55 firmware)
 #        ./setup.sh --fuzz        also clang 14's runtime libraries (libFuzzer, sanitizers), for the
 #                                 libFuzzer harnesses (-DHANDEMO_FUZZ=ON, tests/fuzz/)
 #        ./setup.sh --mpi         also Debian's Open MPI (libopenmpi-dev, openmpi-bin): training across processes

@@ -46,7 +46,7 @@ void spin(std::uint32_t n)
     __asm__ volatile("1: subs %0, %0, #1\n bne 1b" : "+r"(n)::"cc");
 }
 
-#if HANDEMO_MICRO_MVE
+#if HANDEMO_MICRO_MVE && !defined(HANDEMO_FIRMWARE_NO_MVE_CHECK)
 // The MVE convolutions (micro::detail::mve) against the plain ones (micro::detail, which test_micro checks
 // against the reference kernels) on the generator's layers and on geometries it does not use: tiles of 1 to
 // 8 pixels (a predicated part of 1 to 3 lanes), gathers of stride 2 and 3, the transposed fallback.
@@ -145,7 +145,7 @@ int main()
     semihost::write(" ticks for ");
     semihost::write(2ull * n + 1);
     semihost::write(" instructions)\n");
-#if HANDEMO_MICRO_MVE
+#if HANDEMO_MICRO_MVE && !defined(HANDEMO_FIRMWARE_NO_MVE_CHECK)
     const float mve = mve_errors();
     const bool mve_ok = mve <= 1e-6f;
     semihost::write("MVE convolutions against the plain ones (14 geometries): max relative difference ");
