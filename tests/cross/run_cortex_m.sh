@@ -6,7 +6,7 @@
 # instructions of one inference. The firmware compares its output with the host's (x86) itself.
 #   cortex-m7 (default)  qemu-system-arm -M mps2-an500 -cpu cortex-m7 (test cross_cortex_m)
 #   cortex-m55           qemu-system-arm -M mps3-an547 (Helium: MVE integer and float; test cross_cortex_m55);
-#                        also prints how many MVE instructions the inference's code holds (objdump)
+#                        also prints how many instructions of the micro:: functions are MVE instructions (objdump)
 #   cortex-m55+nomve     the same board, the firmware built for the scalar FPU only
 # Exits 77 (CTest: skipped) when arm-none-eabi-g++ or qemu-system-arm is missing (`./setup.sh --cross`).
 # Usage: run_cortex_m.sh SOURCE_DIR BUILD_DIR MODEL_HEADER [CPU]
@@ -48,12 +48,13 @@ echo "$name: memory map (linker map: $bin/firmware.map)"
 arm-none-eabi-size -A "$elf" | grep -E '^(section|\.isr_vector|\.text|\.rodata|\.ARM\.exidx|\.init_array|\.data|\.bss|\.stack) '
 arm-none-eabi-size -B "$elf"
 if [[ $cpu == cortex-m55 ]]; then
-  # MVE instructions (q registers) in the code of G: the generator's functions, whatever GCC inlined into them
+  # MVE instructions (q registers) in the functions of namespace micro:: (G's, whatever GCC inlined into them, and
+  # the instantiations the firmware's kernel check adds)
   dis=$(arm-none-eabi-objdump -d --no-show-raw-insn -C -marmv8.1-m.main "$elf" |
         awk '/^[0-9a-f]+ <.*>:$/ { keep = /micro::/ } keep && /^ *[0-9a-f]+:\t/')
   total=$(grep -c . <<<"$dis" || true)
   mve=$(grep -cE '\bq[0-7]\b' <<<"$dis" || true)
-  echo "$name: MVE instructions in micro::generator's code: $mve of $total"
+  echo "$name: MVE instructions in the firmware's micro:: functions: $mve of $total"
   grep -qE '\bq[0-7]\b' <<<"$dis" || { echo "$name: no MVE instruction in the inference's code"; exit 1; }
 fi
 out=$(timeout 300 qemu-system-arm "${machine[@]}" -nographic -monitor none -serial none \
