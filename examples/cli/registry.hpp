@@ -15,6 +15,7 @@ class method_extension;
 }
 namespace handemo::dist {
 class shard_exchange;
+class process_group;
 }
 
 namespace handemo::cli {
@@ -50,11 +51,13 @@ struct add_eval_extension {
     explicit add_eval_extension(eval_extension_entry e) { eval_extensions().push_back(std::move(e)); }
 };
 
-/// `handemo train --mpi`: set by cmd_mpi.cpp, the one unit that includes MPI, when the CLI is built with MPI (target
-/// handemo::mpi); empty otherwise. `start` initialises MPI once and returns the processes' exchange; `abort` ends
-/// every process after an error in one of them (the others may wait for it in a collective).
+/// `handemo train --mpi` and `handemo eval --mpi`: set by cmd_mpi.cpp, the one unit that includes MPI, when the CLI is
+/// built with MPI (target handemo::mpi); empty otherwise. `start` initialises MPI once and returns the processes'
+/// exchange (train), `group` the same processes as a group (eval); `abort` ends every process after an error in one
+/// of them (the others may wait for it in a collective).
 struct mpi_hooks {
     std::function<handemo::dist::shard_exchange*()> start;
+    std::function<handemo::dist::process_group*()> group;
     std::function<void()> abort;
 };
 

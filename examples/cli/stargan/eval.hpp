@@ -2,7 +2,8 @@
 // emotion transfer against captured motion and baselines (the hand paper's Section 5 future work); writes
 // report.md, results.csv, summary.csv, summary.svg and per-fold models and loss curves into OUT_DIR.
 // `--synth-seed S` (the synthetic hand set's seed) adds the "oracle" row (synthesize_as(), synth.hpp). Built with
-// xtensor-blas, cmd_rcm.cpp adds the circumplex method (on by default, `--no-rcm`) through eval_extensions().
+// xtensor-blas, cmd_rcm.cpp adds the circumplex method (on by default, `--no-rcm`) through eval_extensions(). Built
+// with MPI, `--mpi` deals the trainings over the processes mpirun or srun starts (cmd_mpi.cpp; docs/scale-out.md).
 #pragma once
 
 #include "../build_info.hpp"
@@ -12,6 +13,7 @@
 #include <handemo/eval/protocol.hpp>
 
 #include <cstdint>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -28,6 +30,7 @@ struct eval_cli {
     std::string command;
     bool continuous = false;  ///< measure the continuous control (eval_options::continuous) with the --circumplex table
     std::string circumplex;
+    bool mpi = false;  ///< --mpi: the trainings dealt over the MPI processes (eval_options::group, cmd_mpi.cpp)
 };
 
 void run_eval_cli(eval_cli& o)
@@ -38,6 +41,20 @@ void run_eval_cli(eval_cli& o)
     o.opt.commit = handemo::cli::build_commit();  // printed in the report: the code that made it
     if (o.has_synth_seed) o.opt.synth_seed = o.synth_seed;
     if (o.continuous) o.opt.continuous = o.circumplex.empty() ? transfer_cmd::default_circumplex().string() : o.circumplex;
+    if (o.mpi) {
+        o.opt.group = handemo::cli::mpi().group();  // one process: as without --mpi
+    } else {  // started by a launcher as one of several processes: each would run the whole evaluation into one folder
+        for (const char* var : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+            if (const char* n = std::getenv(var); n && std::atoi(n) > 1)
+                throw value_error(std::string("eval: started as one of ") + n + " processes (" + var + ") without --mpi: each would " +
+                                  "run the whole evaluation into the same report folder; add --mpi" +
+                                  (handemo::cli::mpi().group ? "" : " (in a handemo built with MPI)") + " or start one process");
+    }
+    if (o.opt.group && !o.opt.group->writes_files()) {  // process 0 alone prints and writes the report
+        o.opt.progress_out = nullptr;
+        (void)eval::run_eval_named(o.data, o.config, o.opt, o.report);
+        return;
+    }
     const auto r = eval::run_eval_named(o.data, o.config, o.opt, o.report);
     std::cout << "eval: " << r.folds.size() << " folds, " << r.samples.size() << " scored clips in " << r.seconds / 60.0
               << " min; wrote " << o.report << "/report.md, results.csv, summary.csv, summary.svg\n";
@@ -79,6 +96,16 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
                     "the folds then scored one by one; the models are bit for bit those of --jobs 1")
         ->capture_default_str()
         ->check(CLI::Range(std::size_t{1}, std::size_t{64}));
+    if (!handemo::cli::mpi().group)  // built without MPI: --mpi says why it is absent
+        sub->add_flag_callback("--mpi", [] {
+            throw handemo::value_error("eval: --mpi: this handemo was built without MPI (libopenmpi-dev; docs/scale-out.md)");
+        }, "Run as one of several MPI processes (not built here: needs MPI)");
+    else
+        sub->add_flag("--mpi", o->mpi,
+                      "Run as one of the MPI processes mpirun or srun starts: the trainings dealt round the processes in two waves "
+                      "(the change gate's inner models, then the folds' final Gs; --jobs at a time on each), the report folder "
+                      "on a file system every process sees; process 0 scores the folds, prints and writes the report, that of "
+                      "one process bit for bit");
     sub->add_option_function<std::string>(
            "--gate-groups", [o](const std::string& v) { o->opt.gate_grouping = handemo::eval::parse_gate_groups(v); },
            "The change gate's inner groups: shared (inner models shared by the folds: 8 trainings instead of 14 for 7 contents) "

@@ -1,5 +1,6 @@
-// The MPI transport of data-parallel training (target handemo::mpi, any MPI 3 library; Debian's Open MPI is
-// the one tested): the process's MPI lifetime and a dist::shard_exchange over a communicator. Each part is
+// The MPI transport of work across processes (target handemo::mpi, any MPI 3 library; Debian's Open MPI is
+// the one tested): the process's MPI lifetime, a dist::shard_exchange (data-parallel training) and a
+// dist::process_group (the evaluation's trainings dealt over processes) over a communicator. Each part is
 // broadcast from its owner, parts in rank order, so every process receives every part bit for bit and the
 // trainer adds them in part order itself (MPI_Allreduce would add them in an order of its own choosing,
 // which changes with the number of processes and the library). Only this header includes <mpi.h>.
@@ -7,6 +8,7 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/dist/exchange.hpp>
+#include <handemo/dist/group.hpp>
 
 #include <mpi.h>
 
@@ -90,6 +92,35 @@ public:
     }
     /// @brief Waits for every process of the communicator (e.g. before reading what rank 0 wrote).
     void barrier() { detail::check_mpi(MPI_Barrier(comm_), "MPI_Barrier"); }
+
+private:
+    MPI_Comm comm_;
+    std::size_t rank_ = 0, ranks_ = 1;
+};
+
+/// @brief A process_group over an MPI communicator (MPI_COMM_WORLD unless given): rank and size are the
+/// communicator's; barrier() is MPI_Barrier, all_gather() MPI_Allgather of doubles (a copy, no arithmetic).
+class mpi_group final : public process_group {
+public:
+    explicit mpi_group(MPI_Comm comm = MPI_COMM_WORLD) : comm_(comm)
+    {
+        int r = 0, n = 0;
+        detail::check_mpi(MPI_Comm_rank(comm_, &r), "MPI_Comm_rank");
+        detail::check_mpi(MPI_Comm_size(comm_, &n), "MPI_Comm_size");
+        rank_ = std::size_t(r);
+        ranks_ = std::size_t(n);
+    }
+    std::size_t rank() const noexcept override { return rank_; }
+    std::size_t ranks() const noexcept override { return ranks_; }
+    void barrier() override { detail::check_mpi(MPI_Barrier(comm_), "MPI_Barrier"); }
+    void all_gather(std::span<const double> mine, std::span<double> all) override
+    {
+        if (all.size() != mine.size() * ranks_ || mine.size() > std::size_t(INT_MAX))
+            throw value_error("mpi: all_gather: " + std::to_string(mine.size()) + " values per process and room for " +
+                              std::to_string(all.size()) + ", not " + std::to_string(ranks_) + " times as many");
+        detail::check_mpi(MPI_Allgather(mine.data(), int(mine.size()), MPI_DOUBLE, all.data(), int(mine.size()), MPI_DOUBLE, comm_),
+                          "MPI_Allgather");
+    }
 
 private:
     MPI_Comm comm_;

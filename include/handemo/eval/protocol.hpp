@@ -11,6 +11,7 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/progress.hpp>
+#include <handemo/dist/group.hpp>
 #include <handemo/metrics/baselines.hpp>
 #include <handemo/metrics/classifier.hpp>
 #include <handemo/metrics/full_rate_judge.hpp>
@@ -85,8 +86,17 @@ struct eval_options {
     /// form per-fold groups.
     gate_groups gate_grouping = gate_groups::shared;
     /// Trainings run at once (each with train.threads threads, 1 when that is 0): above 1 every model is trained
-    /// before the first fold is scored (schedule.hpp, train_all()), bit for bit the models of 1.
+    /// before the first fold is scored (schedule.hpp, train_all()), bit for bit the models of 1. In a group, per process.
     std::size_t jobs = 1;
+    /// The processes the trainings are dealt over (dist/group.hpp; dist::mpi_group, `handemo eval --mpi`). Null or one
+    /// process: this process trains everything. With R > 1, every process calls run_eval() with the same clips,
+    /// options and out_dir (a folder every process sees); the plan's trainings run in waves dealt round the processes
+    /// (schedule.hpp, run_training_waves()), then process 0 alone scores every fold, prints and writes the report, bit
+    /// for bit the single-process one's models and results.csv with the same train.threads (0: each process's cores
+    /// when jobs is 1, as one process with jobs 1). The other processes print nothing and return a result without
+    /// folds. An error in a process is thrown there alone and the others wait for it at the wave's end: the caller
+    /// ends them (the CLI: MPI_Abort).
+    dist::process_group* group = nullptr;
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
@@ -155,6 +165,8 @@ inline std::string options_text(const eval_options& o)
     s += "batch 16\nthreads " + std::to_string(o.train.threads) + "\nshards " + std::to_string(o.train.shards) +
          " (0: one on one thread, else two halves of the batch)\nfold seed train.seed + fold index\n";
     s += std::string("gate groups ") + to_string(o.gate_grouping) + "\ntrainings at once " + std::to_string(o.jobs) + "\n";
+    if (o.group && o.group->ranks() > 1)
+        s += "processes " + std::to_string(o.group->ranks()) + " (the trainings dealt round them in waves, the folds scored by process 0)\n";
     s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
     s += std::string("inference weights ") + kernels::weight_storage_name(o.inference_weights) + "\n";
     if (o.synth_seed) s += "synthetic set seed " + std::to_string(*o.synth_seed) + " at " + std::to_string(o.synth_fps) + " fps (oracle row)\n";
@@ -358,7 +370,8 @@ void train_fold_model(const std::vector<labelled_clip>& train, const stargan::co
 /// (the shared plan's, or each fold's own), then each fold's final G once its inner models exist (its gate is
 /// fitted around them, reused). With opt.reuse_models a fold whose checkpoint exists is left to the fold loop,
 /// and only the inner models of a stored gate fitted with other groups are trained here. Each training runs with
-/// train.threads threads (1 when that is 0) and no progress bar of its own; one line per finished training.
+/// train.threads threads (1 when that is 0 and opt.jobs > 1) and no progress bar of its own; one line per finished
+/// training. With a group of several processes, each trains its share of every wave (run_training_waves()).
 /// @return per fold, the seconds its final G took (-1: left to the fold loop, reused)
 template <stargan::stargan_config Config, std::size_t K>
 std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const stargan::config_info& info, const eval_options& opt,
@@ -390,7 +403,7 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
         f.train = split_fold(all, f.held).train;
         f.to = fold_train_options(opt, contents, f.held);
         f.to.progress_out = nullptr;
-        if (f.to.threads == 0) f.to.threads = 1;
+        if (f.to.threads == 0 && opt.jobs > 1) f.to.threads = 1;
         f.plan = fold_gate_plan(opt, contents, f.held, out_dir);
         f.dir = out_dir / "folds" / f.held;
         f.stored = opt.reuse_models && path_exists(f.dir / "checkpoint.safetensors");
@@ -431,7 +444,7 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
                             bool reused = false;
                             stargan::detail::inner_gate_model<Config>(inner_train[i], info, inner_opts[i], inner_dirs[i], true, "", reused);
                         },
-                        {}, 0});
+                        {}, 0, inner_dirs[i] / "checkpoint.safetensors"});
     }
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         auto& f = fj[fi];
@@ -443,13 +456,18 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
                             // its inner models were trained by the jobs it waits on
                             train_fold_model<Config>(g.train, info, g.to, g.held, g.dir, g.sum, g.plan ? &*g.plan : nullptr, true);
                         },
-                        std::move(after), 0});
+                        std::move(after), 0, f.dir / "checkpoint.safetensors"});
     }
+    const std::size_t processes = opt.group ? opt.group->ranks() : 1;
+    const std::string where = processes > 1 ? " on each of " + std::to_string(processes) + " processes" : "";
     if (opt.progress_out)
-        std::fprintf(opt.progress_out, "eval: training %zu models (%zu for the change gates, %zu folds), %zu at a time\n", jobs.size(),
-                     inner_dirs.size(), jobs.size() - inner_dirs.size(), opt.jobs),
+        std::fprintf(opt.progress_out, "eval: training %zu models (%zu for the change gates, %zu folds), %zu at a time%s\n", jobs.size(),
+                     inner_dirs.size(), jobs.size() - inner_dirs.size(), opt.jobs, where.c_str()),
             std::fflush(opt.progress_out);
-    run_training_jobs(jobs, opt.jobs, opt.progress_out, "eval " + info.name + ": training");
+    if (processes > 1)
+        run_training_waves(jobs, *opt.group, opt.jobs, opt.progress_out, "eval " + info.name + ": training");
+    else
+        run_training_jobs(jobs, opt.jobs, opt.progress_out, "eval " + info.name + ": training");
     for (std::size_t fi = 0; fi < folds.size(); ++fi)
         if (final_job[fi] != SIZE_MAX) seconds[fi] = jobs[final_job[fi]].seconds;
     return seconds;
@@ -800,7 +818,8 @@ inline report_section gate_check_section(const eval_result& r, const std::filesy
 /// @brief Runs the leave-one-content-out evaluation for one configuration.
 /// @param clips the whole labelled data set (load_folder())
 /// @param out_dir the report folder: per-fold models and loss curves go to out_dir/folds/<content>/
-/// @return every record; the caller writes the report with write_report() (run_eval_named() does).
+/// @return every record; the caller writes the report with write_report() (run_eval_named() does). In a group
+///         (eval_options::group), only process 0's holds the folds; the others' has the header fields alone.
 /// @throws value_error for an unknown held-out content, a data set with a single content, or no neutral takes
 ///         in a fold; with opt.synth_seed, for a clip name that is not a synthetic take or a neutral clip the seed
 ///         does not reproduce; the errors of training and transfer otherwise.
@@ -811,6 +830,12 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
     namespace fs = std::filesystem;
     using clock = std::chrono::steady_clock;
     constexpr std::size_t K = Config::keyframes;
+    const bool distributed = opt.group && opt.group->ranks() > 1;
+    if (distributed && !opt.group->writes_files() && opt.progress_out) {  // process 0 alone prints
+        eval_options quiet = opt;
+        quiet.progress_out = nullptr;
+        return run_eval<Config>(clips, info, quiet, out_dir);
+    }
     const auto t_start = clock::now();
     opt.train.validate();
     const auto contents = stargan::contents_of(clips);
@@ -837,9 +862,11 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
         continuous_table = load_circumplex(opt.continuous);
         for (const auto& d : info.domain_names) continuous_table->at(d, opt.continuous);
     }
-    // with jobs > 1, every model first (schedule.hpp), then the folds are scored with them one by one
+    // with jobs > 1 or several processes, every model first (schedule.hpp), then the folds are scored with them one by
+    // one, by process 0 alone
     std::vector<double> pretrained_seconds;
-    if (opt.jobs > 1) pretrained_seconds = detail::train_all<Config>(all, info, opt, contents, folds, out_dir);
+    if (opt.jobs > 1 || distributed) pretrained_seconds = detail::train_all<Config>(all, info, opt, contents, folds, out_dir);
+    if (distributed && !opt.group->writes_files()) return res;
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         const std::string& held = folds[fi];
         const auto split = detail::split_fold(all, held);
@@ -998,7 +1025,7 @@ inline eval_result run_eval_named(const std::filesystem::path& data, const std::
     auto res = stargan::with_config(config, [&]<stargan::stargan_config C>(const stargan::config_info& info) {
         return run_eval<C>(clips, info, opt, out_dir);
     });
-    write_report(res, out_dir);
+    if (!opt.group || opt.group->writes_files()) write_report(res, out_dir);  // in a group, process 0 alone
     return res;
 }
 

@@ -19,17 +19,31 @@
 // threads, each with train.threads threads (1 when it is 0 and jobs > 1); a final G waits for its two inner
 // models. Training is deterministic for a seed and thread count, so the models are bit for bit those of
 // training them one after another (a test checks it), and the folds are then scored one by one with them.
+//
+// Across the processes of a group (eval_options::group, dist/group.hpp; `handemo eval --mpi`), run_training_waves()
+// runs the same plan in waves: wave 1 is every job that waits on none (the inner models), wave 2 every job that
+// waits only on wave 1 (the final Gs), and so on. Each wave's jobs, counted in plan order from 0, are dealt round
+// the processes: job i of a wave runs on process i mod R (wave_rank()), so with every fold trained, fold k's final
+// G runs on process k mod R. Each process runs its share of a wave `jobs` at a time, as run_training_jobs() does,
+// and writes the models into the report folder, which every process must see (a shared file system, as on a
+// cluster). At the end of a wave the processes gather every job's seconds (an all-gather, so also a barrier), and
+// every process checks that every model of the wave is there before the next wave reads them. The jobs and seeds
+// are those of one process, so the models are bit for bit those of one process with the same threads per training.
+// Two dependent waves bound the gain: with N + 1 inner models and N final Gs, more than N + 1 processes (times
+// `jobs`) leave some idle, and the evaluation takes at least two trainings' time plus the scoring on process 0.
 #pragma once
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
 #include <handemo/core/progress.hpp>
+#include <handemo/dist/group.hpp>
 #include <handemo/stargan/dataset.hpp>
 #include <handemo/stargan/gate.hpp>
 #include <handemo/stargan/train.hpp>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <condition_variable>
 #include <cstdint>
 #include <cstdio>
@@ -114,6 +128,7 @@ struct training_job {
     std::function<void()> run;       ///< trains (or finds already trained) the model
     std::vector<std::size_t> after;  ///< jobs that must be done first
     double seconds = 0;              ///< how long run() took
+    std::filesystem::path output;    ///< the file run() leaves (in a group, every process checks it after the job's wave)
 };
 
 /// @brief Runs `jobs_list` with up to `jobs` at once, each job only after those it names in `after`, printing a
@@ -182,6 +197,101 @@ inline void run_training_jobs(std::vector<training_job>& jobs_list, std::size_t 
     worker();
     for (auto& t : threads) t.join();
     if (error) std::rethrow_exception(error);
+}
+
+/// @brief The process of a group of `ranks` that runs job `index` of a wave (the wave's jobs counted in plan order
+/// from 0): index mod ranks, so the processes take the wave's jobs in turn.
+inline std::size_t wave_rank(std::size_t index, std::size_t ranks) noexcept { return ranks == 0 ? 0 : index % ranks; }
+
+/// @brief The wave of each job of a plan: 0 for a job that waits on none, else one after the latest wave it waits on.
+/// @throws value_error for a job waiting on itself or on a later or unknown job.
+inline std::vector<std::size_t> job_waves(const std::vector<training_job>& jobs_list)
+{
+    std::vector<std::size_t> wave(jobs_list.size(), 0);
+    for (std::size_t i = 0; i < jobs_list.size(); ++i)
+        for (std::size_t d : jobs_list[i].after) {
+            if (d >= i) throw value_error("eval: training plan: job '" + jobs_list[i].label + "' waits on a job that is not before it");
+            wave[i] = std::max(wave[i], wave[d] + 1);
+        }
+    return wave;
+}
+
+namespace detail {
+
+/// FNV-1a of the jobs' labels and outputs, in plan order: equal on every process that planned the same jobs. Kept to
+/// 32 bits, so that it travels exactly as a double.
+inline std::uint32_t plan_fingerprint(const std::vector<training_job>& jobs_list)
+{
+    std::uint32_t h = 2166136261u;
+    auto add = [&](const std::string& text) {
+        for (unsigned char c : text) h = (h ^ c) * 16777619u;
+        h = (h ^ 0xffu) * 16777619u;  // a separator no label holds
+    };
+    for (const auto& j : jobs_list) add(j.label), add(j.output.string());
+    return h;
+}
+
+}  // namespace detail
+
+/// @brief Runs `jobs_list` over the processes of `group` in waves (see the header comment): in each wave, this
+/// process runs the jobs wave_rank() gives it, `jobs` at a time (run_training_jobs(), printing to progress_out); then
+/// every job's seconds are gathered from the process that ran it (a collective: also the wave's barrier) and every
+/// process checks that every job of the wave left its output. Every process of the group calls it with the same plan.
+/// On return every job's `seconds` holds the time it took on its process.
+/// @throws value_error, on every process, when the processes planned different jobs (other data or report folders) or
+/// a job's output is not there after its wave (the report folder is not shared, or a process skipped it); the first
+/// error of this process's own jobs, on this process alone: the others then wait for it at the wave's end, so the
+/// caller ends them (the CLI: MPI_Abort through dist::mpi_runtime::abort_all).
+inline void run_training_waves(std::vector<training_job>& jobs_list, dist::process_group& group, std::size_t jobs,
+                               std::FILE* progress_out, const std::string& what)
+{
+    const std::size_t R = group.ranks(), me = group.rank();
+    const auto wave = job_waves(jobs_list);
+    {  // every process planned the same jobs, or none starts
+        const double mine[2] = {static_cast<double>(jobs_list.size()), static_cast<double>(detail::plan_fingerprint(jobs_list))};
+        std::vector<double> all(2 * R);
+        group.all_gather(mine, all);
+        for (std::size_t r = 0; r < R; ++r)
+            if (all[2 * r] != mine[0] || all[2 * r + 1] != mine[1])
+                throw value_error("eval: process " + std::to_string(r) + " of " + std::to_string(R) + " planned " +
+                                  std::to_string(static_cast<std::size_t>(all[2 * r])) + " trainings, process " + std::to_string(me) +
+                                  " " + std::to_string(jobs_list.size()) + (all[2 * r] == mine[0] ? " other ones" : "") +
+                                  ": every process needs the same data, options and report folder (a file system all of them see)");
+    }
+    const std::size_t waves = jobs_list.empty() ? 0 : *std::max_element(wave.begin(), wave.end()) + 1;
+    for (std::size_t w = 0; w < waves; ++w) {
+        std::vector<std::size_t> in_wave, mine;  // the wave's jobs in plan order; those of this process
+        for (std::size_t i = 0; i < jobs_list.size(); ++i)
+            if (wave[i] == w) {
+                if (wave_rank(in_wave.size(), R) == me) mine.push_back(i);
+                in_wave.push_back(i);
+            }
+        if (progress_out)
+            std::fprintf(progress_out, "eval: wave %zu of %zu: %zu trainings dealt round %zu processes, %zu on process %zu, %zu at a time\n",
+                         w + 1, waves, in_wave.size(), R, mine.size(), me, jobs),
+                std::fflush(progress_out);
+        std::vector<training_job> share;  // what waits on earlier waves is done: their barrier has passed
+        for (std::size_t i : mine) share.push_back({jobs_list[i].label, jobs_list[i].run, {}, 0, jobs_list[i].output});
+        run_training_jobs(share, jobs, progress_out, what + " (wave " + std::to_string(w + 1) + ")");
+        std::vector<double> seconds(in_wave.size(), 0.0), all(in_wave.size() * R);
+        for (std::size_t k = 0; k < mine.size(); ++k)
+            seconds[static_cast<std::size_t>(std::find(in_wave.begin(), in_wave.end(), mine[k]) - in_wave.begin())] = share[k].seconds;
+        group.all_gather(seconds, all);
+        double longest = 0;
+        for (std::size_t k = 0; k < in_wave.size(); ++k) {
+            auto& job = jobs_list[in_wave[k]];
+            const std::size_t owner = wave_rank(k, R);
+            job.seconds = all[owner * in_wave.size() + k];
+            longest = std::max(longest, job.seconds);
+            if (!job.output.empty() && !path_exists(job.output))
+                throw value_error("eval: process " + std::to_string(owner) + " of " + std::to_string(R) + " was to leave " +
+                                  job.output.string() + " ('" + job.label + "'), which process " + std::to_string(me) +
+                                  " does not find: the report folder must be on a file system every process sees");
+        }
+        if (progress_out)
+            std::fprintf(progress_out, "eval: wave %zu of %zu done on every process (longest training %.1f min)\n", w + 1, waves, longest / 60),
+                std::fflush(progress_out);
+    }
 }
 
 }  // namespace handemo::eval
