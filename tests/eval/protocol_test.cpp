@@ -8,10 +8,13 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <set>
+#include <span>
 #include <stdlib.h>
 #include <string>
 #include <thread>
@@ -646,6 +649,160 @@ TEST_CASE("training jobs: a job starts only after those it waits on; the first e
     backwards.push_back({"later", [] {}, {}, 0});
     CHECK_THROWS_WITH_AS(run_training_jobs(backwards, 2, nullptr, "test"), doctest::Contains("waits on a job that is not before it"),
                          value_error);
+}
+
+namespace {
+/// A process group of threads (dist/group.hpp) for the tests: a barrier by generations, all_gather through a shared
+/// buffer between two barriers.
+struct thread_group_state {
+    explicit thread_group_state(std::size_t n) : ranks(n) {}
+    std::size_t ranks;
+    std::mutex m;
+    std::condition_variable cv;
+    std::size_t arrived = 0, generation = 0;
+    std::vector<double> buffer;
+};
+class thread_group final : public dist::process_group {
+public:
+    thread_group(thread_group_state& s, std::size_t rank) : s_(s), rank_(rank) {}
+    std::size_t rank() const noexcept override { return rank_; }
+    std::size_t ranks() const noexcept override { return s_.ranks; }
+    void barrier() override
+    {
+        std::unique_lock lock(s_.m);
+        const std::size_t gen = s_.generation;
+        if (++s_.arrived == s_.ranks) {
+            s_.arrived = 0;
+            ++s_.generation;
+            s_.cv.notify_all();
+        } else {
+            s_.cv.wait(lock, [&] { return s_.generation != gen; });
+        }
+    }
+    void all_gather(std::span<const double> mine, std::span<double> all) override
+    {
+        {
+            std::lock_guard lock(s_.m);
+            s_.buffer.resize(mine.size() * s_.ranks);
+            std::copy(mine.begin(), mine.end(), s_.buffer.begin() + static_cast<std::ptrdiff_t>(rank_ * mine.size()));
+        }
+        barrier();
+        {
+            std::lock_guard lock(s_.m);
+            std::copy(s_.buffer.begin(), s_.buffer.end(), all.begin());
+        }
+        barrier();
+    }
+
+private:
+    thread_group_state& s_;
+    std::size_t rank_;
+};
+}  // namespace
+
+TEST_CASE("training waves over a group: each job once, on process (index in its wave) mod R, after its wave's barrier")
+{
+    CHECK(wave_rank(0, 3) == 0);
+    CHECK(wave_rank(4, 3) == 1);
+    CHECK(wave_rank(7, 1) == 0);
+    const fs::path dir = fs::temp_directory_path() / ("handemo_eval_waves_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    // 5 inner models, then 4 final ones each waiting on two of them (as the shared plan of 4 folds), then one more
+    constexpr std::size_t R = 3, n = 10;
+    std::mutex m;
+    std::vector<int> runs(n, 0);
+    std::vector<std::size_t> ran_on(n, R);
+    std::vector<int> order;  // jobs in the order they started, over every process
+    auto plan = [&](std::size_t rank, bool skip) {
+        std::vector<training_job> jobs;
+        for (std::size_t i = 0; i < n; ++i) {
+            std::vector<std::size_t> after;
+            if (i >= 5 && i < 9) after = {i - 5, (i - 4) % 5};
+            if (i == 9) after = {5};
+            jobs.push_back({"job " + std::to_string(i),
+                            [&, i, rank, skip] {
+                                {
+                                    std::lock_guard lock(m);
+                                    ++runs[i], ran_on[i] = rank, order.push_back(static_cast<int>(i));
+                                }
+                                if (!skip) write_file_atomic(dir / ("job" + std::to_string(i)), "done");
+                            },
+                            std::move(after), 0, dir / ("job" + std::to_string(i))});
+        }
+        return jobs;
+    };
+    CHECK(job_waves(plan(0, false)) == std::vector<std::size_t>{0, 0, 0, 0, 0, 1, 1, 1, 1, 2});
+    auto run_group = [&](std::size_t skip_rank, std::vector<std::vector<training_job>>& plans) {
+        thread_group_state state(R);
+        std::vector<std::string> errors(R);
+        std::vector<std::thread> ranks;
+        for (std::size_t r = 0; r < R; ++r) plans.push_back(plan(r, r == skip_rank));
+        for (std::size_t r = 0; r < R; ++r)
+            ranks.emplace_back([&, r] {
+                thread_group g(state, r);
+                try {
+                    run_training_waves(plans[r], g, 2, nullptr, "test");
+                } catch (const value_error& e) {
+                    errors[r] = e.what();
+                }
+            });
+        for (auto& t : ranks) t.join();
+        return errors;
+    };
+    std::vector<std::vector<training_job>> plans;
+    const auto errors = run_group(R, plans);
+    for (const auto& e : errors) CHECK(e.empty());
+    // waves {0..4}, {5..8}, {9}: index in its wave mod 3
+    const std::vector<std::size_t> expect_rank{0, 1, 2, 0, 1, 0, 1, 2, 0, 0};
+    for (std::size_t i = 0; i < n; ++i) {
+        CHECK(runs[i] == 1);
+        CHECK(ran_on[i] == expect_rank[i]);
+    }
+    // no job of a wave starts before every job of the waves before it has ended
+    const auto at = [&](int i) { return std::find(order.begin(), order.end(), i) - order.begin(); };
+    for (int late = 5; late < 9; ++late)
+        for (int early = 0; early < 5; ++early) CHECK(at(early) < at(late));
+    CHECK(at(9) > at(8));
+    // every process knows every job's seconds, from the process that ran it
+    for (std::size_t r = 0; r < R; ++r)
+        for (std::size_t i = 0; i < n; ++i) CHECK(plans[r][i].seconds >= 0);
+
+    // a process that leaves a job's file out: every process names the job and where the others looked
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::fill(runs.begin(), runs.end(), 0);
+    order.clear();
+    std::vector<std::vector<training_job>> skipped;
+    const auto failed = run_group(1, skipped);
+    for (const auto& e : failed) {
+        CHECK(e.find("process 1 of 3 was to leave " + (dir / "job1").string() + " ('job 1')") != std::string::npos);
+        CHECK(e.find("file system every process sees") != std::string::npos);
+    }
+    CHECK(runs[5] == 0);  // wave 2 never started
+
+    // processes that planned other jobs stop before any runs
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::fill(runs.begin(), runs.end(), 0);
+    thread_group_state state(2);
+    std::vector<std::string> errs(2);
+    std::vector<std::thread> two;
+    std::vector<std::vector<training_job>> other{plan(0, false), plan(1, false)};
+    other[1].pop_back();
+    for (std::size_t r = 0; r < 2; ++r)
+        two.emplace_back([&, r] {
+            thread_group g(state, r);
+            try {
+                run_training_waves(other[r], g, 1, nullptr, "test");
+            } catch (const value_error& e) {
+                errs[r] = e.what();
+            }
+        });
+    for (auto& t : two) t.join();
+    for (const auto& e : errs) CHECK(e.find("every process needs the same data, options and report folder") != std::string::npos);
+    CHECK(std::count(runs.begin(), runs.end(), 0) == static_cast<long>(n));
+    fs::remove_all(dir);
 }
 
 TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner model trained once; other groups refit the gate")
