@@ -61,7 +61,7 @@ grep -q "^processes 3 " "$work/three/report.md" || { echo "FAIL: the report does
 mkdir -p "$work/broken/folds"
 touch "$work/broken/folds/gripping"
 rc=0
-timeout 300 "${launch[@]}" -np 2 "$cli" eval --mpi "${common[@]}" --report "$work/broken" >"$work/broken.log" 2>&1 || rc=$?
+timeout 120 "${launch[@]}" -np 2 "$cli" eval --mpi "${common[@]}" --report "$work/broken" >"$work/broken.log" 2>&1 || rc=$?
 if [[ $rc -eq 0 || $rc -eq 124 ]]; then cat "$work/broken.log"; echo "FAIL: a failing process gave exit $rc (124: the others hung)"; exit 1; fi
 grep -q "folds/gripping" "$work/broken.log" || { cat "$work/broken.log"; echo "FAIL: the error does not name the fold's folder"; exit 1; }
 [[ ! -e "$work/broken/results.csv" ]] || { echo "FAIL: a report was written after the error"; exit 1; }
