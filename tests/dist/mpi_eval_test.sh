@@ -2,9 +2,10 @@
 # The evaluation's trainings dealt over MPI processes (`handemo eval --mpi`: eval/schedule.hpp run_training_waves(),
 # dist/mpi.hpp mpi_group). With 2 processes and with 3 (--jobs 2 each), the report folder holds byte for byte what
 # one process writes: every model (the change gate's shared inner models, each fold's final G), each fold's gate and
-# loss log, results.csv and summary.csv; rank 0 alone prints and writes the report. An error in one process ends all
-# of them (the folder one fold's model goes to is a file: the process that trains that fold fails, and no process
-# waits for it). `mpirun -np 2 handemo eval` without --mpi is refused before anything is written.
+# loss log, results.csv and summary.csv, and again with --reuse-models over the finished folder; rank 0 alone prints
+# and writes the report. An error in one process ends all of them (the folder one fold's model goes to is a file: the
+# process that trains that fold fails, and no process waits for it). `mpirun -np 2 handemo eval` without --mpi is
+# refused before anything is written.
 # Usage: mpi_eval_test.sh HANDEMO_CLI MPIEXEC WORK_DIR; exits 77 (skipped) without mpirun.
 set -euo pipefail
 cli=$1
@@ -48,12 +49,20 @@ run() {  # run <np> <log> <eval arguments...>: `handemo eval --mpi` on np proces
   [[ "$lines" == 1 ]] || { cat "$log"; echo "FAIL: $lines summaries printed (rank 0 alone prints)"; exit 1; }
   lines=$(grep -c "^eval: fold 1/4: holding out" "$log" || true)
   [[ "$lines" == 1 ]] || { cat "$log"; echo "FAIL: $lines progress lines for fold 1 (rank 0 alone prints)"; exit 1; }
-  grep -q "^eval: wave 2 of 2 done on every process" "$log" || { cat "$log"; echo "FAIL: no second wave"; exit 1; }
+}
+waves() {  # waves <log>: the inner models and the final Gs were trained in two waves
+  grep -q "^eval: wave 2 of 2 done on every process" "$1" || { cat "$1"; echo "FAIL: no second wave"; exit 1; }
 }
 
 run 2 "$work/two.log" "${common[@]}" --report "$work/two"
+waves "$work/two.log"
 same "2 processes" "$work/two"
+# again over the finished folder with --reuse-models: every process plans no training, the same files
+run 2 "$work/reuse.log" "${common[@]}" --reuse-models --report "$work/two"
+grep -q "^eval: training 0 models" "$work/reuse.log" || { cat "$work/reuse.log"; echo "FAIL: --reuse-models trained again"; exit 1; }
+same "2 processes, --reuse-models" "$work/two"
 run 3 "$work/three.log" "${common[@]}" --jobs 2 --report "$work/three"
+waves "$work/three.log"
 same "3 processes, --jobs 2" "$work/three"
 grep -q "^processes 3 " "$work/three/report.md" || { echo "FAIL: the report does not name the 3 processes"; exit 1; }
 
