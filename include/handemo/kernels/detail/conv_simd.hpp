@@ -495,6 +495,32 @@ inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, cons
     }
 }
 
+/// Whether the packing loops gather whole vectors (float, int32 indices: one index vector per float vector) instead
+/// of one element at a time. The indices are offsets into one batch chunk of the input, so it must have fewer than
+/// 2^31 elements.
+template <class T>
+inline constexpr bool vector_gather_type = std::is_same_v<T, float> && xsimd::batch<std::int32_t>::size == simd_t<T>::size;
+template <class T>
+inline bool use_vector_gather(std::size_t input_elements) noexcept
+{
+    return vector_gather_type<T> && input_elements < std::size_t(INT32_MAX);
+}
+
+/// One vector of a packing loop: x[base + lane] where row + lane's row offset is in [0, h) and col + its column
+/// offset in [0, w), else 0: a gather whose out-of-range lanes read x[0] and are then cleared, so every lane
+/// holds exactly what the element-wise loop stores.
+template <class T>
+inline simd_t<T> gather_window(const T* x, const xsimd::batch<std::int32_t>& index, const xsimd::batch<std::int32_t>& row,
+                               const xsimd::batch<std::int32_t>& col, std::int32_t h, std::int32_t w) noexcept
+{
+    static_assert(vector_gather_type<T>, "gather_window: float with as many int32 lanes");
+    using I = xsimd::batch<std::int32_t>;
+    const auto in = (row >= I(0)) & (row < I(h)) & (col >= I(0)) & (col < I(w));
+    const I safe = xsimd::select(in, index, I(0));
+    const I keep = xsimd::select(in, I(-1), I(0));
+    return simd_t<T>::gather(x, safe) & xsimd::bitwise_cast<simd_t<T>>(keep);
+}
+
 /// Forward pass (also the backward-data of the transposed convolution).
 /// mode 0: y = conv + bias (bias may be null); mode 1: y += conv.
 template <class T>
@@ -526,7 +552,31 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
         for (int k0 = 0; k0 < K; k0 += forward_kc) {
             const int kc = std::min(forward_kc, K - k0);
             // pack V[k][i] = x[n_i, c, ih0_i + u, iw0_i + v] (0 outside), k = (c, u, v)
-            {
+            bool packed = false;
+            if constexpr (vector_gather_type<T>)
+                if (use_vector_gather<T>(std::size_t(g.batch) * g.in_channels * HW)) {
+                packed = true;
+                using I = xsimd::batch<std::int32_t>;
+                I rows[micro_nv], cols[micro_nv], bases[micro_nv];
+                for (int q = 0; q < micro_nv; ++q) {
+                    alignas(64) std::int32_t r[L], cl[L], b[L];
+                    for (int i = 0; i < L; ++i) r[i] = ih0[q * L + i], cl[i] = iw0[q * L + i], b[i] = std::int32_t(xbase[q * L + i]);
+                    rows[q] = I::load_aligned(r), cols[q] = I::load_aligned(cl), bases[q] = I::load_aligned(b);
+                }
+                int c = k0 / (kh * kw), u = (k0 / kw) % kh, v = k0 % kw;
+                T* dst = vp;
+                for (int k = 0; k < kc; ++k) {
+                    const std::int32_t off = std::int32_t(c * HW + std::ptrdiff_t(u) * g.in_w + v);
+                    for (int q = 0; q < micro_nv; ++q)
+                        gather_window<T>(x, bases[q] + I(off), rows[q] + I(u), cols[q] + I(v), g.in_h, g.in_w).store_unaligned(dst + q * L);
+                    dst += MR;
+                    if (++v == kw) {
+                        v = 0;
+                        if (++u == kh) u = 0, ++c;
+                    }
+                }
+            }
+            if (!packed) {
                 int c = k0 / (kh * kw), u = (k0 / kw) % kh, v = k0 % kw;
                 T* dst = vp;
                 for (int k = 0; k < kc; ++k) {
@@ -723,11 +773,31 @@ inline void backward_weight(const conv_geometry& g, const T* x, const T* gy, T* 
             kv[i] = v;
             koff[i] = c * HW + std::ptrdiff_t(u) * g.in_w + v;
         }
+        const bool gather = use_vector_gather<T>(std::size_t(g.in_channels) * HW);
+        using I = xsimd::batch<std::int32_t>;
+        I rows[micro_nv], cols[micro_nv], offs[micro_nv];
+        if constexpr (vector_gather_type<T>)
+            if (gather)
+                for (int q = 0; q < micro_nv; ++q) {
+                alignas(64) std::int32_t r[L], cl[L], o[L];
+                for (int i = 0; i < L; ++i) r[i] = ku[q * L + i], cl[i] = kv[q * L + i], o[i] = std::int32_t(koff[q * L + i]);
+                rows[q] = I::load_aligned(r), cols[q] = I::load_aligned(cl), offs[q] = I::load_aligned(o);
+            }
         for (int n = 0; n < g.batch; ++n) {
             const T* xn = x + std::ptrdiff_t(n) * g.in_channels * HW;
             T* dst = vp;
             for (int p = 0; p < P; ++p) {
                 const int ih0 = (p / ow) * g.stride - g.pad, iw0 = (p % ow) * g.stride - g.pad;
+                if constexpr (vector_gather_type<T>)
+                    if (gather) {
+                        // x[n, c, ih0 + u, iw0 + v] for the lanes' (c, u, v), as offsets from the image's start
+                        const std::int32_t at = std::int32_t(std::ptrdiff_t(ih0) * g.in_w + iw0);
+                        for (int q = 0; q < micro_nv; ++q)
+                            gather_window<T>(xn, offs[q] + I(at), rows[q] + I(ih0), cols[q] + I(iw0), g.in_h, g.in_w)
+                                .store_unaligned(dst + q * L);
+                        dst += MR;
+                        continue;
+                    }
                 const T* base = xn + std::ptrdiff_t(ih0) * g.in_w + iw0;
                 for (int i = 0; i < MR; ++i) {
                     const bool in = unsigned(ih0 + ku[i]) < unsigned(g.in_h) && unsigned(iw0 + kv[i]) < unsigned(g.in_w);
