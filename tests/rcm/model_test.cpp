@@ -354,3 +354,168 @@ TEST_CASE("model: leave-one-content-out with relative features: every fold, the 
     }
     CHECK(aut.relative_folds == relative_folds);
 }
+
+TEST_CASE("model: the variants' parts: shrinkage toward the constant, the inner choice, cluster weights")
+{
+    // shrink_toward: s = 1 keeps the point, s = 0 answers the constant, s = 0.5 the midpoint, quadrant anew
+    rcm::analysis p;
+    p.valence = p.raw_valence = 0.6, p.arousal = 0.4, p.raw_arousal = 1.4;
+    const auto keep = rcm::shrink_toward(p, -0.2, -0.4, 1.0);
+    CHECK(keep.valence == Approx(0.6));
+    CHECK(keep.raw_arousal == Approx(1.4));
+    const auto none = rcm::shrink_toward(p, -0.2, -0.4, 0.0);
+    CHECK(none.valence == Approx(-0.2));
+    CHECK(none.arousal == Approx(-0.4));
+    CHECK(none.quadrant == 3);
+    const auto half = rcm::shrink_toward(p, -0.2, -0.4, 0.5);
+    CHECK(half.valence == Approx(0.2));
+    CHECK(half.arousal == Approx(0.0));
+    CHECK(half.raw_arousal == Approx(0.5));
+    // choose_variant: input 0 points away from the labels (best weight 0: the constant), input 1 overshoots them
+    // twice (weight 0.5 lands on them)
+    const std::vector<rcm::label_point> truth{{"a", 0.8, 0.2}, {"b", -0.6, -0.4}}, constant{{"c", 0, 0}, {"c", 0, 0}};
+    auto point = [](double v, double a) {
+        rcm::analysis x;
+        x.valence = x.raw_valence = v, x.arousal = x.raw_arousal = a;
+        return x;
+    };
+    const std::vector<std::vector<rcm::analysis>> pred{{point(-0.8, -0.2), point(0.6, 0.4)}, {point(1.6, 0.4), point(-1.2, -0.8)}};
+    const auto grid = rcm::shrink_grid();
+    REQUIRE(grid.size() == 11);
+    CHECK(grid.front() == 1.0);
+    CHECK(grid.back() == 0.0);
+    const auto both = rcm::choose_variant(pred, constant, truth, grid);
+    CHECK(both.input == 1);
+    CHECK(both.shrink == Approx(0.5));
+    CHECK(both.distance == Approx(0.0).epsilon(1e-12));
+    const auto only0 = rcm::choose_variant({pred[0]}, constant, truth, grid);
+    CHECK(only0.input == 0);
+    CHECK(only0.shrink == 0.0);
+    CHECK(only0.distance == Approx((std::hypot(0.8, 0.2) + std::hypot(0.6, 0.4)) / 2));
+    const auto fixed = rcm::choose_variant(pred, constant, truth, {1.0});  // no shrinkage: |2l - l| = |l| beats input 0
+    CHECK(fixed.input == 1);
+    CHECK(fixed.distance == Approx((std::hypot(0.8, 0.2) + std::hypot(0.6, 0.4)) / 2));
+    const auto tie = rcm::choose_variant({pred[1], pred[1]}, constant, truth, grid);  // a tie goes to the earlier input
+    CHECK(tie.input == 0);
+    CHECK_THROWS_AS(rcm::choose_variant({{point(0, 0)}}, constant, truth, grid), shape_error);
+    // weighted_point: weights normalised to sum to 1
+    const auto w = rcm::weighted_point({point(1, 0), point(0, 1)}, {30, 10});
+    CHECK(w.valence == Approx(0.75));
+    CHECK(w.arousal == Approx(0.25));
+    CHECK_THROWS_AS(rcm::weighted_point({point(1, 0)}, {0}), value_error);
+    // window shares: per cluster, summing to 1
+    const auto sh = rcm::detail::window_shares({0, 0, 2, 1}, 3);
+    CHECK(sh == std::vector<double>{0.5, 0.25, 0.25});
+    // the options' text
+    CHECK(rcm::parse_shrink("none") == std::vector<double>{1.0});
+    CHECK(rcm::parse_shrink("0.3") == std::vector<double>{0.3});
+    CHECK_THROWS_WITH_AS(rcm::parse_shrink("1.5"), doctest::Contains("--shrink 1.5"), value_error);
+    CHECK_THROWS_AS(rcm::parse_shrink("0.3x"), value_error);
+    CHECK(rcm::parse_analysis_inputs("auto").size() == 4);
+    CHECK(rcm::parse_analysis_inputs("judge") == std::vector<rcm::analysis_input>{rcm::analysis_input::judge});
+    CHECK_THROWS_WITH_AS(rcm::parse_analysis_inputs("pca"), doctest::Contains("--input pca"), value_error);
+}
+
+TEST_CASE("model: the judge's features are read against the same content's neutral clips")
+{
+    const auto& sh = shared();
+    const auto judge = rcm::detail::judge_features(sh.clips, "neutral");
+    REQUIRE(judge.size() == sh.clips.size());
+    const std::size_t J = sh.clips.front().motion->skel.size();
+    for (std::size_t i = 0; i < sh.clips.size(); ++i) {
+        CAPTURE(sh.clips[i].name);
+        REQUIRE(judge[i].mean.size() == metrics::full_rate_change_count(J));
+        std::size_t ref = 0;
+        for (std::size_t j = 0; j < sh.clips.size(); ++j)
+            if (sh.clips[j].performer == sh.clips[i].performer && sh.clips[j].emotion == "neutral") ref = j;
+        // one neutral take per content: exactly the judge's change against it (zero for that take itself)
+        const auto want = metrics::full_rate_change(metrics::full_rate_features(*sh.clips[i].motion), metrics::full_rate_features(*sh.clips[ref].motion));
+        for (std::size_t d = 0; d < want.size(); ++d) CHECK(judge[i].mean(d) == Approx(want[d]));
+    }
+}
+
+TEST_CASE("model: leave-one-content-out with candidate inputs and shrinkage")
+{
+    const auto& sh = shared();
+    std::vector<std::string> group;
+    for (const auto& c : sh.clips) group.push_back(c.performer);
+    auto opt = sh.opt;
+    opt.cluster = false;
+    const std::string file = "circumplex.json";
+    using rcm::analysis_input;
+    // weight 0 is the constant predictor, exactly
+    const auto zero = rcm::evaluate_loo(sh.clips, group, sh.table, file, opt, {rcm::relative_features::off, "neutral", {}, {0.0}});
+    REQUIRE(zero.samples.size() == sh.clips.size());
+    for (const auto& s : zero.samples) CHECK(s.distance == Approx(s.baseline_distance).epsilon(1e-12));
+    CHECK(zero.mean_shrink == 0.0);
+    // each input alone fits every fold; the judge keeps every one of its features
+    std::map<analysis_input, rcm::eval_report> single;
+    for (auto v : {analysis_input::paper, analysis_input::relative, analysis_input::clusters, analysis_input::judge}) {
+        CAPTURE(rcm::to_string(v));
+        single[v] = rcm::evaluate_loo(sh.clips, group, sh.table, file, opt, {rcm::relative_features::off, "neutral", {v}, {}});
+        CHECK(single[v].failed_folds.empty());
+        CHECK(single[v].input_folds.at(rcm::to_string(v)) == 7);
+        for (const auto& s : single[v].samples) CHECK((std::abs(s.valence) <= 1 && std::abs(s.arousal) <= 1));
+    }
+    CHECK(single[analysis_input::judge].mean_selected == metrics::full_rate_change_count(sh.clips.front().motion->skel.size()));
+    CHECK(single[analysis_input::clusters].mean_distance != single[analysis_input::paper].mean_distance);
+    const auto plain = rcm::evaluate_loo(sh.clips, group, sh.table, file, opt);
+    CHECK(single[analysis_input::paper].mean_distance == plain.mean_distance);
+    CHECK(single[analysis_input::relative].mean_distance ==
+          rcm::evaluate_loo(sh.clips, group, sh.table, file, opt, {rcm::relative_features::on, "neutral"}).mean_distance);
+    CHECK_THROWS_WITH_AS(rcm::evaluate_loo(sh.clips, group, sh.table, file, opt, {rcm::relative_features::on, "neutral", {analysis_input::judge}, {}}),
+                         doctest::Contains("not both"), value_error);
+    CHECK_THROWS_WITH_AS(rcm::evaluate_loo(sh.clips, group, sh.table, file, opt, {rcm::relative_features::off, "", {analysis_input::judge}, {}}),
+                         doctest::Contains("judge features need the neutral label"), value_error);
+    // the choice: per fold, the pair of the least inner mean distance; its samples are those of that input alone,
+    // shrunk toward the fold's constant predictor by that weight
+    const std::vector<analysis_input> cand{analysis_input::paper, analysis_input::relative, analysis_input::judge};
+    const auto aut = rcm::evaluate_loo(sh.clips, group, sh.table, file, opt, {rcm::relative_features::off, "neutral", cand, rcm::shrink_grid()});
+    REQUIRE(aut.failed_folds.empty());
+    REQUIRE(aut.samples.size() == sh.clips.size());
+    std::size_t folds = 0;
+    for (const auto& [name, n] : aut.input_folds) folds += n;
+    CHECK(folds == 7);
+    for (const auto& f : aut.folds) {
+        CAPTURE(f);
+        std::string input;
+        double weight = -1;
+        for (std::size_t i = 0; i < aut.samples.size(); ++i) {
+            const auto& s = aut.samples[i];
+            if (s.held_out != f) continue;
+            if (weight < 0) input = s.input, weight = s.shrink;
+            CHECK(s.input == input);
+            CHECK(s.shrink == weight);
+            const auto v = rcm::parse_analysis_inputs(input).front();
+            const auto& one = single[v].samples[i];
+            // the constant point c of the fold: the baseline of the weight-0 run, same fold, same clip
+            const auto& c = zero.samples[i];
+            CHECK(s.valence == Approx(c.valence + weight * (one.valence - c.valence)).epsilon(1e-12));
+            CHECK(s.arousal == Approx(c.arousal + weight * (one.arousal - c.arousal)).epsilon(1e-12));
+        }
+        // the rule, from inner runs of each input alone on the fold's training clips
+        std::vector<rcm::training_clip> inner;
+        std::vector<std::string> inner_group;
+        for (const auto& c : sh.clips)
+            if (c.performer != f) inner.push_back(c), inner_group.push_back(c.performer);
+        std::vector<std::vector<rcm::analysis>> pred;
+        std::vector<rcm::label_point> constant, truth;
+        const auto inner_zero = rcm::evaluate_loo(inner, inner_group, sh.table, file, opt, {rcm::relative_features::off, "neutral", {}, {0.0}});
+        for (auto v : cand) {
+            const auto r = rcm::evaluate_loo(inner, inner_group, sh.table, file, opt, {rcm::relative_features::off, "neutral", {v}, {}});
+            REQUIRE(r.failed_folds.empty());
+            pred.emplace_back();
+            for (const auto& s : r.samples)
+                if (!s.neutral) {
+                    rcm::analysis a;
+                    a.valence = s.valence, a.arousal = s.arousal;
+                    pred.back().push_back(a);
+                }
+        }
+        for (const auto& s : inner_zero.samples)
+            if (!s.neutral) constant.push_back({"c", s.valence, s.arousal}), truth.push_back({s.emotion, s.true_valence, s.true_arousal});
+        const auto want = rcm::choose_variant(pred, constant, truth, rcm::shrink_grid());
+        CHECK(input == rcm::to_string(cand[want.input]));
+        CHECK(weight == want.shrink);
+    }
+}

@@ -7,12 +7,15 @@
 // and the leave-one-content-out evaluation of the analysis.
 //
 // Analysis uses the global selection (all poses); the per-cluster selections are fitted, stored and
-// printed for the synthesis, which applies features per pose cluster as the paper does.
+// printed for the synthesis. The evaluation also tries what the paper leaves open (analysis_input: the
+// per-cluster selections for analysis, features against the content's neutral clips, the full-rate judge's
+// feature space; a pull toward the constant predictor), chosen per fold by an inner leave-one-group-out.
 #pragma once
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
 #include <handemo/core/progress.hpp>
+#include <handemo/metrics/full_rate_judge.hpp>
 #include <handemo/motion/clip.hpp>
 #include <handemo/rcm/circumplex.hpp>
 #include <handemo/rcm/cluster.hpp>
@@ -57,6 +60,7 @@ struct fit_options {
     nlohmann::json role_overrides = nlohmann::json::object();  ///< `{"left_hand": "Hand_L"}`
     std::string performer_kind = "content";  ///< what plays the performers' role, for the report
     bool show_progress = false;
+    bool select = true;  ///< false keeps every feature (a feature space other than Table 1's, as evaluate_loo's judge input)
 };
 
 /// @brief The analysed emotion of a clip.
@@ -197,8 +201,76 @@ inline matrix rows_of(const std::vector<vector>& rows, std::size_t D)
 
 }  // namespace detail
 
+/// @brief The analysis half of a model on features normalised elsewhere: the selection, the PCA and Eq. 1.
+struct emotion_map {
+    std::vector<std::size_t> selected;  ///< indices into the normalised features
+    selection_result selection;         ///< counts of the selection (empty when every feature is kept)
+    pca_model pca;
+    rbf_map to_emotion;               ///< Eq. 1-2: PCA scores -> (valence, arousal)
+    std::vector<label_point> labels;  ///< the training labels (sorted by name) with their coordinates
+
+    /// @brief The circumplex point of one clip's normalised features `[D]` (all of them; the selected are picked).
+    analysis operator()(const vector& normalised) const
+    {
+        vector s = xt::zeros<double>({selected.size()});
+        for (std::size_t k = 0; k < selected.size(); ++k) s(k) = normalised(selected[k]);
+        const vector e = to_emotion(pca.project(s));
+        analysis a;
+        a.raw_valence = e(0), a.raw_arousal = e(1);
+        a.valence = std::clamp(e(0), -1.0, 1.0);
+        a.arousal = std::clamp(e(1), -1.0, 1.0);
+        a.quadrant = quadrant(a.valence, a.arousal);
+        return a;
+    }
+};
+
+/// @brief Fits selection (Section 3.2; every feature when `select` is false), PCA and Eq. 1 on normalised features
+/// `x` `[N, D]` with an emotion and a performer per row.
+/// @throws value_error for a label without coordinates, fewer than 2 emotions or performers, or a singular fit.
+inline emotion_map fit_emotion_map(const matrix& x, const std::vector<std::string>& emo, const std::vector<std::string>& perf,
+                                   const circumplex_table& table, const std::string& table_name, const selection_options& sel,
+                                   double pca_keep, bool select = true)
+{
+    emotion_map em;
+    const std::size_t N = x.shape()[0], D = x.shape()[1];
+    if (select) {
+        em.selection = select_features(x, emo, perf, sel);
+        em.selected = em.selection.selected;
+    } else {
+        for (std::size_t k = 0; k < D; ++k) em.selected.push_back(k);
+    }
+    const std::size_t S = em.selected.size();
+    matrix xs = xt::zeros<double>({N, S});
+    for (std::size_t i = 0; i < N; ++i)
+        for (std::size_t k = 0; k < S; ++k) xs(i, k) = x(i, em.selected[k]);
+    em.pca = fit_pca(xs, pca_keep, N > 1 ? N - 1 : 1);
+    const matrix scores = em.pca.project_rows(xs);
+    std::set<std::string> name_set(emo.begin(), emo.end());
+    const std::vector<std::string> names(name_set.begin(), name_set.end());
+    const std::size_t K = names.size(), d = em.pca.dims();
+    for (const auto& n : names) em.labels.push_back(table.at(n, table_name));
+    matrix centres = xt::zeros<double>({K, d}), centre_e = xt::zeros<double>({K, std::size_t{2}});
+    matrix targets = xt::zeros<double>({N, std::size_t{2}});
+    std::vector<double> count(K, 0.0);
+    for (std::size_t i = 0; i < N; ++i) {
+        const std::size_t k = static_cast<std::size_t>(std::find(names.begin(), names.end(), emo[i]) - names.begin());
+        count[k] += 1;
+        for (std::size_t j = 0; j < d; ++j) centres(k, j) += scores(i, j);
+        targets(i, 0) = em.labels[k].valence;
+        targets(i, 1) = em.labels[k].arousal;
+    }
+    for (std::size_t k = 0; k < K; ++k) {
+        for (std::size_t j = 0; j < d; ++j) centres(k, j) /= count[k];
+        centre_e(k, 0) = em.labels[k].valence;
+        centre_e(k, 1) = em.labels[k].arousal;
+    }
+    em.to_emotion = fit_rbf_regression(scores, targets, centres, centre_e, rbf_kernel::gaussian, mean_pairwise_distance(scores));
+    return em;
+}
+
 /// @brief Fits the analysis part (normaliser, selection, PCA, Eq. 1 and Eq. 3 maps) from precomputed features
-/// of the clips `use` (indices into clips/features).
+/// of the clips `use` (indices into clips/features). The features need not be LMA's: their length is read from
+/// them, and opt.select = false keeps all of them.
 /// @throws value_error for a label without coordinates, fewer than 2 emotions or performers, or a singular fit.
 inline rcm_model fit_from_features(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
                                    const std::vector<std::size_t>& use, feature_set fs, const circumplex_table& table,
@@ -210,44 +282,34 @@ inline rcm_model fit_from_features(const std::vector<training_clip>& clips, cons
     m.performer_kind = opt.performer_kind;
     m.label_source = table.source;
     m.training_clips = use.size();
-    const std::size_t D = derived_count(fs);
+    if (use.empty()) throw value_error("rcm fit: no training clips");
+    const std::size_t D = feats[use.front()].mean.size();
     std::vector<vector> raw;
     std::vector<std::string> emo, perf;
     for (std::size_t i : use) raw.push_back(feats[i].mean), emo.push_back(clips[i].emotion), perf.push_back(clips[i].performer);
     m.normaliser = feature_normaliser::fit(detail::rows_of(raw, D));
     const matrix x = m.normaliser.apply_rows(detail::rows_of(raw, D));
-    m.selection = select_features(x, emo, perf, opt.selection);
-    m.selected = m.selection.selected;
-    const std::size_t S = m.selected.size(), N = use.size();
-    matrix xs = xt::zeros<double>({N, S});
-    for (std::size_t i = 0; i < N; ++i)
-        for (std::size_t k = 0; k < S; ++k) xs(i, k) = x(i, m.selected[k]);
-    m.pca = fit_pca(xs, opt.pca_keep, N > 1 ? N - 1 : 1);
-    const matrix scores = m.pca.project_rows(xs);
-    const auto names = detail::sorted_unique(emo);
-    const std::size_t K = names.size(), d = m.pca.dims();
-    for (const auto& n : names) {
-        label_point p = table.at(n, table_name);
-        m.labels.push_back(p);
-    }
-    matrix centres = xt::zeros<double>({K, d}), centre_feat = xt::zeros<double>({K, S}), centre_e = xt::zeros<double>({K, std::size_t{2}});
-    matrix targets = xt::zeros<double>({N, std::size_t{2}});
+    emotion_map em = fit_emotion_map(x, emo, perf, table, table_name, opt.selection, opt.pca_keep, opt.select);
+    m.selection = std::move(em.selection);
+    m.selected = std::move(em.selected);
+    m.pca = std::move(em.pca);
+    m.to_emotion = std::move(em.to_emotion);
+    m.labels = std::move(em.labels);
+    // Eq. 3: each emotion's mean selected features at its circumplex point
+    const std::size_t S = m.selected.size(), N = use.size(), K = m.labels.size();
+    matrix centre_feat = xt::zeros<double>({K, S}), centre_e = xt::zeros<double>({K, std::size_t{2}});
+    const auto names = detail::sorted_unique(emo);  // the order of m.labels
     std::vector<double> count(K, 0.0);
     for (std::size_t i = 0; i < N; ++i) {
         const std::size_t k = static_cast<std::size_t>(std::find(names.begin(), names.end(), emo[i]) - names.begin());
         count[k] += 1;
-        for (std::size_t j = 0; j < d; ++j) centres(k, j) += scores(i, j);
-        for (std::size_t j = 0; j < S; ++j) centre_feat(k, j) += xs(i, j);
-        targets(i, 0) = m.labels[k].valence;
-        targets(i, 1) = m.labels[k].arousal;
+        for (std::size_t j = 0; j < S; ++j) centre_feat(k, j) += x(i, m.selected[j]);
     }
     for (std::size_t k = 0; k < K; ++k) {
-        for (std::size_t j = 0; j < d; ++j) centres(k, j) /= count[k];
         for (std::size_t j = 0; j < S; ++j) centre_feat(k, j) /= count[k];
         centre_e(k, 0) = m.labels[k].valence;
         centre_e(k, 1) = m.labels[k].arousal;
     }
-    m.to_emotion = fit_rbf_regression(scores, targets, centres, centre_e, rbf_kernel::gaussian, mean_pairwise_distance(scores));
     m.to_features = fit_rbf_interpolant(centre_e, centre_feat, rbf_kernel::multiquadric, mean_pairwise_distance(centre_e));
     return m;
 }
@@ -614,6 +676,8 @@ struct eval_sample {
     double baseline_distance = 0;  ///< distance of the training set's mean label point (a constant predictor)
     bool neutral = false;          ///< a clip of the neutral label (loo_options::neutral)
     bool relative = false;         ///< analysed with features relative to its content's neutral clips
+    std::string input = "paper";   ///< the analysis input of its fold (to_string(analysis_input))
+    double shrink = 1;             ///< the shrinkage weight of its fold (1: the map's own point)
 };
 
 /// @brief The leave-one-group-out evaluation.
@@ -627,6 +691,8 @@ struct eval_report {
     /// content's neutral mean is no test of the analysis)
     double emotional_distance = 0, emotional_baseline_distance = 0;
     std::size_t relative_folds = 0;  ///< folds analysed with relative features
+    std::map<std::string, std::size_t> input_folds;  ///< analysis input -> folds analysed with it
+    double mean_shrink = 1;                          ///< mean shrinkage weight over the fitted folds
 };
 
 /// @brief How evaluate_loo() reads a clip's features: as they are (the paper), as the change from the mean
@@ -635,10 +701,70 @@ struct eval_report {
 /// non-neutral clips is lower). docs/circumplex.md gives the rule.
 enum class relative_features { off, on, automatic };
 
+/// @brief What evaluate_loo() maps to the circumplex (docs/circumplex.md):
+/// - `paper`: the clip's Table 1 features, the global selection (Section 3.3);
+/// - `relative`: the same features as the change from the mean of its content's neutral clips;
+/// - `clusters`: the per-pose-cluster selections of Section 3.5, one selection, PCA and Eq. 1 map per cluster on
+///   the clip's windows in that cluster, the clip's point the mean of the clusters' points weighted by its share of
+///   windows in each (the global map for a clip none of whose windows reach a fitted cluster);
+/// - `judge`: the full-rate emotion classifier's features (metrics::full_rate_change(): the clip's
+///   full_rate_features() against each neutral clip of its content, averaged), all of them, PCA and Eq. 1.
+enum class analysis_input { paper, relative, clusters, judge };
+
+/// @brief The name of an analysis input (`paper`, `relative`, `clusters`, `judge`).
+inline const char* to_string(analysis_input v) noexcept
+{
+    switch (v) {
+    case analysis_input::paper: return "paper";
+    case analysis_input::relative: return "relative";
+    case analysis_input::clusters: return "clusters";
+    case analysis_input::judge: return "judge";
+    }
+    return "paper";
+}
+
+/// @brief `paper`, `relative`, `clusters` or `judge` as a one-element list, `auto` as all four (in that order, the
+/// order of preference on a tie); value_error naming the text otherwise.
+inline std::vector<analysis_input> parse_analysis_inputs(const std::string& s)
+{
+    if (s == "auto") return {analysis_input::paper, analysis_input::relative, analysis_input::clusters, analysis_input::judge};
+    for (auto v : {analysis_input::paper, analysis_input::relative, analysis_input::clusters, analysis_input::judge})
+        if (s == to_string(v)) return {v};
+    throw value_error("rcm eval: --input " + s + " is not paper, relative, clusters, judge or auto");
+}
+
+/// @brief The shrinkage weights `auto` tries: 1, 0.9, .., 0 (in that order, the order of preference on a tie).
+inline std::vector<double> shrink_grid()
+{
+    std::vector<double> g;
+    for (int k = 10; k >= 0; --k) g.push_back(k / 10.0);
+    return g;
+}
+
+/// @brief `none` as {1}, `auto` as shrink_grid(), a number in [0, 1] as itself; value_error naming the text otherwise.
+inline std::vector<double> parse_shrink(const std::string& s)
+{
+    if (s == "none") return {1.0};
+    if (s == "auto") return shrink_grid();
+    std::size_t used = 0;
+    double v = -1;
+    try {
+        v = std::stod(s, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != s.size() || !(v >= 0 && v <= 1)) throw value_error("rcm eval: --shrink " + s + " is not none, auto or a number in [0, 1]");
+    return {v};
+}
+
 /// @brief Options of evaluate_loo() beyond the fit's.
 struct loo_options {
     relative_features relative = relative_features::off;
-    std::string neutral;  ///< the neutral label (needed unless relative is off; counted as neutral in the report)
+    std::string neutral;  ///< the neutral label (needed by relative and judge inputs; counted as neutral in the report)
+    /// the candidate inputs (empty: from `relative`: off {paper}, on {relative}, automatic {paper, relative})
+    std::vector<analysis_input> inputs;
+    /// the candidate shrinkage weights s: a point p becomes c + s (p - c), c the fold's constant predictor (empty: {1})
+    std::vector<double> shrink;
 };
 
 /// @brief `off`, `on` or `auto` as relative_features; value_error naming the text otherwise.
@@ -648,6 +774,74 @@ inline relative_features parse_relative_features(const std::string& s)
     if (s == "on") return relative_features::on;
     if (s == "auto") return relative_features::automatic;
     throw value_error("rcm eval: --relative " + s + " is not off, on or auto");
+}
+
+/// @brief A point moved toward the constant predictor `c`: c + s (p - c) for the clamped and the raw point, its
+/// quadrant anew. s = 1 keeps the point, s = 0 answers c.
+inline analysis shrink_toward(const analysis& p, double cv, double ca, double s) noexcept
+{
+    analysis a;
+    a.valence = cv + s * (p.valence - cv);
+    a.arousal = ca + s * (p.arousal - ca);
+    a.raw_valence = cv + s * (p.raw_valence - cv);
+    a.raw_arousal = ca + s * (p.raw_arousal - ca);
+    a.quadrant = quadrant(a.valence, a.arousal);
+    return a;
+}
+
+/// @brief One candidate of the inner choice: an index into the candidate inputs and a shrinkage weight.
+struct variant_choice {
+    std::size_t input = 0;
+    double shrink = 1;
+    double distance = 0;  ///< mean distance of the chosen pair over the inner held-out clips
+};
+
+/// @brief The pair (input, weight) with the least mean distance between c_n + s (p_vn - c_n) and the label l_n over
+/// the inner held-out clips n: `pred` `[V][N]`, `constant` and `truth` `[N]`. A tie goes to the earlier input, then
+/// the earlier weight. With no clips, the first pair.
+/// @throws shape_error when the lengths disagree.
+inline variant_choice choose_variant(const std::vector<std::vector<analysis>>& pred, const std::vector<label_point>& constant,
+                                     const std::vector<label_point>& truth, const std::vector<double>& weights)
+{
+    const std::size_t N = truth.size();
+    if (pred.empty() || weights.empty() || constant.size() != N)
+        throw shape_error("rcm eval: choose_variant: no candidates, or constants and labels differ in number");
+    for (const auto& p : pred)
+        if (p.size() != N) throw shape_error("rcm eval: choose_variant: " + std::to_string(p.size()) + " predictions, expected " + std::to_string(N));
+    variant_choice best;
+    bool first = true;
+    for (std::size_t v = 0; v < pred.size(); ++v)
+        for (double s : weights) {
+            double d = 0;
+            for (std::size_t n = 0; n < N; ++n) {
+                const analysis a = shrink_toward(pred[v][n], constant[n].valence, constant[n].arousal, s);
+                d += std::hypot(a.valence - truth[n].valence, a.arousal - truth[n].arousal);
+            }
+            d = N ? d / static_cast<double>(N) : 0.0;
+            if (first || d < best.distance) best = {v, s, d}, first = false;
+        }
+    return best;
+}
+
+/// @brief The weighted mean of circumplex points (clamped and raw), the weights normalised to sum to 1; its quadrant anew.
+/// @throws value_error when the weights are negative or sum to 0; shape_error when the lengths differ.
+inline analysis weighted_point(const std::vector<analysis>& points, const std::vector<double>& weights)
+{
+    if (points.size() != weights.size() || points.empty()) throw shape_error("rcm eval: weighted_point: points and weights differ in number");
+    double total = 0;
+    for (double w : weights) {
+        if (!(w >= 0)) throw value_error("rcm eval: weighted_point: weight " + std::to_string(w) + " is negative");
+        total += w;
+    }
+    if (!(total > 0)) throw value_error("rcm eval: weighted_point: the weights sum to 0");
+    analysis a;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        const double w = weights[k] / total;
+        a.valence += w * points[k].valence, a.arousal += w * points[k].arousal;
+        a.raw_valence += w * points[k].raw_valence, a.raw_arousal += w * points[k].raw_arousal;
+    }
+    a.quadrant = quadrant(a.valence, a.arousal);
+    return a;
 }
 
 namespace detail {
@@ -697,93 +891,267 @@ inline std::vector<analysis> fit_and_analyse(const std::vector<training_clip>& c
     return out;
 }
 
-/// The inner choice of relative_features::automatic for an outer fold's training clips: leave one group of them out
-/// at a time, with absolute and with relative features; true when relative features' mean distance over the held-out
-/// non-neutral clips is lower (over the inner folds both fits succeed on).
-inline bool choose_relative(const std::vector<training_clip>& clips, const std::vector<std::string>& group,
-                            const std::vector<clip_feature_data>& absolute, const std::vector<clip_feature_data>& relative,
-                            const std::vector<std::size_t>& train, feature_set fs, const circumplex_table& table,
-                            const std::string& table_name, const fit_options& opt, const std::string& neutral)
+/// Every clip's features in the full-rate judge's space: the mean over the neutral clips n of its performer
+/// (content) of metrics::full_rate_change(f(clip), f(n)), f = metrics::full_rate_features().
+/// @throws value_error naming a performer without a neutral clip.
+inline std::vector<clip_feature_data> judge_features(const std::vector<training_clip>& clips, const std::string& neutral)
 {
-    std::vector<std::string> inner_groups;
-    for (std::size_t i : train) inner_groups.push_back(group[i]);
-    double sum_abs = 0, sum_rel = 0;
-    for (const auto& g : sorted_unique(inner_groups)) {
-        std::vector<std::size_t> in_train, in_test;
-        for (std::size_t i : train) {
-            if (group[i] != g) in_train.push_back(i);
-            else if (clips[i].emotion != neutral) in_test.push_back(i);
-        }
-        if (in_test.empty()) continue;
-        std::vector<analysis> a, r;
+    std::vector<std::vector<double>> f;
+    f.reserve(clips.size());
+    for (const auto& c : clips) {
         try {
-            a = fit_and_analyse(clips, absolute, in_train, in_test, fs, table, table_name, opt);
-            r = fit_and_analyse(clips, relative, in_train, in_test, fs, table, table_name, opt);
-        } catch (const error&) {
-            continue;  // an inner fold one of the two cannot fit is left out of both sums
-        }
-        for (std::size_t k = 0; k < in_test.size(); ++k) {
-            const auto& l = table.at(clips[in_test[k]].emotion, table_name);
-            sum_abs += std::hypot(a[k].valence - l.valence, a[k].arousal - l.arousal);
-            sum_rel += std::hypot(r[k].valence - l.valence, r[k].arousal - l.arousal);
+            f.push_back(metrics::full_rate_features(*c.motion));
+        } catch (const error& e) {
+            throw value_error("rcm eval: " + c.name + ": " + e.what());
         }
     }
-    return sum_rel < sum_abs;
+    std::vector<clip_feature_data> out;
+    out.reserve(clips.size());
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        std::vector<double> sum;
+        double n = 0;
+        for (std::size_t j = 0; j < clips.size(); ++j) {
+            if (clips[j].performer != clips[i].performer || clips[j].emotion != neutral) continue;
+            const auto d = metrics::full_rate_change(f[i], f[j]);
+            if (sum.empty()) sum.assign(d.size(), 0.0);
+            for (std::size_t k = 0; k < d.size(); ++k) sum[k] += d[k];
+            n += 1;
+        }
+        if (n == 0)
+            throw value_error("rcm eval: judge features: '" + clips[i].performer + "' has no '" + neutral + "' clip to read " +
+                              clips[i].name + " against");
+        clip_feature_data d;
+        d.mean = xt::zeros<double>({sum.size()});
+        for (std::size_t k = 0; k < sum.size(); ++k) d.mean(k) = sum[k] / n;
+        out.push_back(std::move(d));
+    }
+    return out;
+}
+
+/// The pose cluster of every window of every clip (the cluster of its centre frame), the clusters found on the
+/// poses of the clips `train` only.
+struct window_clusters {
+    std::size_t count = 0;
+    std::vector<std::vector<std::size_t>> of_clip;  ///< [clips][windows]
+};
+
+inline window_clusters cluster_windows(const std::vector<clip_feature_data>& feats, const std::vector<std::vector<pose>>& poses,
+                                       const std::vector<std::size_t>& train, const std::vector<double>& weights,
+                                       pose_cluster_options co)
+{
+    std::vector<pose> pool;
+    for (std::size_t i : train) pool.insert(pool.end(), poses[i].begin(), poses[i].end());
+    co.clusters = std::min(co.clusters, pool.size());
+    const pose_clustering pc = cluster_poses(pool, weights, co);
+    window_clusters wc;
+    wc.count = pc.count();
+    wc.of_clip.resize(feats.size());
+    for (std::size_t i = 0; i < feats.size(); ++i) {
+        const std::size_t frames = poses[i].size();
+        const auto starts = window_starts(frames, feats[i].window_length);
+        for (std::size_t k = 0; k < feats[i].windows.shape()[0]; ++k)
+            wc.of_clip[i].push_back(pc.assign(poses[i][std::min(frames - 1, starts[k] + feats[i].window_length / 2)]));
+    }
+    return wc;
+}
+
+/// The share of a clip's windows in each of `count` clusters (summing to 1; all 0 for a clip without windows).
+inline std::vector<double> window_shares(const std::vector<std::size_t>& window_cluster, std::size_t count)
+{
+    std::vector<double> s(count, 0.0);
+    for (std::size_t c : window_cluster)
+        if (c < count) s[c] += 1.0 / static_cast<double>(window_cluster.size());
+    return s;
+}
+
+/// The analysis input `clusters`: fits the global model and one selection, PCA and Eq. 1 map per pose cluster on
+/// the training clips' normalised windows in it (averaged per clip), and answers each test clip's point as the
+/// mean of the clusters' points weighted by its windows' shares (the global point when no window reaches a cluster
+/// whose fit succeeded: a cluster with too few emotions or contents has none).
+inline std::vector<analysis> fit_and_analyse_clusters(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
+                                                      const window_clusters& wc, const std::vector<std::size_t>& train,
+                                                      const std::vector<std::size_t>& test, feature_set fs, const circumplex_table& table,
+                                                      const std::string& table_name, const fit_options& opt)
+{
+    const rcm_model global = fit_from_features(clips, feats, train, fs, table, table_name, opt);
+    const std::size_t D = global.normaliser.lo.size();
+    // the normalised mean of clip i's windows in cluster c, or nothing when none is there
+    auto cluster_mean = [&](std::size_t i, std::size_t c) -> std::optional<vector> {
+        vector acc = xt::zeros<double>({D});
+        double n = 0;
+        for (std::size_t k = 0; k < wc.of_clip[i].size(); ++k) {
+            if (wc.of_clip[i][k] != c) continue;
+            const vector row = xt::view(feats[i].windows, k, xt::all());
+            acc += global.normaliser.apply(row);
+            n += 1;
+        }
+        if (n == 0) return std::nullopt;
+        return vector(acc / n);
+    };
+    std::vector<std::optional<emotion_map>> maps(wc.count);
+    for (std::size_t c = 0; c < wc.count; ++c) {
+        std::vector<vector> rows;
+        std::vector<std::string> emo, perf;
+        for (std::size_t i : train)
+            if (auto r = cluster_mean(i, c)) rows.push_back(std::move(*r)), emo.push_back(clips[i].emotion), perf.push_back(clips[i].performer);
+        try {
+            maps[c] = fit_emotion_map(rows_of(rows, D), emo, perf, table, table_name, opt.selection, opt.pca_keep);
+        } catch (const error&) {
+            maps[c].reset();  // too few clips, emotions or contents reach this cluster, or its fit is singular
+        }
+    }
+    std::vector<analysis> out;
+    for (std::size_t i : test) {
+        std::vector<analysis> points;
+        std::vector<double> weights;
+        const auto shares = window_shares(wc.of_clip[i], wc.count);
+        for (std::size_t c = 0; c < wc.count; ++c) {
+            if (!maps[c]) continue;
+            const auto r = cluster_mean(i, c);
+            if (!r) continue;
+            points.push_back((*maps[c])(*r));
+            weights.push_back(shares[c]);
+        }
+        out.push_back(points.empty() ? global.analyse_features([&] {
+            const vector all = global.normaliser.apply(feats[i].mean);
+            vector sel = xt::zeros<double>({global.selected.size()});
+            for (std::size_t k = 0; k < global.selected.size(); ++k) sel(k) = all(global.selected[k]);
+            return sel;
+        }())
+                                     : weighted_point(points, weights));
+    }
+    return out;
 }
 
 }  // namespace detail
 
 /// @brief Leave-one-group-out evaluation of the analysis: for each value of `group` (content or take), fit on
-/// the other clips (no pose clusters: analysis does not use them) and analyse the held-out ones. With
-/// lo.relative, features are read against the neutral clips of the same performer or content (a held-out one
-/// against its own neutral clips), always (`on`) or when an inner leave-one-group-out inside the fold's training
-/// clips says so (`automatic`).
-/// @throws value_error for no clips, a missing neutral label with relative features, or a performer without a
-///         neutral clip to read its clips against.
+/// the other clips (no pose clusters unless the `clusters` input is a candidate) and analyse the held-out ones.
+/// With one candidate input and one shrinkage weight, that is the analysis; with more (lo.inputs, lo.shrink, or
+/// relative_features::automatic), each fold chooses the pair (input, weight) by an inner leave-one-group-out over
+/// its training groups: the pair with the least mean distance over the inner held-out non-neutral clips, each
+/// point shrunk toward the inner fold's constant predictor (choose_variant(); inner folds a candidate cannot fit
+/// are left out for all). The outer fold's point is then shrunk toward its own constant predictor, the mean label
+/// point of its training clips. docs/circumplex.md gives the rule.
+/// @throws value_error for no clips, both lo.relative and lo.inputs, a missing neutral label with relative or
+///         judge inputs, or a performer without a neutral clip to read its clips against.
 inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const std::vector<std::string>& group,
                                 const circumplex_table& table, const std::string& table_name, const fit_options& opt,
                                 const loo_options& lo = {})
 {
     if (clips.empty()) throw value_error("rcm eval: no clips");
     if (group.size() != clips.size()) throw shape_error("rcm eval: one group per clip needed");
-    if (lo.relative != relative_features::off && lo.neutral.empty())
-        throw value_error("rcm eval: relative features need the neutral label");
+    if (!lo.inputs.empty() && lo.relative != relative_features::off)
+        throw value_error("rcm eval: give the relative option or the candidate inputs, not both");
+    std::vector<analysis_input> inputs = lo.inputs;
+    if (inputs.empty()) {
+        if (lo.relative != relative_features::on) inputs.push_back(analysis_input::paper);
+        if (lo.relative != relative_features::off) inputs.push_back(analysis_input::relative);
+    }
+    const std::vector<double> weights = lo.shrink.empty() ? std::vector<double>{1.0} : lo.shrink;
+    auto uses = [&](analysis_input v) { return std::find(inputs.begin(), inputs.end(), v) != inputs.end(); };
+    if ((uses(analysis_input::relative) || uses(analysis_input::judge)) && lo.neutral.empty())
+        throw value_error(std::string("rcm eval: ") + (uses(analysis_input::judge) && !uses(analysis_input::relative) ? "judge" : "relative") +
+                          " features need the neutral label");
     feature_set fs{};
     const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
     const auto feats = compute_features(clips, r, fs, opt.lma, opt.show_progress);
-    const auto rel = lo.relative == relative_features::off ? std::vector<clip_feature_data>{} : detail::relative_to_neutral(clips, feats, lo.neutral);
+    const auto rel = uses(analysis_input::relative) ? detail::relative_to_neutral(clips, feats, lo.neutral) : std::vector<clip_feature_data>{};
+    const auto judge = uses(analysis_input::judge) ? detail::judge_features(clips, lo.neutral) : std::vector<clip_feature_data>{};
+    fit_options judge_opt = opt;
+    judge_opt.select = false;
+    std::vector<std::vector<pose>> poses;
+    std::vector<double> pose_w;
+    if (uses(analysis_input::clusters)) {
+        for (const auto& c : clips) poses.push_back(clip_poses(*c.motion, r, opt.lma.up_axis));
+        pose_w = pose_weights(clips.front().motion->skel, r);
+    }
+    auto predict = [&](analysis_input v, const detail::window_clusters& wc, const std::vector<std::size_t>& train,
+                       const std::vector<std::size_t>& test, rcm_model* m) -> std::vector<analysis> {
+        switch (v) {
+        case analysis_input::relative: return detail::fit_and_analyse(clips, rel, train, test, fs, table, table_name, opt, m);
+        case analysis_input::judge: return detail::fit_and_analyse(clips, judge, train, test, fs, table, table_name, judge_opt, m);
+        case analysis_input::clusters: {
+            if (m) *m = fit_from_features(clips, feats, train, fs, table, table_name, opt);
+            return detail::fit_and_analyse_clusters(clips, feats, wc, train, test, fs, table, table_name, opt);
+        }
+        case analysis_input::paper: break;
+        }
+        return detail::fit_and_analyse(clips, feats, train, test, fs, table, table_name, opt, m);
+    };
+    auto mean_label = [&](const std::vector<std::size_t>& train) {
+        label_point c{"constant", 0, 0};
+        for (std::size_t i : train) {
+            const auto& l = table.at(clips[i].emotion, table_name);
+            c.valence += l.valence / static_cast<double>(train.size());
+            c.arousal += l.arousal / static_cast<double>(train.size());
+        }
+        return c;
+    };
     eval_report rep;
     rep.folds = detail::sorted_unique(group);
     progress bar("rcm eval folds", static_cast<long>(rep.folds.size()), opt.show_progress ? stderr : nullptr);
     std::size_t fitted = 0, qbase = 0;
+    double shrink_sum = 0;
     for (std::size_t f = 0; f < rep.folds.size(); ++f) {
         std::vector<std::size_t> train, test;
         for (std::size_t i = 0; i < clips.size(); ++i) (group[i] == rep.folds[f] ? test : train).push_back(i);
-        const bool relative = lo.relative == relative_features::on ||
-                              (lo.relative == relative_features::automatic &&
-                               detail::choose_relative(clips, group, feats, rel, train, fs, table, table_name, opt, lo.neutral));
+        const label_point base = mean_label(train);
+        detail::window_clusters wc;
+        variant_choice choice{0, weights.front(), 0};
+        try {
+            if (uses(analysis_input::clusters)) wc = detail::cluster_windows(feats, poses, train, pose_w, opt.clustering);
+            if (inputs.size() > 1 || weights.size() > 1) {
+                // the inner leave-one-group-out on the fold's training clips
+                std::vector<std::string> inner_groups;
+                for (std::size_t i : train) inner_groups.push_back(group[i]);
+                std::vector<std::vector<analysis>> pred(inputs.size());
+                std::vector<label_point> constant, truth;
+                for (const auto& g : detail::sorted_unique(inner_groups)) {
+                    std::vector<std::size_t> in_train, in_test;
+                    for (std::size_t i : train) {
+                        if (group[i] != g) in_train.push_back(i);
+                        else if (lo.neutral.empty() || clips[i].emotion != lo.neutral) in_test.push_back(i);
+                    }
+                    if (in_test.empty()) continue;
+                    std::vector<std::vector<analysis>> p;
+                    try {
+                        for (auto v : inputs) p.push_back(predict(v, wc, in_train, in_test, nullptr));
+                    } catch (const error&) {
+                        continue;  // an inner fold one of the candidates cannot fit is left out for all
+                    }
+                    const label_point c = mean_label(in_train);
+                    for (std::size_t v = 0; v < inputs.size(); ++v) pred[v].insert(pred[v].end(), p[v].begin(), p[v].end());
+                    for (std::size_t i : in_test) constant.push_back(c), truth.push_back(table.at(clips[i].emotion, table_name));
+                }
+                choice = choose_variant(pred, constant, truth, weights);
+            }
+        } catch (const error& e) {
+            rep.failed_folds.push_back(rep.folds[f] + ": " + e.what());
+            bar.update(static_cast<long>(f + 1));
+            continue;
+        }
+        const analysis_input input = inputs[choice.input];
         rcm_model m;
         std::vector<analysis> an;
         try {
-            an = detail::fit_and_analyse(clips, relative ? rel : feats, train, test, fs, table, table_name, opt, &m);
+            an = predict(input, wc, train, test, &m);
         } catch (const error& e) {
             rep.failed_folds.push_back(rep.folds[f] + ": " + e.what());
             bar.update(static_cast<long>(f + 1));
             continue;
         }
         ++fitted;
+        const bool relative = input == analysis_input::relative;
         rep.relative_folds += relative ? 1 : 0;
+        ++rep.input_folds[to_string(input)];
+        shrink_sum += choice.shrink;
         rep.mean_selected += static_cast<double>(m.selected.size());
         rep.mean_pca_dims += static_cast<double>(m.pca.dims());
-        double bv = 0, ba = 0;
-        for (std::size_t i : train) {
-            const auto& l = table.at(clips[i].emotion, table_name);
-            bv += l.valence / static_cast<double>(train.size());
-            ba += l.arousal / static_cast<double>(train.size());
-        }
+        const double bv = base.valence, ba = base.arousal;
         for (std::size_t k = 0; k < test.size(); ++k) {
             const std::size_t i = test[k];
-            const analysis& a = an[k];
+            const analysis a = choice.shrink == 1.0 ? an[k] : shrink_toward(an[k], bv, ba, choice.shrink);
             const auto& l = table.at(clips[i].emotion, table_name);
             eval_sample es;
             es.name = clips[i].name;
@@ -796,6 +1164,8 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
             es.baseline_distance = std::hypot(bv - l.valence, ba - l.arousal);
             es.neutral = !lo.neutral.empty() && clips[i].emotion == lo.neutral;
             es.relative = relative;
+            es.input = to_string(input);
+            es.shrink = choice.shrink;
             qbase += quadrant(bv, ba) == quadrant(l.valence, l.arousal) ? 1 : 0;
             rep.samples.push_back(es);
         }
@@ -811,7 +1181,10 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
     }
     if (ne > 0) rep.emotional_distance /= ne, rep.emotional_baseline_distance /= ne;
     rep.baseline_quadrant_accuracy = n > 0 ? static_cast<double>(qbase) / n : 0;
-    if (fitted) rep.mean_selected /= static_cast<double>(fitted), rep.mean_pca_dims /= static_cast<double>(fitted);
+    if (fitted) {
+        rep.mean_selected /= static_cast<double>(fitted), rep.mean_pca_dims /= static_cast<double>(fitted);
+        rep.mean_shrink = shrink_sum / static_cast<double>(fitted);
+    }
     return rep;
 }
 
