@@ -32,8 +32,13 @@ endif()
 run_ok(analyse_csv rcm analyse --model ${M} ${D}/hand_pointing_sad_0.csv)
 
 run_ok(eval rcm eval --data ${D} --min-features 10 --csv ${WORK_DIR}/eval.csv --svg ${WORK_DIR}/eval.svg)
-if(NOT last_output MATCHES "leave-one-content-out on .*: 7 folds, 35 clips" OR NOT last_output MATCHES "right quadrant")
+if(NOT last_output MATCHES "leave-one-content-out on .*: 7 folds, 35 clips" OR NOT last_output MATCHES "right quadrant"
+   OR NOT last_output MATCHES "inputs per fold")  # the default: the inner choice of input and shrinkage
   message(FATAL_ERROR "rcm eval output:\n${last_output}")
+endif()
+run_ok(eval_paper rcm eval --data ${D} --min-features 10 --input paper --shrink none)
+if(NOT last_output MATCHES "right quadrant" OR last_output MATCHES "inputs per fold")
+  message(FATAL_ERROR "rcm eval --input paper --shrink none output:\n${last_output}")
 endif()
 if(NOT EXISTS ${WORK_DIR}/eval.csv OR NOT EXISTS ${WORK_DIR}/eval.svg)
   message(FATAL_ERROR "rcm eval did not write the CSV and SVG")

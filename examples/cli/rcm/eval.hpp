@@ -3,7 +3,8 @@
 // the label's coordinates, share of predictions in the label's quadrant, next to a constant predictor (the
 // training labels' mean point). `--relative on|auto` reads features against the same content's neutral clips;
 // `--input` and `--shrink` choose what is mapped and how far the point is pulled toward the constant predictor,
-// fixed or per fold by an inner leave-one-content-out (docs/circumplex.md).
+// fixed or per fold by an inner leave-one-content-out (docs/circumplex.md); both default to that choice (`auto`),
+// and `--input paper --shrink none` is the paper's analysis.
 #pragma once
 
 #include "common.hpp"
@@ -18,7 +19,8 @@ namespace handemo::cli::rcm_cmd {
 
 struct eval_run {
     fit_cli f;
-    std::string by = "content", csv, svg, relative = "off", neutral, input = "paper", shrink = "none";
+    std::string by = "content", csv, svg, relative, neutral, input = "auto", shrink = "auto";
+    bool input_given = false, shrink_given = false;
 };
 
 inline void run_eval(eval_run& o)
@@ -35,19 +37,26 @@ inline void run_eval(eval_run& o)
         else throw handemo::value_error("rcm eval: --by " + o.by + " is not 'content' or 'take'");
     }
     handemo::rcm::loo_options lo;
-    lo.relative = handemo::rcm::parse_relative_features(o.relative);
     lo.neutral = o.neutral;
-    if (o.input != "paper") lo.inputs = handemo::rcm::parse_analysis_inputs(o.input);
-    lo.shrink = handemo::rcm::parse_shrink(o.shrink);
     if (lo.neutral.empty())  // the label called neutral, else Bandai's normal
         for (const char* n : {"neutral", "normal"})
             if (lo.neutral.empty() && std::any_of(set.clips.begin(), set.clips.end(), [&](const auto& c) { return c.emotion == n; })) lo.neutral = n;
-    if (lo.relative != handemo::rcm::relative_features::off && lo.neutral.empty())
-        throw handemo::value_error("rcm eval: --relative " + o.relative + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
-    if ((o.input == "relative" || o.input == "judge" || o.input == "auto") && lo.neutral.empty())
-        throw handemo::value_error("rcm eval: --input " + o.input + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
-    if (o.input != "paper" && lo.relative != handemo::rcm::relative_features::off)
-        throw handemo::value_error("rcm eval: --relative " + o.relative + " and --input " + o.input + ": give one of them");
+    if (!o.relative.empty()) {  // the earlier option: its inputs, and no shrinkage unless --shrink says so
+        if (o.input_given) throw handemo::value_error("rcm eval: --relative " + o.relative + " and --input " + o.input + ": give one of them");
+        lo.relative = handemo::rcm::parse_relative_features(o.relative);
+        lo.shrink = handemo::rcm::parse_shrink(o.shrink_given ? o.shrink : "none");
+        if (lo.relative != handemo::rcm::relative_features::off && lo.neutral.empty())
+            throw handemo::value_error("rcm eval: --relative " + o.relative + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
+    } else {
+        lo.inputs = handemo::rcm::parse_analysis_inputs(o.input);
+        lo.shrink = handemo::rcm::parse_shrink(o.shrink);
+        if ((o.input == "relative" || o.input == "judge" || (o.input == "auto" && o.input_given)) && lo.neutral.empty())
+            throw handemo::value_error("rcm eval: --input " + o.input + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
+        if (lo.neutral.empty()) {  // the default auto without a neutral label: the inputs that need none
+            lo.inputs = {handemo::rcm::analysis_input::paper, handemo::rcm::analysis_input::clusters};
+            std::cout << "rcm eval: no clip is labelled neutral or normal: --input auto tries paper and clusters only\n";
+        }
+    }
     const auto r = handemo::rcm::evaluate_loo(set.clips, group, table, o.f.labels, o.f.opt, lo);
     char buf[512];
     std::snprintf(buf, sizeof buf,
@@ -63,7 +72,7 @@ inline void run_eval(eval_run& o)
                       r.folds.size() - r.failed_folds.size());
         std::cout << buf;
     }
-    if (o.input != "paper" || lo.shrink.size() > 1 || lo.shrink.front() != 1.0) {
+    if (lo.inputs.size() > 1 || lo.relative == handemo::rcm::relative_features::automatic || lo.shrink.size() > 1) {
         std::string line = "rcm eval: inputs per fold:";
         for (const auto& [name, folds] : r.input_folds) line += " " + name + " " + std::to_string(folds);
         std::snprintf(buf, sizeof buf, "; mean shrinkage weight %.2f\n", r.mean_shrink);
@@ -111,22 +120,25 @@ inline void add_eval(CLI::App& rcm)
     sub->add_option("--csv", o->csv, "Per-clip predictions (CSV)");
     sub->add_option("--svg", o->svg, "Circumplex with every held-out prediction");
     sub->add_option("--relative", o->relative,
-                    "Features as the change from the same content's neutral clips: off (the paper), on, or auto (chosen per fold "
-                    "by an inner leave-one-out on its training clips; docs/circumplex.md)")
-        ->check(CLI::IsMember({"off", "on", "auto"}))
-        ->capture_default_str();
-    sub->add_option("--input", o->input,
+                    "Instead of --input: features as the change from the same content's neutral clips: off (the paper), on, or "
+                    "auto (chosen per fold by an inner leave-one-out on its training clips); no shrinkage unless --shrink is given")
+        ->check(CLI::IsMember({"off", "on", "auto"}));
+    auto* input = sub->add_option("--input", o->input,
                     "What the RBF maps: paper (Table 1 features, global selection), relative (the same against the content's "
                     "neutral clips), clusters (per-pose-cluster selections), judge (the full-rate classifier's features against "
                     "the content's neutral clips), or auto (chosen per fold by an inner leave-one-out; docs/circumplex.md)")
         ->check(CLI::IsMember({"paper", "relative", "clusters", "judge", "auto"}))
         ->capture_default_str();
-    sub->add_option("--shrink", o->shrink,
+    auto* shrink = sub->add_option("--shrink", o->shrink,
                     "Pull each point toward the constant predictor: none, a weight in [0, 1] (0: the constant), or auto "
                     "(0, 0.1 .. 1 chosen per fold by the inner leave-one-out, jointly with --input)")
         ->capture_default_str();
     sub->add_option("--neutral", o->neutral, "The neutral label (default: neutral, else normal, when the data has it)");
-    sub->callback([o] { run_eval(*o); });
+    sub->callback([o, input, shrink] {
+        o->input_given = input->count() > 0;
+        o->shrink_given = shrink->count() > 0;
+        run_eval(*o);
+    });
 }
 
 }  // namespace handemo::cli::rcm_cmd
