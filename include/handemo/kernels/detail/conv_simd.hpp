@@ -23,6 +23,9 @@
 #include <type_traits>
 
 #include <xsimd/xsimd.hpp>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 
 #include <handemo/kernels/reference.hpp>
 
@@ -498,27 +501,54 @@ inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, cons
 /// Whether the packing loops gather whole vectors (float, int32 indices: one index vector per float vector) instead
 /// of one element at a time. The indices are offsets into one batch chunk of the input, so it must have fewer than
 /// 2^31 elements.
+/// (xsimd 8's batch::gather does not reach the AVX2 / AVX-512 gather instructions, it inserts lane by lane, so the
+/// gather is written with the intrinsics, and only for those two.)
 template <class T>
-inline constexpr bool vector_gather_type = std::is_same_v<T, float> && xsimd::batch<std::int32_t>::size == simd_t<T>::size;
+inline constexpr bool vector_gather_type =
+#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
+    std::is_same_v<T, float> && simd_t<T>::size == 16 && xsimd::batch<std::int32_t>::size == 16;
+#elif defined(__AVX2__) && (defined(__x86_64__) || defined(__i386__))
+    std::is_same_v<T, float> && simd_t<T>::size == 8 && xsimd::batch<std::int32_t>::size == 8;
+#else
+    false;
+#endif
 template <class T>
 inline bool use_vector_gather(std::size_t input_elements) noexcept
 {
     return vector_gather_type<T> && input_elements < std::size_t(INT32_MAX);
 }
 
-/// One vector of a packing loop: x[base + lane] where row + lane's row offset is in [0, h) and col + its column
-/// offset in [0, w), else 0: a gather whose out-of-range lanes read x[0] and are then cleared, so every lane
-/// holds exactly what the element-wise loop stores.
+/// One vector of a packing loop: x[index] in each lane whose row is in [0, h) and column in [0, w), else 0: a masked
+/// gather (out-of-range lanes read nothing), so every lane holds exactly what the element-wise loop stores.
 template <class T>
 inline simd_t<T> gather_window(const T* x, const xsimd::batch<std::int32_t>& index, const xsimd::batch<std::int32_t>& row,
                                const xsimd::batch<std::int32_t>& col, std::int32_t h, std::int32_t w) noexcept
 {
-    static_assert(vector_gather_type<T>, "gather_window: float with as many int32 lanes");
     using I = xsimd::batch<std::int32_t>;
-    const auto in = (row >= I(0)) & (row < I(h)) & (col >= I(0)) & (col < I(w));
-    const I safe = xsimd::select(in, index, I(0));
-    const I keep = xsimd::select(in, I(-1), I(0));
-    return simd_t<T>::gather(x, safe) & xsimd::bitwise_cast<simd_t<T>>(keep);
+#if (defined(__AVX512F__) || defined(__AVX2__)) && (defined(__x86_64__) || defined(__i386__))
+    static_assert(vector_gather_type<T>, "gather_window: float with as many int32 lanes");
+    const auto ri = static_cast<typename I::register_type>(row), ci = static_cast<typename I::register_type>(col);
+    const auto ii = static_cast<typename I::register_type>(index);
+#if defined(__AVX512F__)
+    // unsigned compares: a negative row or column is a large unsigned number, out of range like one past the end
+    const __mmask16 in = _mm512_cmplt_epu32_mask(ri, _mm512_set1_epi32(h)) & _mm512_cmplt_epu32_mask(ci, _mm512_set1_epi32(w));
+    return simd_t<T>(_mm512_mask_i32gather_ps(_mm512_setzero_ps(), in, ii, x, int(sizeof(float))));
+#else
+    const __m256i row_in = _mm256_and_si256(_mm256_cmpgt_epi32(ri, _mm256_set1_epi32(-1)), _mm256_cmpgt_epi32(_mm256_set1_epi32(h), ri));
+    const __m256i col_in = _mm256_and_si256(_mm256_cmpgt_epi32(ci, _mm256_set1_epi32(-1)), _mm256_cmpgt_epi32(_mm256_set1_epi32(w), ci));
+    const __m256 in = _mm256_castsi256_ps(_mm256_and_si256(row_in, col_in));
+    return simd_t<T>(_mm256_mask_i32gather_ps(_mm256_setzero_ps(), x, ii, in, int(sizeof(float))));
+#endif
+#else
+    // element by element (no target here takes this path: vector_gather_type is false without AVX2 or AVX-512)
+    constexpr int L = simd_lanes<T>;
+    static_assert(int(I::size) == L, "gather_window: as many int32 lanes as T lanes");
+    alignas(64) std::int32_t ix[L], r[L], c[L];
+    alignas(64) T out[L];
+    index.store_aligned(ix), row.store_aligned(r), col.store_aligned(c);
+    for (int i = 0; i < L; ++i) out[i] = unsigned(r[i]) < unsigned(h) && unsigned(c[i]) < unsigned(w) ? x[ix[i]] : T(0);
+    return simd_t<T>::load_aligned(out);
+#endif
 }
 
 /// Forward pass (also the backward-data of the transposed convolution).
