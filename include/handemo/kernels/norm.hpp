@@ -12,6 +12,24 @@
 
 namespace handemo::kernels {
 
+namespace detail {
+
+/// xsimd::batch<double>::size values of p as doubles (exact). For float with AVX2 or AVX-512 one converting
+/// instruction (xsimd 8's converting load goes element by element).
+template <class T>
+inline xsimd::batch<double> load_as_double(const T* p) noexcept
+{
+    using D = xsimd::batch<double>;
+#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
+    if constexpr (std::is_same_v<T, float> && D::size == 8) return D(_mm512_cvtps_pd(_mm256_loadu_ps(p)));
+#elif defined(__AVX2__) && (defined(__x86_64__) || defined(__i386__))
+    if constexpr (std::is_same_v<T, float> && D::size == 4) return D(_mm256_cvtps_pd(_mm_loadu_ps(p)));
+#endif
+    return D::load_unaligned(p);
+}
+
+}  // namespace detail
+
 /// @brief Mean and biased variance of v[0..M) (two passes, sums in double). M > 0.
 template <class T>
 void channel_moments(const T* v, int M, double& mean, double& var) noexcept
@@ -24,8 +42,8 @@ void channel_moments(const T* v, int M, double& mean, double& var) noexcept
         constexpr int L = int(D::size);
         D a0(0.0), a1(0.0);
         for (; m + 2 * L <= M; m += 2 * L) {
-            a0 += D::load_unaligned(v + m);
-            a1 += D::load_unaligned(v + m + L);
+            a0 += detail::load_as_double(v + m);
+            a1 += detail::load_as_double(v + m + L);
         }
         s = xsimd::hadd(a0 + a1);
     }
@@ -38,7 +56,7 @@ void channel_moments(const T* v, int M, double& mean, double& var) noexcept
         const D mu(mean);
         D a0(0.0), a1(0.0);
         for (; m + 2 * L <= M; m += 2 * L) {
-            const D d0 = D::load_unaligned(v + m) - mu, d1 = D::load_unaligned(v + m + L) - mu;
+            const D d0 = detail::load_as_double(v + m) - mu, d1 = detail::load_as_double(v + m + L) - mu;
             a0 = xsimd::fma(d0, d0, a0);
             a1 = xsimd::fma(d1, d1, a1);
         }
