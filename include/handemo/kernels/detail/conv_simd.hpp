@@ -661,12 +661,15 @@ inline void backward_data_stride1(const conv_geometry& g, const T* gy, const T* 
 {
     const int kh = g.kernel_h, kw = g.kernel_w, Ci = g.in_channels, Co = g.out_channels;
     T* wf = scratch;
-    for (int o = 0; o < Co; ++o)
-        for (int c = 0; c < Ci; ++c)
-            for (int u = 0; u < kh; ++u)
-                for (int v = 0; v < kw; ++v)
-                    wf[((std::ptrdiff_t(c) * Co + o) * kh + (kh - 1 - u)) * kw + (kw - 1 - v)] =
-                        w[((std::ptrdiff_t(o) * Ci + c) * kh + u) * kw + v];
+    // (kh - 1 - u) kw + (kw - 1 - v) = kk - 1 - (u kw + v): each (o, c) block of kk taps is written reversed into
+    // block (c, o), in the order the blocks are written
+    const int kk = kh * kw;
+    for (int c = 0; c < Ci; ++c)
+        for (int o = 0; o < Co; ++o) {
+            const T* src = w + (std::ptrdiff_t(o) * Ci + c) * kk;
+            T* dst = wf + (std::ptrdiff_t(c) * Co + o) * kk;
+            for (int t = 0; t < kk; ++t) dst[t] = src[kk - 1 - t];
+        }
     forward(flipped_geometry(g), gy, wf, static_cast<const T*>(nullptr), gx, scratch + g.w_size(), true);
 }
 
