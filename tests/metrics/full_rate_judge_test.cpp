@@ -258,3 +258,90 @@ TEST_CASE("full-rate judge: recognises emotions of synthetic motion types it was
     CHECK(clf.cv_accuracy_chosen() > 0.75);
     CHECK(ok >= 6);  // chance is 2 of 10
 }
+
+TEST_CASE("full-rate judge: the per-joint input set appends every joint's wrapped posture change")
+{
+    const clip n0 = synthesize(hand_motion::gripping, emotion::neutral, 0, 5), a0 = synthesize(hand_motion::gripping, emotion::angry, 0, 5);
+    const auto fn = full_rate_features(n0), fa = full_rate_features(a0);
+    const std::size_t J = n0.skel.size();
+    const auto pooled = full_rate_change(fa, fn), joints = full_rate_change(fa, fn, full_rate_inputs::joints);
+    REQUIRE(pooled.size() == full_rate_change_count(J));
+    REQUIRE(joints.size() == full_rate_change_count(J, full_rate_inputs::joints));
+    CHECK(joints.size() == 6 * J + 11);
+    for (std::size_t i = 0; i < pooled.size(); ++i) CHECK(joints[i] == pooled[i]);  // the pooled set first, unchanged
+    for (std::size_t j = 0; j < J; ++j)
+        for (std::size_t a = 0; a < 3; ++a)
+            CHECK(joints[3 * J + 11 + 3 * j + a] == doctest::Approx(wrap_angle_deg(fa[J + 3 * j + a] - fn[J + 3 * j + a])));
+    // a turn on one angle changes nothing there either
+    auto turned = fn;
+    turned[J + 4] += 360;
+    for (double v : full_rate_change(turned, fn, full_rate_inputs::joints)) CHECK(v == doctest::Approx(0.0).scale(1.0));
+    CHECK(std::string(to_string(full_rate_inputs::joints)) == "joints");
+    CHECK(parse_full_rate_inputs("pooled") == full_rate_inputs::pooled);
+    CHECK_THROWS_WITH_AS((void)parse_full_rate_inputs("all"), doctest::Contains("'all'"), value_error);
+}
+
+namespace {
+
+// Feature vectors of 2 joints (6J + 8 = 20 values) whose emotion shows only in the posture of the two joints: "bow" turns
+// joint 0 by 15 deg, "lift" joint 1 by as much. Pooled over the joints the two are the same change; per joint they
+// are not. `speed_cue` adds a second cue the pooled set sees: bow raises the log mean speed (clip feature 6J + 1),
+// lift the log mean acceleration (6J + 2).
+struct posture_toy {
+    std::vector<std::vector<double>> f, r;
+    std::vector<std::string> y, g;
+};
+posture_toy posture_set(bool speed_cue, std::size_t salt)
+{
+    posture_toy t;
+    const std::size_t J = 2, D = full_rate_feature_count(J);
+    const char* names[] = {"neutral", "bow", "lift"};
+    std::size_t k = salt;
+    for (int content = 0; content < 5; ++content)
+        for (int take = 0; take < 3; ++take) {
+            std::vector<double> ref(D);
+            for (std::size_t i = 0; i < D; ++i) ref[i] = 10 * noise2(++k) + 30.0 * content;
+            for (int e = 0; e < 3; ++e) {
+                auto f = ref;
+                for (std::size_t i = 0; i < D; ++i) f[i] += 0.5 * noise2(++k);
+                if (e == 1) f[J + 0] += 15.0;  // joint 0's x angle
+                if (e == 2) f[J + 3] += 15.0;  // joint 1's x angle
+                if (speed_cue && e > 0) f[6 * J + static_cast<std::size_t>(e)] += 3.0;
+                t.f.push_back(f), t.r.push_back(ref), t.y.push_back(names[e]), t.g.push_back("c" + std::to_string(content));
+            }
+        }
+    return t;
+}
+
+}  // namespace
+
+TEST_CASE("full-rate judge: keeps the per-joint set where only it recognises, the pooled one on a tie")
+{
+    const auto train = posture_set(false, 0), test = posture_set(false, 5000);
+    full_rate_judge judge;
+    judge.fit(train.f, train.r, train.y, train.g);
+    REQUIRE(judge.candidates().size() == 2);
+    REQUIRE(judge.candidate_cv_accuracy().size() == 2);
+    MESSAGE("posture toy: cross-validated pooled " << judge.candidate_cv_accuracy()[0] << ", joints " << judge.candidate_cv_accuracy()[1]);
+    CHECK(judge.candidate_cv_accuracy()[1] > judge.candidate_cv_accuracy()[0] + 0.2);
+    CHECK(judge.inputs() == full_rate_inputs::joints);
+    CHECK(judge.classifier().cv_accuracy_chosen() == judge.candidate_cv_accuracy()[1]);
+    std::size_t ok = 0;
+    for (std::size_t i = 0; i < test.f.size(); ++i) ok += judge.predict(test.f[i], test.r[i]) == test.y[i];
+    CHECK(ok >= test.f.size() * 9 / 10);
+    // a speed cue both sets see: both recognise everything, and the tie keeps the pooled set
+    const auto easy = posture_set(true, 0);
+    full_rate_judge tie;
+    tie.fit(easy.f, easy.r, easy.y, easy.g);
+    CHECK(tie.candidate_cv_accuracy()[0] == 1.0);
+    CHECK(tie.candidate_cv_accuracy()[1] == 1.0);
+    CHECK(tie.inputs() == full_rate_inputs::pooled);
+    // one candidate: no choice
+    full_rate_judge only;
+    only.fit(train.f, train.r, train.y, train.g, {full_rate_inputs::pooled});
+    CHECK(only.inputs() == full_rate_inputs::pooled);
+    const auto p = only.probabilities(test.f[0], test.r[0]);
+    CHECK(p.size() == 3);
+    CHECK_THROWS_AS(only.fit(train.f, train.r, train.y, train.g, {}), value_error);
+    CHECK_THROWS_AS(only.fit(train.f, {}, train.y, train.g), value_error);
+}

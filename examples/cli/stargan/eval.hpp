@@ -120,6 +120,17 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
                                                "score the transfers of G's convolution weights as trained, or rounded to IEEE "
                                                "binary16 (with --reuse-models: the same trained models, the accuracy cost of "
                                                "binary16 weights)");
+    sub->add_option_function<std::string>(
+           "--judge-inputs",
+           [o](const std::string& v) {
+               if (v == "auto")
+                   o->opt.judge_inputs = {handemo::metrics::full_rate_inputs::pooled, handemo::metrics::full_rate_inputs::joints};
+               else
+                   o->opt.judge_inputs = {handemo::metrics::parse_full_rate_inputs(v)};
+           },
+           "The full-rate judge's input set: pooled (the posture pooled over the joints, the judge of earlier reports), joints "
+           "(every joint's posture besides) or auto (each fold keeps the one its leave-one-content-out check on the training "
+           "clips recognises best; docs/evaluation.md); default auto");
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
     sub->add_flag("--continuous", o->continuous,
                   "Also measure the continuous control on every fold (equality at the labels' points, monotone paths from neutral, "

@@ -97,6 +97,10 @@ struct eval_options {
     /// folds. An error in a process is thrown there alone and the others wait for it at the wave's end: the caller
     /// ends them (the CLI: MPI_Abort).
     dist::process_group* group = nullptr;
+    /// The input sets the full-rate judge chooses from in each fold (metrics::full_rate_judge: the set with the higher
+    /// leave-one-content-out accuracy on the fold's training clips, the earlier on a tie). One set: that set, no choice
+    /// ({pooled} is the judge of earlier reports).
+    std::vector<metrics::full_rate_inputs> judge_inputs{metrics::full_rate_inputs::pooled, metrics::full_rate_inputs::joints};
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by
@@ -168,6 +172,9 @@ inline std::string options_text(const eval_options& o)
     if (o.group && o.group->ranks() > 1)
         s += "processes " + std::to_string(o.group->ranks()) + " (the trainings dealt round them in waves, the folds scored by process 0)\n";
     s += "classifier shrinkage " + std::to_string(o.shrinkage) + "\n";
+    s += "full-rate judge inputs";
+    for (std::size_t i = 0; i < o.judge_inputs.size(); ++i) s += std::string(i ? ", " : " ") + metrics::to_string(o.judge_inputs[i]);
+    s += o.judge_inputs.size() > 1 ? " (each fold keeps the one its leave-one-content-out check recognises best)\n" : "\n";
     s += std::string("inference weights ") + kernels::weight_storage_name(o.inference_weights) + "\n";
     if (o.synth_seed) s += "synthetic set seed " + std::to_string(*o.synth_seed) + " at " + std::to_string(o.synth_fps) + " fps (oracle row)\n";
     for (const auto& x : o.extensions) s += x->options_text();
@@ -529,16 +536,16 @@ metrics::nearest_centroid_classifier fit_classifier(const std::vector<const prep
     return clf;
 }
 
-/// The full-rate judge of a fold (metrics::full_rate_classifier), fitted on its training clips only: each clip read
+/// The full-rate judge of a fold (metrics::full_rate_judge), fitted on its training clips only: each clip read
 /// against the neutral clip of its content and take (its content's first neutral clip when that take has none;
-/// a content without a neutral clip is left out), the contents as the groups of its cross-validation. Records the
-/// cross-validated accuracy and the weight chosen.
+/// a content without a neutral clip is left out), the contents as the groups of its cross-validation, the input set
+/// chosen from `inputs` by that cross-validation. Records the set kept, its cross-validated accuracy and the weight.
 /// @throws value_error when no training clip has a neutral reference.
 template <std::size_t K>
-metrics::full_rate_classifier fit_full_rate_judge(const std::vector<const prepared_clip<K>*>& train_p, const std::string& neutral,
-                                                  fold_summary& fsum)
+metrics::full_rate_judge fit_full_rate_judge(const std::vector<const prepared_clip<K>*>& train_p, const std::string& neutral,
+                                             const std::vector<metrics::full_rate_inputs>& inputs, fold_summary& fsum)
 {
-    std::vector<std::vector<double>> x;
+    std::vector<std::vector<double>> x, r;
     std::vector<std::string> y, g;
     for (const auto* p : train_p) {
         const prepared_clip<K>* ref = nullptr;  // the same take's neutral clip, else the content's first
@@ -551,13 +558,18 @@ metrics::full_rate_classifier fit_full_rate_judge(const std::vector<const prepar
             if (!ref) ref = q;
         }
         if (!ref) continue;
-        x.push_back(metrics::full_rate_change(p->full_f, ref->full_f)), y.push_back(p->src->emotion), g.push_back(p->src->content);
+        x.push_back(p->full_f), r.push_back(ref->full_f), y.push_back(p->src->emotion), g.push_back(p->src->content);
     }
     if (x.empty()) throw value_error("eval: the full-rate judge has no training clip with a '" + neutral + "' clip of its content");
-    metrics::full_rate_classifier judge;
-    judge.fit(x, y, g);
-    fsum.judge_cv_acc = judge.cv_accuracy_chosen();
-    fsum.judge_lambda = judge.lambda();
+    metrics::full_rate_judge judge;
+    judge.fit(x, r, y, g, inputs);
+    fsum.judge_cv_acc = judge.classifier().cv_accuracy_chosen();
+    fsum.judge_lambda = judge.classifier().lambda();
+    fsum.judge_inputs = metrics::to_string(judge.inputs());
+    fsum.judge_candidates.clear();
+    for (std::size_t i = 0; i < judge.candidates().size(); ++i)
+        fsum.judge_candidates += (i ? ", " : "") + std::string(metrics::to_string(judge.candidates()[i])) + " " +
+                                 detail::fmt(100 * judge.candidate_cv_accuracy()[i], 0) + "%";
     return judge;
 }
 
@@ -681,7 +693,7 @@ inline report_section detail_section(const std::vector<track_series>& curves, co
 template <std::size_t K>
 sample_record score_output(const clip& out, const prepared_clip<K>& in, const prepared_clip<K>& real, const std::string& held,
                            const std::string& target, const char* method, const metrics::nearest_centroid_classifier& clf,
-                           const metrics::full_rate_classifier& judge,
+                           const metrics::full_rate_judge& judge,
                            const content_recogniser<K>& content_of, double real_rom, double real_speed,
                            const std::vector<std::shared_ptr<method_extension>>& extensions)
 {
@@ -694,7 +706,7 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
     s.rmse_input = metrics::keyframe_rmse(kf, in.kf);
     s.predicted_emotion = clf.predict(metrics::motion_features(kf, ch.duration));
     s.emotion_ok = s.predicted_emotion == target;
-    s.predicted_emotion_full = judge.predict(metrics::full_rate_change(metrics::full_rate_features(out), in.full_f));
+    s.predicted_emotion_full = judge.predict(metrics::full_rate_features(out), in.full_f);
     s.emotion_ok_full = s.predicted_emotion_full == target;
     s.predicted_content = content_of(kf);
     s.content_ok = s.predicted_content == held;
@@ -915,7 +927,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
             }
         }
         const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
-        const auto judge = detail::fit_full_rate_judge<K>(split.train_p, info.neutral, fsum);
+        const auto judge = detail::fit_full_rate_judge<K>(split.train_p, info.neutral, opt.judge_inputs, fsum);
         detail::seen_content_rmse<K>(models.model, split.train_p, info.neutral, fsum);
 
         // ---- extensions (eval/extension.hpp) fit on the fold's training clips only

@@ -5,7 +5,8 @@
 //  - regression: every held-out clip (every emotion) is analysed (Eq. 1); the report gets the mean
 //    circumplex distance between the predicted and the label's (valence, arousal) and the share in the
 //    label's quadrant, next to a constant predictor (the training clips' mean label point), per fold and
-//    pooled: the same numbers as `handemo rcm eval` for the same folds;
+//    pooled: the same numbers as `handemo rcm eval --input paper --shrink none` (the paper's analysis; that
+//    command's default chooses its input and shrinkage per fold) for the same folds;
 //  - synthesis: each held-out neutral clip is moved to each target label's circumplex point
 //    (rcm::stylise_to_point(), Section 4: rules, IK, spline), the method "rcm", scored with the metrics of
 //    every other method (RMSE to the real clip, independent classifier, content kept, ROM and speed errors);

@@ -68,6 +68,8 @@ struct fold_summary {
     double classifier_train_acc = 0;  ///< the emotion classifier's accuracy on its own training clips
     /// The full-rate judge: its leave-one-content-out accuracy inside the training clips and the L2 weight it chose
     double judge_cv_acc = std::nan(""), judge_lambda = std::nan("");
+    /// The input set it kept (metrics::full_rate_inputs) and each candidate's cross-validated accuracy ("pooled 71%, joints 83%")
+    std::string judge_inputs, judge_candidates;
     /// Seen-content diagnostic: mean keyframe RMSE to the real target when the neutral takes of the
     /// training contents are transferred (StarGAN, and identity for scale): tells a model that does not fit
     /// its training data from one that does not generalise to the held-out content.
@@ -493,10 +495,10 @@ inline std::string report_introduction(const eval_result& r, const std::vector<m
     s += "Metrics: RMSE over the 9 uniform keyframes (differences wrapped to (-180, 180]); emotion recognised: a "
          "nearest-centroid classifier (shrunk pooled within-class covariance) on keyframe features, trained only on the "
          "real training clips of the fold, never on the discriminator; recognised, full-rate judge: a second, independent "
-         "classifier (metrics::full_rate_classifier: the change of full-rate features (per joint range, speed and tremor, "
-         "the posture, duration, acceleration, tremor frequency, joint lags) against the neutral input, an L2 logistic "
-         "regression whose weight is chosen by leave-one-content-out cross-validation inside the fold's real training "
-         "clips); content kept: the nearest `" + r.neutral +
+         "classifier (metrics::full_rate_judge: the change of full-rate features (per joint range, speed and tremor, "
+         "the posture pooled over the joints or also per joint, duration, acceleration, tremor frequency, joint lags) "
+         "against the neutral input, an L2 logistic regression whose weight and input set are chosen by leave-one-content-out "
+         "cross-validation inside the fold's real training clips); content kept: the nearest `" + r.neutral +
          "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "
          "output / input measured on 9-keyframe reconstructions; ratio errors: the absolute log of (output ratio / real ratio); "
          "duration ratio error: |log(duration out / duration real)| (identity keeps the input's duration); "
@@ -601,7 +603,8 @@ inline std::string report_folds(const eval_result& r, const std::vector<metric_d
              " s; training-set diagnostics: D/acc " + detail::fmt(100 * f.train_d_acc, 0) + "%, G/cls " + detail::fmt(f.train_g_cls, 3) +
              ", emotion classifier on its training clips " + detail::fmt(100 * f.classifier_train_acc, 0) +
              "%, full-rate judge " + detail::fmt(100 * f.judge_cv_acc, 0) + "% by leave-one-content-out inside them (L2 weight " +
-             detail::fmt(f.judge_lambda, 3) + "); seen-content transfer (training contents' neutral takes to their real targets) RMSE " +
+             detail::fmt(f.judge_lambda, 3) +
+             (f.judge_inputs.empty() ? std::string() : ", inputs " + f.judge_inputs + " of " + f.judge_candidates) + "); seen-content transfer (training contents' neutral takes to their real targets) RMSE " +
              detail::fmt(f.seen_rmse_stargan) + " deg for StarGAN vs " + detail::fmt(f.seen_rmse_identity) + " for identity" +
              (f.tempo_estimator.empty() ? std::string()
                                         : "; tempo " + f.tempo_estimator + ", shrink weight " + detail::fmt(f.tempo_shrink_weight) +

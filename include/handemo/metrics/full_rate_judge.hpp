@@ -11,6 +11,9 @@
 //   L(W) = -(1/N) sum_n log softmax(W x_n)_{y_n} + (lambda / 2) sum_{c, i > 0} W_ci^2,
 // minimised by L-BFGS; lambda is chosen from a fixed grid by leave-one-group-out cross-validation on the
 // training samples (the groups are contents, so the weight that recognises emotions on unseen contents wins).
+// The judge (full_rate_judge) reads the change in one of two input sets (full_rate_inputs): the posture pooled
+// per axis over the joints, or the posture of every joint besides; with both candidates it keeps the one whose
+// leave-one-content-out accuracy on its training clips is higher (a tie keeps the pooled, the smaller set).
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -190,29 +193,55 @@ inline std::vector<double> full_rate_features(const clip& c, const full_rate_fea
     return f;
 }
 
-/// @brief The number of values full_rate_change() gives for J joints: 3J + 11.
-constexpr std::size_t full_rate_change_count(std::size_t joints) noexcept { return 3 * joints + 11; }
+/// @brief The input sets the full-rate judge can read a change in (full_rate_change()).
+enum class full_rate_inputs {
+    pooled,  ///< per joint range, speed and tremor; the posture pooled per axis over the joints; the clip features (3J + 11)
+    joints,  ///< the pooled set and every joint's posture change besides (6J + 11): a head bowed, a chest lifted
+};
+
+/// @brief "pooled" or "joints".
+inline const char* to_string(full_rate_inputs i) noexcept { return i == full_rate_inputs::joints ? "joints" : "pooled"; }
+
+/// @brief Parses "pooled" or "joints".
+/// @throws value_error naming the value otherwise.
+inline full_rate_inputs parse_full_rate_inputs(std::string_view v)
+{
+    if (v == "pooled") return full_rate_inputs::pooled;
+    if (v == "joints") return full_rate_inputs::joints;
+    throw value_error("full-rate judge inputs '" + std::string(v) + "': expected pooled or joints");
+}
+
+/// @brief The number of values full_rate_change() gives for J joints: 3J + 11 (pooled), 6J + 11 (joints).
+constexpr std::size_t full_rate_change_count(std::size_t joints, full_rate_inputs inputs = full_rate_inputs::pooled) noexcept
+{
+    return (inputs == full_rate_inputs::joints ? 6 : 3) * joints + 11;
+}
 
 /// @brief What the full-rate judge reads: a clip's features (full_rate_features()) against those of a neutral clip
 /// of the same content (the same take where there is one), so that what the content sets (its joints' ranges,
 /// speeds and posture) cancels and what the emotion changes stays. 3J + 11 values: per joint the differences of
 /// log range, log speed and log tremor energy; per axis the mean over joints of the posture difference (wrapped
-/// into (-180, 180]); the differences of the 8 clip features.
+/// into (-180, 180]); the differences of the 8 clip features. With full_rate_inputs::joints, 3J values follow:
+/// each joint's posture difference per axis (wrapped, degrees), joint by joint.
 /// @throws shape_error when the two vectors differ in length or are not 6J + 8 long.
-inline std::vector<double> full_rate_change(const std::vector<double>& clip_features, const std::vector<double>& neutral_features)
+inline std::vector<double> full_rate_change(const std::vector<double>& clip_features, const std::vector<double>& neutral_features,
+                                            full_rate_inputs inputs = full_rate_inputs::pooled)
 {
     const std::size_t d = clip_features.size();
     if (d != neutral_features.size() || d < 8 || (d - 8) % 6 != 0)
         throw shape_error("full_rate_change: " + std::to_string(d) + " and " + std::to_string(neutral_features.size()) +
                           " features, expected two vectors of 6J + 8");
     const std::size_t J = (d - 8) / 6;
-    std::vector<double> out(full_rate_change_count(J), 0.0);
+    std::vector<double> out(full_rate_change_count(J, inputs), 0.0);
     for (std::size_t j = 0; j < J; ++j) {
         out[j] = clip_features[j] - neutral_features[j];                          // log range
         out[J + j] = clip_features[4 * J + j] - neutral_features[4 * J + j];      // log speed
         out[2 * J + j] = clip_features[5 * J + j] - neutral_features[5 * J + j];  // log tremor energy
-        for (std::size_t a = 0; a < 3; ++a)
-            out[3 * J + a] += wrap_angle_deg(clip_features[J + 3 * j + a] - neutral_features[J + 3 * j + a]) / static_cast<double>(J);
+        for (std::size_t a = 0; a < 3; ++a) {
+            const double d = wrap_angle_deg(clip_features[J + 3 * j + a] - neutral_features[J + 3 * j + a]);
+            out[3 * J + a] += d / static_cast<double>(J);
+            if (inputs == full_rate_inputs::joints) out[3 * J + 11 + 3 * j + a] = d;
+        }
     }
     for (std::size_t i = 0; i < 8; ++i) out[3 * J + 3 + i] = clip_features[6 * J + i] - neutral_features[6 * J + i];
     return out;
@@ -465,6 +494,79 @@ private:
     std::vector<double> mu_, sd_, w_;
     std::vector<double> cv_accuracy_;
     double cv_accuracy_chosen_ = std::nan("");
+};
+
+/// @brief The full-rate judge: a full_rate_classifier on the change full_rate_change() reads in one of its input
+/// sets, the set chosen by leave-one-group-out accuracy on the training samples.
+class full_rate_judge {
+public:
+    /// @brief Fits on clips' full_rate_features() `clip_features`, each against its neutral reference's
+    /// `reference_features` (same order), with labels and groups as full_rate_classifier::fit(). For each set of
+    /// `candidates` (in order) the classifier is fitted with its own L2 weight chosen by the groups'
+    /// cross-validation; the set with the highest cross-validated accuracy at its chosen weight is kept, the earlier
+    /// set on a tie (so {pooled, joints} keeps the smaller set unless the larger recognises more).
+    /// @throws value_error for no candidate or counts that differ; as full_rate_classifier::fit() otherwise.
+    void fit(const std::vector<std::vector<double>>& clip_features, const std::vector<std::vector<double>>& reference_features,
+             const std::vector<std::string>& labels, const std::vector<std::string>& groups = {},
+             const std::vector<full_rate_inputs>& candidates = {full_rate_inputs::pooled, full_rate_inputs::joints})
+    {
+        if (candidates.empty()) throw value_error("full_rate_judge::fit: no input set to choose from");
+        if (clip_features.size() != reference_features.size())
+            throw value_error("full_rate_judge::fit: " + std::to_string(clip_features.size()) + " clips and " +
+                              std::to_string(reference_features.size()) + " references");
+        candidates_ = candidates;
+        cv_.clear();
+        bool have = false;
+        for (const auto inputs : candidates) {
+            std::vector<std::vector<double>> x;
+            x.reserve(clip_features.size());
+            for (std::size_t n = 0; n < clip_features.size(); ++n) x.push_back(full_rate_change(clip_features[n], reference_features[n], inputs));
+            full_rate_classifier c;
+            c.fit(x, labels, groups);
+            cv_.push_back(c.cv_accuracy_chosen());
+            if (!have || c.cv_accuracy_chosen() > clf_.cv_accuracy_chosen()) clf_ = std::move(c), inputs_ = inputs, have = true;
+        }
+    }
+
+    /// @brief Fits on one input set with a given L2 weight, no cross-validation.
+    void fit_fixed(const std::vector<std::vector<double>>& clip_features, const std::vector<std::vector<double>>& reference_features,
+                   const std::vector<std::string>& labels, full_rate_inputs inputs, double lambda)
+    {
+        if (clip_features.size() != reference_features.size())
+            throw value_error("full_rate_judge::fit_fixed: " + std::to_string(clip_features.size()) + " clips and " +
+                              std::to_string(reference_features.size()) + " references");
+        std::vector<std::vector<double>> x;
+        for (std::size_t n = 0; n < clip_features.size(); ++n) x.push_back(full_rate_change(clip_features[n], reference_features[n], inputs));
+        clf_.fit_fixed(x, labels, lambda);
+        candidates_ = {inputs}, cv_.assign(1, std::nan("")), inputs_ = inputs;
+    }
+
+    /// @brief The emotion a clip's features say, read against its neutral reference's.
+    /// @throws value_error before fit(); shape_error for features of another skeleton size.
+    const std::string& predict(const std::vector<double>& clip_features, const std::vector<double>& reference_features) const
+    {
+        return clf_.predict(full_rate_change(clip_features, reference_features, inputs_));
+    }
+
+    /// @brief Class probabilities, in classifier().classes() order.
+    std::vector<double> probabilities(const std::vector<double>& clip_features, const std::vector<double>& reference_features) const
+    {
+        return clf_.probabilities(full_rate_change(clip_features, reference_features, inputs_));
+    }
+
+    /// The input set kept.
+    full_rate_inputs inputs() const noexcept { return inputs_; }
+    /// The classifier fitted on the kept set.
+    const full_rate_classifier& classifier() const noexcept { return clf_; }
+    /// The sets tried, in order, and each one's cross-validated accuracy at its chosen weight (NaN after fit_fixed()).
+    const std::vector<full_rate_inputs>& candidates() const noexcept { return candidates_; }
+    const std::vector<double>& candidate_cv_accuracy() const noexcept { return cv_; }
+
+private:
+    full_rate_classifier clf_;
+    full_rate_inputs inputs_ = full_rate_inputs::pooled;
+    std::vector<full_rate_inputs> candidates_;
+    std::vector<double> cv_;
 };
 
 }  // namespace handemo::metrics
