@@ -864,7 +864,6 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
     const std::optional<foreign_rig> rig = opt.retargeted && !clips.empty() ? make_foreign_rig(clips.front().motion.skel, clips.front().motion)
                                                                             : std::nullopt;
 
-    progress overall("eval " + info.name, static_cast<long>(folds.size()), opt.progress_out, 0.0);
     std::vector<track_series> detail_curves;  // the detail layer's example: the first fold's first input
     std::string detail_take;
     // the continuous control's table, read and checked against the model's emotions before any fold trains
@@ -879,6 +878,8 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
     std::vector<double> pretrained_seconds;
     if (opt.jobs > 1 || distributed) pretrained_seconds = detail::train_all<Config>(all, info, opt, contents, folds, out_dir);
     if (distributed && !opt.group->writes_files()) return res;
+    // the folds' bar starts here, so that its ETA counts only the folds' own time (not the trainings done before)
+    progress overall("eval " + info.name, static_cast<long>(folds.size()), opt.progress_out, 0.0);
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         const std::string& held = folds[fi];
         const auto split = detail::split_fold(all, held);
