@@ -8,19 +8,8 @@
 # refused before anything is written.
 # Usage: mpi_eval_test.sh HANDEMO_CLI MPIEXEC WORK_DIR; exits 77 (skipped) without mpirun.
 set -euo pipefail
-cli=$1
-mpiexec=$2
-work=$3
-if [[ -z "$mpiexec" || ! -x "$(command -v "$mpiexec" || true)" ]]; then
-  echo "mpi_eval: no mpirun found (./setup.sh --mpi installs openmpi-bin): skipped"
-  exit 77
-fi
-launch=("$mpiexec" --oversubscribe)
-# Open MPI refuses to start as root unless asked to
-if [[ $(id -u) -eq 0 ]]; then launch+=(--allow-run-as-root); fi
-rm -rf "$work"
-mkdir -p "$work"
-"$cli" synth --out "$work/data" --takes 1 --seed 3 >/dev/null
+name=mpi_eval cli=$1 mpiexec=$2 work=$3
+source "$(dirname "$0")/mpi_common.sh"
 # 4 folds of 7 contents: 6 inner models of the shared plan and 4 final Gs, in two waves
 common=(--data "$work/data" --config hand-tiny --threads 1 --iters 4 --seed 5 --no-rcm --no-retargeted
         --folds crawling,gripping,patting,pointing)

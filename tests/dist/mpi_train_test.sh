@@ -6,19 +6,8 @@
 # 3 processes are refused before anything is written (a batch is cut into at most 2 parts).
 # Usage: mpi_train_test.sh HANDEMO_CLI MPIEXEC WORK_DIR; exits 77 (skipped) without mpirun.
 set -euo pipefail
-cli=$1
-mpiexec=$2
-work=$3
-if [[ -z "$mpiexec" || ! -x "$(command -v "$mpiexec" || true)" ]]; then
-  echo "mpi_train: no mpirun found (./setup.sh --mpi installs openmpi-bin): skipped"
-  exit 77
-fi
-launch=("$mpiexec" --oversubscribe)
-# Open MPI refuses to start as root unless asked to
-if [[ $(id -u) -eq 0 ]]; then launch+=(--allow-run-as-root); fi
-rm -rf "$work"
-mkdir -p "$work"
-"$cli" synth --out "$work/data" --takes 1 --seed 3 >/dev/null
+name=mpi_train cli=$1 mpiexec=$2 work=$3
+source "$(dirname "$0")/mpi_common.sh"
 common=(--data "$work/data" --config hand-tiny --threads 1 --log-every 1 --exclude-content pointing --seed 5)
 
 same() {  # same <what> <one-process folder> <two-process folder>

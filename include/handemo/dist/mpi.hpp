@@ -33,6 +33,18 @@ inline void check_mpi(int rc, const char* call)
     throw io_error(std::string("mpi: ") + call + " failed: " + std::string(msg, std::size_t(std::max(len, 0))));
 }
 
+/// The rank of this process in `comm` and the number of processes there.
+struct comm_place {
+    std::size_t rank = 0, ranks = 1;
+};
+inline comm_place place_in(MPI_Comm comm)
+{
+    int r = 0, n = 0;
+    check_mpi(MPI_Comm_rank(comm, &r), "MPI_Comm_rank");
+    check_mpi(MPI_Comm_size(comm, &n), "MPI_Comm_size");
+    return {std::size_t(r), std::size_t(n)};
+}
+
 }  // namespace detail
 
 /// @brief The process's MPI lifetime: MPI_Init_thread (funneled: only the thread that made it calls MPI) on
@@ -71,11 +83,8 @@ class mpi_exchange final : public shard_exchange {
 public:
     explicit mpi_exchange(MPI_Comm comm = MPI_COMM_WORLD) : comm_(comm)
     {
-        int r = 0, n = 0;
-        detail::check_mpi(MPI_Comm_rank(comm_, &r), "MPI_Comm_rank");
-        detail::check_mpi(MPI_Comm_size(comm_, &n), "MPI_Comm_size");
-        rank_ = std::size_t(r);
-        ranks_ = std::size_t(n);
+        const auto p = detail::place_in(comm_);
+        rank_ = p.rank, ranks_ = p.ranks;
     }
     std::size_t rank() const noexcept override { return rank_; }
     std::size_t ranks() const noexcept override { return ranks_; }
@@ -104,11 +113,8 @@ class mpi_group final : public process_group {
 public:
     explicit mpi_group(MPI_Comm comm = MPI_COMM_WORLD) : comm_(comm)
     {
-        int r = 0, n = 0;
-        detail::check_mpi(MPI_Comm_rank(comm_, &r), "MPI_Comm_rank");
-        detail::check_mpi(MPI_Comm_size(comm_, &n), "MPI_Comm_size");
-        rank_ = std::size_t(r);
-        ranks_ = std::size_t(n);
+        const auto p = detail::place_in(comm_);
+        rank_ = p.rank, ranks_ = p.ranks;
     }
     std::size_t rank() const noexcept override { return rank_; }
     std::size_t ranks() const noexcept override { return ranks_; }

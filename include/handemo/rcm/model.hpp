@@ -68,6 +68,17 @@ struct analysis {
     double valence = 0, arousal = 0;          ///< clamped to [-1, 1]
     double raw_valence = 0, raw_arousal = 0;  ///< before clamping
     int quadrant = 1;
+
+    /// @brief The analysis of a point Eq. 1 maps to (valence, arousal): clamped to [-1, 1], its quadrant.
+    static analysis of_point(double valence, double arousal)
+    {
+        analysis a;
+        a.raw_valence = valence, a.raw_arousal = arousal;
+        a.valence = std::clamp(valence, -1.0, 1.0);
+        a.arousal = std::clamp(arousal, -1.0, 1.0);
+        a.quadrant = handemo::quadrant(a.valence, a.arousal);
+        return a;
+    }
 };
 
 /// @brief A fitted circumplex analysis model.
@@ -114,12 +125,7 @@ struct rcm_model {
     analysis analyse_features(const vector& selected_normalised) const
     {
         const vector e = to_emotion(pca.project(selected_normalised));
-        analysis a;
-        a.raw_valence = e(0), a.raw_arousal = e(1);
-        a.valence = std::clamp(e(0), -1.0, 1.0);
-        a.arousal = std::clamp(e(1), -1.0, 1.0);
-        a.quadrant = quadrant(a.valence, a.arousal);
-        return a;
+        return analysis::of_point(e(0), e(1));
     }
     /// @brief The emotion of a clip (Section 3.3).
     /// @throws value_error when the clip's skeleton lacks a role the features need.
@@ -215,12 +221,7 @@ struct emotion_map {
         vector s = xt::zeros<double>({selected.size()});
         for (std::size_t k = 0; k < selected.size(); ++k) s(k) = normalised(selected[k]);
         const vector e = to_emotion(pca.project(s));
-        analysis a;
-        a.raw_valence = e(0), a.raw_arousal = e(1);
-        a.valence = std::clamp(e(0), -1.0, 1.0);
-        a.arousal = std::clamp(e(1), -1.0, 1.0);
-        a.quadrant = quadrant(a.valence, a.arousal);
-        return a;
+        return analysis::of_point(e(0), e(1));
     }
 };
 
