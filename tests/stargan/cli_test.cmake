@@ -92,6 +92,10 @@ run_ok(transfer_img transfer --model ${M} --in ${WORK_DIR}/angry.bmp --emotion h
 run_ok(info_out info ${WORK_DIR}/sad.bvh)
 
 # the README's 10-line example (examples/transfer.cpp) on the same model
+if(NOT EXISTS "${EXAMPLE}")
+  message(FATAL_ERROR "the README example ${EXAMPLE} is not built: build the target handemo_example_transfer "
+                      "(cmake --build build builds every target) before this test")
+endif()
 execute_process(COMMAND ${EXAMPLE} ${M} ${D}/hand_pointing_neutral_0.bvh sad ${WORK_DIR}/example.bvh
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK_DIR}/example.bvh OR NOT out MATCHES "-> sad: [0-9]+ frames")
