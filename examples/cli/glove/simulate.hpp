@@ -86,7 +86,7 @@ inline void add_simulate(CLI::App* glove)
     sub->add_option("--glove", o->src.glove, glove_help())->required();
     add_glove_settings(sub, o->src);
     sub->add_option("--out", o->out, "Raw stream file")->required();
-    sub->add_option("--motion", o->motion, "Synthetic motion (crawling, gripping, patting, impatient, hand-on-mouse, pointing, pushing)")->capture_default_str();
+    sub->add_option("--motion", o->motion, "Synthetic motion (crawling, gripping, patting, impatient, hand-on-mouse, pointing, pushing; and the extended set's waving, counting, scratching, piano, beckoning)")->capture_default_str();
     sub->add_option("--emotion", o->emotion, "Emotion of the synthetic take")->capture_default_str();
     sub->add_option("--seconds", o->seconds, "Seconds of motion")->capture_default_str();
     sub->add_option("--flat", o->flat, "Seconds of flat hand first (and as many of a fist for flex gloves)")->capture_default_str();
