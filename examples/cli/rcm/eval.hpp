@@ -88,10 +88,10 @@ inline void run_eval(eval_run& o)
         std::cout << buf;
     }
     if (!o.csv.empty()) {
-        std::string t = "clip,held_out,emotion,valence,arousal,true_valence,true_arousal,distance,quadrant_ok\n";
+        std::string t = "clip,held_out,emotion,valence,arousal,true_valence,true_arousal,distance,quadrant_ok,input,shrink\n";
         for (const auto& s : r.samples) {
-            std::snprintf(buf, sizeof buf, "%s,%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%d\n", s.name.c_str(), s.held_out.c_str(), s.emotion.c_str(),
-                          s.valence, s.arousal, s.true_valence, s.true_arousal, s.distance, s.quadrant_ok ? 1 : 0);
+            std::snprintf(buf, sizeof buf, "%s,%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%s,%.2f\n", s.name.c_str(), s.held_out.c_str(), s.emotion.c_str(),
+                          s.valence, s.arousal, s.true_valence, s.true_arousal, s.distance, s.quadrant_ok ? 1 : 0, s.input.c_str(), s.shrink);
             t += buf;
         }
         handemo::write_file_atomic(o.csv, t);
@@ -117,7 +117,7 @@ inline void add_eval(CLI::App& rcm)
     auto o = std::make_shared<eval_run>();
     add_fit_options(sub, o->f);
     sub->add_option("--by", o->by, "Hold out one 'content' or one 'take' per fold")->capture_default_str();
-    sub->add_option("--csv", o->csv, "Per-clip predictions (CSV)");
+    sub->add_option("--csv", o->csv, "Per-clip predictions (CSV; each row also names its fold's input and shrinkage weight)");
     sub->add_option("--svg", o->svg, "Circumplex with every held-out prediction");
     sub->add_option("--relative", o->relative,
                     "Instead of --input: features as the change from the same content's neutral clips: off (the paper), on, or "
