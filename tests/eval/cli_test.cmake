@@ -76,6 +76,8 @@ run_fail(eval_config eval --data ${WORK_DIR}/data --config hand-huge --report ${
 expect_error_matches("unknown configuration 'hand-huge'")
 run_fail(eval_synth_seed eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --synth-seed 5)
 expect_error_matches("--synth-seed 5 at 60.000000 fps does not reproduce")
+run_fail(eval_judge_inputs eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --judge-inputs all)
+expect_error_matches("--judge-inputs 'all': expected auto, pooled or joints")
 run_fail(eval_fold eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --folds swimming)
 expect_error_matches("content 'swimming' is not in the data set")
 run_fail(eval_data eval --data ${WORK_DIR}/missing --config hand-tiny --report ${WORK_DIR}/bad)

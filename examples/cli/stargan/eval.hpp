@@ -123,10 +123,10 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option_function<std::string>(
            "--judge-inputs",
            [o](const std::string& v) {
-               if (v == "auto")
-                   o->opt.judge_inputs = {handemo::metrics::full_rate_inputs::pooled, handemo::metrics::full_rate_inputs::joints};
-               else
-                   o->opt.judge_inputs = {handemo::metrics::parse_full_rate_inputs(v)};
+               if (v != "auto" && v != "pooled" && v != "joints")
+                   throw handemo::value_error("eval: --judge-inputs '" + v + "': expected auto, pooled or joints");
+               o->opt.judge_inputs = v == "auto" ? handemo::metrics::all_full_rate_inputs()
+                                                 : std::vector{handemo::metrics::parse_full_rate_inputs(v)};
            },
            "The full-rate judge's input set: pooled (the posture pooled over the joints, the judge of earlier reports), joints "
            "(every joint's posture besides) or auto (each fold keeps the one its leave-one-content-out check on the training "

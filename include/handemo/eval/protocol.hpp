@@ -100,7 +100,7 @@ struct eval_options {
     /// The input sets the full-rate judge chooses from in each fold (metrics::full_rate_judge: the set with the higher
     /// leave-one-content-out accuracy on the fold's training clips, the earlier on a tie). One set: that set, no choice
     /// ({pooled} is the judge of earlier reports).
-    std::vector<metrics::full_rate_inputs> judge_inputs{metrics::full_rate_inputs::pooled, metrics::full_rate_inputs::joints};
+    std::vector<metrics::full_rate_inputs> judge_inputs = metrics::all_full_rate_inputs();
 };
 
 /// @brief Training defaults of the evaluation: stargan::handemo_options() (the preset every command uses by

@@ -199,6 +199,13 @@ enum class full_rate_inputs {
     joints,  ///< the pooled set and every joint's posture change besides (6J + 11): a head bowed, a chest lifted
 };
 
+/// @brief Every input set, in the order the judge prefers them on a tie (the smaller first): what it chooses from by default.
+inline const std::vector<full_rate_inputs>& all_full_rate_inputs()
+{
+    static const std::vector<full_rate_inputs> all{full_rate_inputs::pooled, full_rate_inputs::joints};
+    return all;
+}
+
 /// @brief "pooled" or "joints".
 inline const char* to_string(full_rate_inputs i) noexcept { return i == full_rate_inputs::joints ? "joints" : "pooled"; }
 
@@ -508,7 +515,7 @@ public:
     /// @throws value_error for no candidate or counts that differ; as full_rate_classifier::fit() otherwise.
     void fit(const std::vector<std::vector<double>>& clip_features, const std::vector<std::vector<double>>& reference_features,
              const std::vector<std::string>& labels, const std::vector<std::string>& groups = {},
-             const std::vector<full_rate_inputs>& candidates = {full_rate_inputs::pooled, full_rate_inputs::joints})
+             const std::vector<full_rate_inputs>& candidates = all_full_rate_inputs())
     {
         if (candidates.empty()) throw value_error("full_rate_judge::fit: no input set to choose from");
         if (clip_features.size() != reference_features.size())
@@ -528,19 +535,6 @@ public:
         }
     }
 
-    /// @brief Fits on one input set with a given L2 weight, no cross-validation.
-    void fit_fixed(const std::vector<std::vector<double>>& clip_features, const std::vector<std::vector<double>>& reference_features,
-                   const std::vector<std::string>& labels, full_rate_inputs inputs, double lambda)
-    {
-        if (clip_features.size() != reference_features.size())
-            throw value_error("full_rate_judge::fit_fixed: " + std::to_string(clip_features.size()) + " clips and " +
-                              std::to_string(reference_features.size()) + " references");
-        std::vector<std::vector<double>> x;
-        for (std::size_t n = 0; n < clip_features.size(); ++n) x.push_back(full_rate_change(clip_features[n], reference_features[n], inputs));
-        clf_.fit_fixed(x, labels, lambda);
-        candidates_ = {inputs}, cv_.assign(1, std::nan("")), inputs_ = inputs;
-    }
-
     /// @brief The emotion a clip's features say, read against its neutral reference's.
     /// @throws value_error before fit(); shape_error for features of another skeleton size.
     const std::string& predict(const std::vector<double>& clip_features, const std::vector<double>& reference_features) const
@@ -558,7 +552,7 @@ public:
     full_rate_inputs inputs() const noexcept { return inputs_; }
     /// The classifier fitted on the kept set.
     const full_rate_classifier& classifier() const noexcept { return clf_; }
-    /// The sets tried, in order, and each one's cross-validated accuracy at its chosen weight (NaN after fit_fixed()).
+    /// The sets tried, in order, and each one's cross-validated accuracy at its chosen weight.
     const std::vector<full_rate_inputs>& candidates() const noexcept { return candidates_; }
     const std::vector<double>& candidate_cv_accuracy() const noexcept { return cv_; }
 
