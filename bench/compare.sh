@@ -23,6 +23,9 @@
 #   --quick     runs every step for a moment (benchmarks 0.01 s, a few reference calls): checks that the whole
 #               comparison runs end to end; its numbers are not measurements (the table says so; no --out)
 #   HANDEMO_COMPARE_ROUNDS=N (default 3; 1 gives the single-pass numbers of earlier versions)
+#   HANDEMO_COMPARE_ICOUNT=0 leaves out the embedded instruction counts (aarch64 and Cortex-M under emulation, after
+#               the rounds, several minutes; they need ./setup.sh --cross, and for the Cortex-M a model header:
+#               HANDEMO_COMPARE_MICRO_HEADER=FILE, else the seeded-weights header the built tests in build/ write)
 #   HANDEMO_ORT_DIR=DIR (default <repo>/build-ort): where onnxruntime-node is installed, by
 #               npm install --prefix DIR onnxruntime-node --ignore-scripts (without it, or without node or
 #               torch, the ONNX Runtime columns are n/a)
@@ -209,6 +212,43 @@ done
   --benchmark_out="$out/conv_layers.json" --benchmark_out_format=json >/dev/null
 echo "== $rounds rounds in $(( $(date +%s) - start )) s"
 
+# Embedded targets: instructions per G inference counted under emulation. The counts are deterministic (the same
+# binary gives the same count on any host), so they run once, after the timed rounds, and take several minutes.
+# HANDEMO_COMPARE_ICOUNT=0 leaves them out; without the cross tools (./setup.sh --cross) each line says why.
+icount_section() {
+  echo "Embedded targets: instructions per G inference (batch 1), counted under emulation (deterministic; not times):"
+  echo
+  if [ "${HANDEMO_COMPARE_ICOUNT:-1}" = 0 ] || [ "$quick" = 1 ]; then
+    echo "(not counted: HANDEMO_COMPARE_ICOUNT=0 or --quick)"
+    return
+  fi
+  local a c header=${HANDEMO_COMPARE_MICRO_HEADER:-}
+  echo "aarch64, NEON (bench/aarch64_icount.sh):"
+  echo
+  if a=$(bash "$here/aarch64_icount.sh" "$out/aarch64-icount" micro-plain micro embedded 2>&1); then
+    printf '%s\n' "$a" | grep -v '^== building'
+  else
+    echo "(not counted: $(printf '%s\n' "$a" | tail -1))"
+  fi
+  echo
+  echo "Cortex-M (bench/cortex_m_icount.sh, hand-micro with the test fixture's seeded weights):"
+  echo
+  if [ -z "$header" ] && [ -x "$root/build/tests/handemo_tests_quick" ]; then
+    header="$out/micro_model.hpp"
+    HANDEMO_WRITE_MICRO_HEADER="$header" "$root/build/tests/handemo_tests_quick" -tc='*fixture*exported header*' >/dev/null 2>&1 \
+      || header=""
+  fi
+  if [ -z "$header" ]; then
+    echo "(not counted: no model header; build the tests (cmake --build build) or set HANDEMO_COMPARE_MICRO_HEADER)"
+  elif c=$(bash "$here/cortex_m_icount.sh" "$header" "$out/cortex-m-icount" 2>&1); then
+    printf '%s\n' "$c"
+  else
+    echo "(not counted: $(printf '%s\n' "$c" | tail -1))"
+  fi
+}
+echo "== embedded instruction counts"
+icount_section | tee "$out/icount.txt"
+
 echo "== comparison"
 list() { local f=$1 acc="" r; for r in $(seq 1 "$rounds"); do acc="$acc${acc:+,}$out/${f}_$r.$2"; done; echo "$acc"; }
 "$py" "$here/compare_table.py" --isa "${isa:-unknown}" --peak "${peak:-0}" --torch1 "$(list torch1 txt)" \
@@ -231,6 +271,8 @@ if [ "$write_out" = 1 ]; then
             done && /^\|/ && prev != "" && prev !~ /^\|/ { print "" }
             { print; prev = $0 }
             END { if (!done) print "```" }' "$out/table.txt"
+       echo
+       cat "$out/icount.txt"
      } >"$results"; then
     echo "== wrote $results"
   else
