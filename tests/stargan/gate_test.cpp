@@ -522,6 +522,37 @@ TEST_CASE("change gate guard: the statistics setting unless the checked choices 
     CHECK(handemo::stargan::detail::options_without_gate(a.to_json()) == handemo::stargan::detail::options_without_gate(b.to_json()));
 }
 
+TEST_CASE("a stored inner model trained otherwise is named with what differs before it is trained again")
+{
+    namespace sd = handemo::stargan::detail;
+    auto want = handemo_options();
+    want.iters = 400;
+    checkpoint_info ck;
+    ck.step = 400;
+    ck.options = want.to_json();
+    CHECK(sd::trained_same_g(ck, want));
+    // the gate's own options aside: still the same G
+    ck.options["gate_guard"] = -1;
+    CHECK(sd::trained_same_g(ck, want));
+    // steps first
+    ck.step = 300;
+    CHECK_FALSE(sd::trained_same_g(ck, want));
+    CHECK(sd::g_difference(ck, want) == "steps 300 / 400");
+    ck.step = 400;
+    // an option of G: named with both values
+    ck.options["lambda_pair"] = 100.0;
+    CHECK_FALSE(sd::trained_same_g(ck, want));
+    CHECK(sd::g_difference(ck, want) == "lambda_pair 100.0 / " + want.to_json().at("lambda_pair").dump());
+    // missing on one side or the other
+    ck.options = want.to_json();
+    ck.options.erase("seed");
+    CHECK(sd::g_difference(ck, want) == "seed absent / " + want.to_json().at("seed").dump());
+    ck.options = want.to_json();
+    ck.options["unknown_option"] = 3;
+    CHECK_FALSE(sd::trained_same_g(ck, want));
+    CHECK(sd::g_difference(ck, want) == "unknown_option 3 / absent");
+}
+
 TEST_CASE("posture prior: the keyframe mean of the training pairs' difference emotion - neutral")
 {
     // every sad take is its neutral take with channel 4 raised by 6 deg and channel 10 lowered by 2 deg at every

@@ -176,6 +176,22 @@ inline bool trained_same_g(const checkpoint_info& ck, const train_options& opt)
     return ck.step == opt.iters && options_without_gate(ck.options) == options_without_gate(opt.to_json());
 }
 
+/// What makes a checkpoint not the G that `opt` trains (trained_same_g() false): its steps, or the first option
+/// (the gate's and the tempo's aside) whose value differs or is missing on one side, as "name stored / wanted".
+inline std::string g_difference(const checkpoint_info& ck, const train_options& opt)
+{
+    if (ck.step != opt.iters) return "steps " + std::to_string(ck.step) + " / " + std::to_string(opt.iters);
+    const auto have = options_without_gate(ck.options), want = options_without_gate(opt.to_json());
+    const auto dump = [](const nlohmann::json& o, const std::string& k) { return o.is_object() && o.contains(k) ? o.at(k).dump() : std::string("absent"); };
+    if (want.is_object())
+        for (const auto& [k, v] : want.items())
+            if (!have.is_object() || !have.contains(k) || have.at(k) != v) return k + " " + dump(have, k) + " / " + dump(want, k);
+    if (have.is_object())
+        for (const auto& [k, v] : have.items())
+            if (!want.contains(k)) return k + " " + v.dump() + " / absent";
+    return "the options";
+}
+
 }  // namespace detail
 
 /// @brief The settings fit_change_gate() chooses from: posture weight a, motion weight b (each from gate_grid)
@@ -383,13 +399,17 @@ std::pair<safetensors_file, checkpoint_info> inner_gate_model(const std::vector<
 {
     const auto ck_path = dir / "checkpoint.safetensors";
     reused = false;
-    if (reuse && path_exists(ck_path))
+    if (reuse && path_exists(ck_path)) {
         if (auto stored = read_checkpoint(ck_path); trained_same_g(stored.second, inner)) {
             if (inner.progress_out)
                 std::fprintf(inner.progress_out, "%s: reusing the G trained without those contents (%s)\n", label.c_str(), ck_path.string().c_str());
             reused = true;
             return stored;
+        } else if (inner.progress_out) {
+            std::fprintf(inner.progress_out, "%s: %s was trained otherwise (%s, stored / now): training it again\n", label.empty() ? "gate" : label.c_str(),
+                         ck_path.string().c_str(), g_difference(stored.second, inner).c_str());
         }
+    }
     if (inner.progress_out)
         std::fprintf(inner.progress_out, "%s: training G on the other %zu clips to choose the change gate\n", label.c_str(), train.size());
     {
