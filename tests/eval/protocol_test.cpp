@@ -872,3 +872,30 @@ TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner 
     CHECK(read_file(base / "two" / "folds" / "gripping" / "gate" / "groups.txt") == gate_groups_text(train, to, nullptr));
     fs::remove_all(base);
 }
+
+TEST_CASE("continuous control: a path's log posterior is monotone, peaks before the label, or dips and recovers")
+{
+    using eval::shape_of_path;
+    // rising, flat steps included: monotone, and the label's point is the maximum
+    auto p = shape_of_path({-3.0, -2.0, -2.0, -0.5});
+    CHECK(p.monotone);
+    CHECK_FALSE(p.peak_before_label);
+    // peaks at a blend short of the label, then falls toward it
+    p = shape_of_path({-3.0, -1.0, -0.4, -0.7});
+    CHECK_FALSE(p.monotone);
+    CHECK(p.peak_before_label);
+    // dips on the way, ends at its maximum: not monotone, not a peak before the label
+    p = shape_of_path({-3.0, -1.0, -1.5, -0.2});
+    CHECK_FALSE(p.monotone);
+    CHECK_FALSE(p.peak_before_label);
+    // a fall within the rounding tolerance is not a fall
+    p = shape_of_path({-2.0, -2.0 - 1e-12, -1.0});
+    CHECK(p.monotone);
+    // trivial paths
+    CHECK(shape_of_path({}).monotone);
+    CHECK(shape_of_path({-1.0}).monotone);
+    CHECK_FALSE(shape_of_path({-1.0}).peak_before_label);
+    // a peak before the label counts even when the path dipped earlier
+    p = shape_of_path({-3.0, -3.5, -0.3, -0.9});
+    CHECK(p.peak_before_label);
+}

@@ -32,6 +32,9 @@ struct continuous_fold {
     std::size_t inputs = 0;
     std::size_t label_points = 0, label_equal = 0;  ///< (input, label) pairs, and those equal to the discrete transfer bit for bit
     std::size_t paths = 0, monotone = 0;            ///< paths neutral -> label, and those whose log posterior never falls
+    /// the paths that are not monotone because the posterior peaks before the label's point: the label's own output
+    /// (the discrete transfer) is recognised less surely than a point on the way (the rest dip and recover)
+    std::size_t peak_before_label = 0;
     double lipschitz = 0;                           ///< largest keyframe change (deg, any channel) per unit circumplex distance between path steps
     std::size_t halfway = 0, halfway_third = 0;     ///< halfway points, and those recognised as neither the label nor neutral
     std::size_t real = 0, real_third = 0;           ///< the held-out real emotional clips, and those recognised as a third emotion
@@ -43,6 +46,26 @@ struct continuous_fold {
 
 /// @brief An analysis of a clip onto the circumplex, (valence, arousal); NaN where it cannot say.
 using circumplex_analysis = std::function<std::pair<double, double>(const clip&)>;
+
+/// @brief The shape of the label's log posterior along a path from neutral (steps 0..n): monotone when it never
+/// falls (a relative tolerance of 1e-9 for rounding), and whether its value at the label's point (the last) is
+/// below its maximum on the way (then the path falls toward its end, whatever it did before).
+struct path_shape {
+    bool monotone = true, peak_before_label = false;
+};
+
+/// @brief path_shape of a sequence of log posteriors (an empty or one-element sequence is monotone).
+inline path_shape shape_of_path(const std::vector<double>& log_post)
+{
+    path_shape p;
+    double best = -1e300;
+    for (std::size_t s = 0; s < log_post.size(); ++s) {
+        if (s > 0 && log_post[s] < log_post[s - 1] - 1e-9 * std::abs(log_post[s - 1])) p.monotone = false;
+        if (s + 1 < log_post.size()) best = std::max(best, log_post[s]);
+    }
+    if (log_post.size() > 1) p.peak_before_label = log_post.back() < best - 1e-9 * std::abs(best);
+    return p;
+}
 
 /// @brief The grid of targets the Spearman correlations are taken over: valence and arousal in -0.8, -0.4, 0, 0.4,
 /// 0.8, the 21 points inside the unit circle.
@@ -89,8 +112,7 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
             if (info.domains[d] == info.neutral) continue;
             ++f.paths;
             const std::size_t ci = clf.index_of(info.domains[d]);
-            double prev_log = -1e300;
-            bool rising = true;
+            std::vector<double> log_posts;
             std::vector<double> prev_keys;
             const double step_dist = std::hypot(label.valence - neutral.valence, label.arousal - neutral.arousal) / static_cast<double>(steps);
             for (std::size_t s = 0; s <= steps; ++s) {
@@ -104,8 +126,7 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
                 double z = 0;
                 for (double v : dist) z += std::exp(-0.5 * (v - dmin));
                 const double log_post = ci < dist.size() ? -0.5 * (dist[ci] - dmin) - std::log(z) : -1e300;
-                rising = rising && log_post >= prev_log - 1e-9 * std::abs(prev_log);
-                prev_log = log_post;
+                log_posts.push_back(log_post);
                 if (!prev_keys.empty()) {
                     double m = 0;
                     for (std::size_t i = 0; i < prev_keys.size(); ++i) m = std::max(m, std::abs(r.keys.angles[i] - prev_keys[i]));
@@ -117,7 +138,9 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
                     f.halfway_third += third(clf.predict(x), info.domains[d]);
                 }
             }
-            f.monotone += rising;
+            const path_shape shape = shape_of_path(log_posts);
+            f.monotone += shape.monotone;
+            f.peak_before_label += !shape.monotone && shape.peak_before_label;
         }
         if (analyse) {  // the grid of targets against their analysis
             std::vector<double> tv, ta, av, aa;
@@ -160,15 +183,17 @@ inline report_section continuous_section(const std::vector<continuous_fold>& fol
     std::string& m = sec.markdown;
     m += "Each held-out neutral take goes to every label's circumplex point and along the straight path from neutral's point to each "
          "label in " + std::to_string(steps) + " steps (docs/continuous.md). *Equal*: outputs at the labels' points equal to the discrete "
-         "transfer bit for bit. *Monotone*: paths along which the fold's classifier's posterior for the label never falls. *Lipschitz*: "
+         "transfer bit for bit. *Monotone*: paths along which the fold's classifier's posterior for the label never falls; *peak "
+         "first*: of the others, those whose posterior at the label's point is below its maximum on the way (the discrete transfer "
+         "is recognised less surely than a blend short of it; the rest dip and recover). *Lipschitz*: "
          "the largest keyframe change (degrees, any channel) per unit of circumplex distance between two steps. *Halfway, third*: halfway "
          "points recognised as neither the label nor neutral, against the held-out real emotional clips recognised as another emotion "
          "than their own and neutral. *Spearman*: with the circumplex method built and on (`--rcm`), its analysis (fitted on the fold's "
          "training clips) of the outputs at 21 grid targets per input against the targets' valence and arousal (mean over the inputs), "
          "and of the held-out real clips against their labels' points; n/a without it.\n\n";
-    m += "| fold | inputs | equal at labels | monotone paths | Lipschitz (deg per unit) | halfway: third emotion | real clips: third emotion "
-         "| Spearman valence, arousal | real clips: Spearman valence, arousal |\n";
-    m += "|---|---|---|---|---|---|---|---|---|\n";
+    m += "| fold | inputs | equal at labels | monotone paths | not monotone: peak first | Lipschitz (deg per unit) | halfway: third emotion "
+         "| real clips: third emotion | Spearman valence, arousal | real clips: Spearman valence, arousal |\n";
+    m += "|---|---|---|---|---|---|---|---|---|---|\n";
     continuous_fold all;
     all.held_out = "all";
     char b[640];
@@ -180,8 +205,9 @@ inline report_section continuous_section(const std::vector<continuous_fold>& fol
     };
     const auto pct = [](std::size_t a, std::size_t n) { return n ? 100.0 * static_cast<double>(a) / static_cast<double>(n) : std::nan(""); };
     const auto row = [&](const continuous_fold& f) {
-        std::snprintf(b, sizeof b, "| %s | %zu | %zu / %zu | %zu / %zu (%.1f%%) | %.2f | %zu / %zu (%.1f%%) | %zu / %zu (%.1f%%) | %s, %s | %s, %s |\n",
-                      f.held_out.c_str(), f.inputs, f.label_equal, f.label_points, f.monotone, f.paths, pct(f.monotone, f.paths), f.lipschitz,
+        std::snprintf(b, sizeof b, "| %s | %zu | %zu / %zu | %zu / %zu (%.1f%%) | %zu / %zu | %.2f | %zu / %zu (%.1f%%) | %zu / %zu (%.1f%%) | %s, %s | %s, %s |\n",
+                      f.held_out.c_str(), f.inputs, f.label_equal, f.label_points, f.monotone, f.paths, pct(f.monotone, f.paths),
+                      f.peak_before_label, f.paths - f.monotone, f.lipschitz,
                       f.halfway_third, f.halfway, pct(f.halfway_third, f.halfway), f.real_third, f.real, pct(f.real_third, f.real),
                       rho(f.spearman_valence).c_str(), rho(f.spearman_arousal).c_str(), rho(f.real_spearman_valence).c_str(),
                       rho(f.real_spearman_arousal).c_str());
@@ -197,7 +223,7 @@ inline report_section continuous_section(const std::vector<continuous_fold>& fol
         if (std::isfinite(f.real_spearman_valence)) rv += f.real_spearman_valence, ++nrv;
         if (std::isfinite(f.real_spearman_arousal)) ra += f.real_spearman_arousal, ++nra;
         all.inputs += f.inputs, all.label_points += f.label_points, all.label_equal += f.label_equal, all.paths += f.paths;
-        all.monotone += f.monotone, all.halfway += f.halfway, all.halfway_third += f.halfway_third, all.real += f.real;
+        all.monotone += f.monotone, all.peak_before_label += f.peak_before_label, all.halfway += f.halfway, all.halfway_third += f.halfway_third, all.real += f.real;
         all.real_third += f.real_third, all.lipschitz = std::max(all.lipschitz, f.lipschitz);
     }
     const auto avg = [](double s, std::size_t n) { return n ? s / static_cast<double>(n) : std::nan(""); };
