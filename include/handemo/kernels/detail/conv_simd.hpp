@@ -437,6 +437,21 @@ inline void forward_dot(const conv_geometry& g, const T* x, const T* w, const T*
     }
 }
 
+/// y[i] = ((add ? y[i] : 0) + t[i]) + b for i < n, whole vectors first: the same sums, in the same order, as
+/// the element-by-element loop.
+template <class T>
+inline void store_run(T* y, const T* t, int n, T b, bool add) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>;
+    int i = 0;
+    for (; i + L <= n; i += L) {
+        const B r = ((add ? B::load_unaligned(y + i) : B(T(0))) + B::load_unaligned(t + i)) + B(b);
+        r.store_unaligned(y + i);
+    }
+    for (; i < n; ++i) y[i] = ((add ? y[i] : T(0)) + t[i]) + b;
+}
+
 /// Forward pass for stride 1: per image, x is copied once into a zero-padded [C, H+2p, W+2p] buffer and
 /// the output is computed on the "wide" grid p' = i*(W+2p) + j, where im2col row (c,u,v) is the window
 /// starting at c*(H+2p)*(W+2p) + u*(W+2p) + v; columns j >= out_w are computed and dropped.
@@ -484,12 +499,14 @@ inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, cons
                         const T* t = tile + j * MR;
                         T* yo = yn + std::ptrdiff_t(o0 + j) * P;
                         int r = p0 / Wp, q = p0 % Wp;
-                        for (int i = 0; i < MR && r < oh; ++i) {
+                        for (int i = 0; i < MR && r < oh;) {  // the lanes of each output row at once; wide columns dropped
                             if (q < ow) {
-                                T& dst = yo[r * ow + q];
-                                dst = (add ? dst : T(0)) + t[i] + b;
+                                const int len = std::min(ow - q, MR - i);
+                                store_run(yo + r * ow + q, t + i, len, b, add);
+                                i += len, q += len;
+                            } else {
+                                i += Wp - q, q = 0, ++r;
                             }
-                            if (++q == Wp) q = 0, ++r;
                         }
                     }
                 }
@@ -579,6 +596,13 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
             ybase[i] = std::ptrdiff_t(n) * Co * P + r;
         }
         const bool contiguous = np == MR && ybase[MR - 1] - ybase[0] == MR - 1;
+        // otherwise the lanes fall into runs of consecutive outputs (a panel across images, or the last one)
+        int run_at[MR + 1], runs = 0;
+        if (!contiguous) {
+            for (int i = 0; i < np; ++i)
+                if (i == 0 || ybase[i] != ybase[i - 1] + 1) run_at[runs++] = i;
+            run_at[runs] = np;
+        }
         for (int k0 = 0; k0 < K; k0 += forward_kc) {
             const int kc = std::min(forward_kc, K - k0);
             // pack V[k][i] = x[n_i, c, ih0_i + u, iw0_i + v] (0 outside), k = (c, u, v)
@@ -638,10 +662,8 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
                             r.store_unaligned(yp + q);
                         }
                     } else {
-                        for (int i = 0; i < np; ++i) {
-                            T& dst = y[ybase[i] + yo];
-                            dst = (add ? dst : T(0)) + t[i] + b;
-                        }
+                        for (int r = 0; r < runs; ++r)
+                            store_run(y + ybase[run_at[r]] + yo, t + run_at[r], run_at[r + 1] - run_at[r], b, add);
                     }
                 }
             }
@@ -663,13 +685,19 @@ inline void backward_data_stride1(const conv_geometry& g, const T* gy, const T* 
     T* wf = scratch;
     // (kh - 1 - u) kw + (kw - 1 - v) = kk - 1 - (u kw + v): each (o, c) block of kk taps is written reversed into
     // block (c, o), in the order the blocks are written
+    // blocks of 16 input channels: each o reads one contiguous run of w, and each c of the block writes on
+    // where it left off (reading w's blocks Ci * kk apart, one per o, missed the cache on the wide layers)
     const int kk = kh * kw;
-    for (int c = 0; c < Ci; ++c)
-        for (int o = 0; o < Co; ++o) {
-            const T* src = w + (std::ptrdiff_t(o) * Ci + c) * kk;
-            T* dst = wf + (std::ptrdiff_t(c) * Co + o) * kk;
-            for (int t = 0; t < kk; ++t) dst[t] = src[kk - 1 - t];
-        }
+    constexpr int cb = 16;
+    for (int c0 = 0; c0 < Ci; c0 += cb) {
+        const int c1 = std::min(Ci, c0 + cb);
+        for (int o = 0; o < Co; ++o)
+            for (int c = c0; c < c1; ++c) {
+                const T* src = w + (std::ptrdiff_t(o) * Ci + c) * kk;
+                T* dst = wf + (std::ptrdiff_t(c) * Co + o) * kk;
+                for (int t = 0; t < kk; ++t) dst[t] = src[kk - 1 - t];
+            }
+    }
     forward(flipped_geometry(g), gy, wf, static_cast<const T*>(nullptr), gx, scratch + g.w_size(), true);
 }
 
@@ -705,9 +733,12 @@ inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
         const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
         for (int k0 = 0; k0 < K; k0 += MR) {
             const int nk = std::min(MR, K - k0);
-            for (int i = 0; i < nk; ++i) {
-                const int k = k0 + i, c = k / (kh * kw), u = (k / kw) % kh, v = k % kw;
+            for (int i = 0, c = k0 / (kh * kw), u = (k0 / kw) % kh, v = k0 % kw; i < nk; ++i) {
                 koff[i] = c * HWp + std::ptrdiff_t(u) * Wp + v;
+                if (++v == kw) {
+                    v = 0;
+                    if (++u == kh) u = 0, ++c;
+                }
             }
             const T* vsrc = vpack + std::ptrdiff_t(k0) * Co;
             for (int p0 = 0; p0 < P; p0 += NR) {
