@@ -577,7 +577,6 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
     if (use_dot_forward<T>(g)) return forward_dot(g, x, w, bias, y, scratch, accumulate_out);
     if (use_stride1_forward<T>(g)) return forward_stride1(g, x, w, bias, y, scratch, accumulate_out);
     constexpr int MR = micro_mr<T>, NR = micro_nr, L = simd_lanes<T>;
-    using B = simd_t<T>;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow, Ptot = P * g.batch;
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
     const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w;
@@ -595,14 +594,12 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
             xbase[i] = std::ptrdiff_t(n) * g.in_channels * HW + std::ptrdiff_t(ih0[i]) * g.in_w + iw0[i];
             ybase[i] = std::ptrdiff_t(n) * Co * P + r;
         }
-        const bool contiguous = np == MR && ybase[MR - 1] - ybase[0] == MR - 1;
-        // otherwise the lanes fall into runs of consecutive outputs (a panel across images, or the last one)
+        // the lanes as runs of consecutive outputs: one run for a panel inside one image, more for a panel across
+        // images (or a short last one)
         int run_at[MR + 1], runs = 0;
-        if (!contiguous) {
-            for (int i = 0; i < np; ++i)
-                if (i == 0 || ybase[i] != ybase[i - 1] + 1) run_at[runs++] = i;
-            run_at[runs] = np;
-        }
+        for (int i = 0; i < np; ++i)
+            if (i == 0 || ybase[i] != ybase[i - 1] + 1) run_at[runs++] = i;
+        run_at[runs] = np;
         for (int k0 = 0; k0 < K; k0 += forward_kc) {
             const int kc = std::min(forward_kc, K - k0);
             // pack V[k][i] = x[n_i, c, ih0_i + u, iw0_i + v] (0 outside), k = (c, u, v)
@@ -654,17 +651,8 @@ inline void forward(const conv_geometry& g, const T* x, const T* w, const T* bia
                     const T b = (first && bias) ? bias[o0 + j] : T(0);
                     const T* t = tile + j * MR;
                     const std::ptrdiff_t yo = std::ptrdiff_t(o0 + j) * P;
-                    if (contiguous) {
-                        T* yp = y + ybase[0] + yo;
-                        for (int q = 0; q < MR; q += L) {
-                            B r = B::load_unaligned(t + q) + B(b);
-                            if (add) r += B::load_unaligned(yp + q);
-                            r.store_unaligned(yp + q);
-                        }
-                    } else {
-                        for (int r = 0; r < runs; ++r)
-                            store_run(y + ybase[run_at[r]] + yo, t + run_at[r], run_at[r + 1] - run_at[r], b, add);
-                    }
+                    for (int r = 0; r < runs; ++r)
+                        store_run(y + ybase[run_at[r]] + yo, t + run_at[r], run_at[r + 1] - run_at[r], b, add);
                 }
             }
         }
