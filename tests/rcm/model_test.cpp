@@ -5,6 +5,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -518,4 +519,76 @@ TEST_CASE("model: leave-one-content-out with candidate inputs and shrinkage")
         CHECK(input == rcm::to_string(cand[want.input]));
         CHECK(weight == want.shrink);
     }
+}
+
+TEST_CASE("model: a chosen analysis fitted on a fold's training clips gives that fold's evaluate_loo points")
+{
+    const auto& sh = shared();
+    std::vector<std::string> group;
+    for (const auto& c : sh.clips) group.push_back(c.performer);
+    auto opt = sh.opt;
+    opt.cluster = false;
+    const std::string file = "circumplex.json";
+    using rcm::analysis_input;
+    const auto all = rcm::parse_analysis_inputs("auto");
+    // every input alone (each path of analyse_unshrunk) and the full choice with shrinkage
+    std::vector<rcm::loo_options> cases;
+    for (auto v : all) cases.push_back({rcm::relative_features::off, "neutral", {v}, {}});
+    cases.push_back({rcm::relative_features::off, "neutral", all, rcm::shrink_grid()});
+    for (const auto& lo : cases) {
+        const std::string name = lo.inputs.size() == 1 ? rcm::to_string(lo.inputs.front()) : "auto";
+        CAPTURE(name);
+        const auto want = rcm::evaluate_loo(sh.clips, group, sh.table, file, opt, lo);
+        REQUIRE(want.failed_folds.empty());
+        for (const auto& f : want.folds) {
+            CAPTURE(f);
+            std::vector<rcm::training_clip> train;
+            std::vector<const clip*> neutrals;
+            for (const auto& c : sh.clips) {
+                if (c.performer != f) train.push_back(c);
+                else if (c.emotion == "neutral") neutrals.push_back(c.motion);
+            }
+            const auto ca = rcm::fit_chosen(train, sh.table, file, opt, lo);
+            const auto ref = ca.reference(neutrals, f);
+            std::size_t seen = 0;
+            for (const auto& s : want.samples) {  // the samples come fold by fold: found by name
+                if (s.held_out != f) continue;
+                CAPTURE(s.name);
+                const auto it = std::find_if(sh.clips.begin(), sh.clips.end(), [&](const rcm::training_clip& c) { return c.name == s.name; });
+                REQUIRE(it != sh.clips.end());
+                ++seen;
+                CHECK(rcm::to_string(ca.input()) == s.input);
+                CHECK(ca.shrink() == s.shrink);
+                const auto a = ca.analyse(*it->motion, ref, s.name);
+                CHECK(a.valence == Approx(s.valence).epsilon(1e-12));
+                CHECK(a.arousal == Approx(s.arousal).epsilon(1e-12));
+                // the pull toward the constant is an increasing map of the unshrunk point
+                const auto u = ca.analyse_unshrunk(*it->motion, ref, s.name);
+                CHECK(a.valence == Approx(ca.constant().valence + ca.shrink() * (u.valence - ca.constant().valence)).epsilon(1e-12));
+            }
+            CHECK(seen == 5);  // the fold's five clips, one per emotion
+        }
+    }
+}
+
+TEST_CASE("model: a chosen analysis names what it cannot read")
+{
+    const auto& sh = shared();
+    auto opt = sh.opt;
+    opt.cluster = false;
+    std::vector<rcm::training_clip> train;
+    for (const auto& c : sh.clips)
+        if (c.performer != sh.clips.front().performer) train.push_back(c);
+    for (auto v : {rcm::analysis_input::relative, rcm::analysis_input::judge}) {
+        CAPTURE(rcm::to_string(v));
+        const auto ca = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral", {v}, {}});
+        CHECK_THROWS_WITH_AS(ca.reference({}, "waving"), doctest::Contains("'waving' has no neutral clip"), value_error);
+        CHECK_THROWS_WITH_AS(ca.analyse(*sh.clips.front().motion, rcm::neutral_reference{}, "out.csv"), doctest::Contains("out.csv has no neutral clip"),
+                             value_error);
+    }
+    const auto paper = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral", {rcm::analysis_input::paper}, {}});
+    clip other = *sh.clips.front().motion;
+    other.skel.joints.pop_back();
+    CHECK_THROWS_WITH_AS(paper.analyse(other, paper.reference({}, "x"), "body.bvh"), doctest::Contains("body.bvh has a skeleton other"), shape_error);
+    CHECK_THROWS_WITH_AS(rcm::fit_chosen({}, sh.table, "circumplex.json", opt, {}), doctest::Contains("no training clips"), value_error);
 }

@@ -874,6 +874,15 @@ inline std::vector<clip_feature_data> relative_to_neutral(const std::vector<trai
     return out;
 }
 
+/// Eq. 1 on one clip's raw mean features: normalised, the selected picked, mapped.
+inline analysis analyse_mean(const rcm_model& m, const vector& raw_mean)
+{
+    const vector all = m.normaliser.apply(raw_mean);
+    vector s = xt::zeros<double>({m.selected.size()});
+    for (std::size_t k = 0; k < m.selected.size(); ++k) s(k) = all(m.selected[k]);
+    return m.analyse_features(s);
+}
+
 /// Fits on `train` and analyses the clips of `test` (indices into clips and feats).
 inline std::vector<analysis> fit_and_analyse(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
                                              const std::vector<std::size_t>& train, const std::vector<std::size_t>& test,
@@ -882,14 +891,28 @@ inline std::vector<analysis> fit_and_analyse(const std::vector<training_clip>& c
 {
     const rcm_model m = fit_from_features(clips, feats, train, fs, table, table_name, opt);
     std::vector<analysis> out;
-    for (std::size_t i : test) {
-        const vector all = m.normaliser.apply(feats[i].mean);
-        vector s = xt::zeros<double>({m.selected.size()});
-        for (std::size_t k = 0; k < m.selected.size(); ++k) s(k) = all(m.selected[k]);
-        out.push_back(m.analyse_features(s));
-    }
+    for (std::size_t i : test) out.push_back(analyse_mean(m, feats[i].mean));
     if (fitted) *fitted = m;
     return out;
+}
+
+/// One clip's features in the full-rate judge's space: the mean over its content's neutral clips' full-rate features
+/// `neutrals` of metrics::full_rate_change(features, neutral).
+/// @throws value_error with the message `none` when there is no neutral clip.
+inline clip_feature_data judge_change(const std::vector<double>& features, const std::vector<const std::vector<double>*>& neutrals,
+                                      const std::string& none)
+{
+    std::vector<double> sum;
+    for (const auto* n : neutrals) {
+        const auto d = metrics::full_rate_change(features, *n);
+        if (sum.empty()) sum.assign(d.size(), 0.0);
+        for (std::size_t k = 0; k < d.size(); ++k) sum[k] += d[k];
+    }
+    if (neutrals.empty()) throw value_error(none);
+    clip_feature_data d;
+    d.mean = xt::zeros<double>({sum.size()});
+    for (std::size_t k = 0; k < sum.size(); ++k) d.mean(k) = sum[k] / static_cast<double>(neutrals.size());
+    return d;
 }
 
 /// Every clip's features in the full-rate judge's space: the mean over the neutral clips n of its performer
@@ -909,22 +932,10 @@ inline std::vector<clip_feature_data> judge_features(const std::vector<training_
     std::vector<clip_feature_data> out;
     out.reserve(clips.size());
     for (std::size_t i = 0; i < clips.size(); ++i) {
-        std::vector<double> sum;
-        double n = 0;
-        for (std::size_t j = 0; j < clips.size(); ++j) {
-            if (clips[j].performer != clips[i].performer || clips[j].emotion != neutral) continue;
-            const auto d = metrics::full_rate_change(f[i], f[j]);
-            if (sum.empty()) sum.assign(d.size(), 0.0);
-            for (std::size_t k = 0; k < d.size(); ++k) sum[k] += d[k];
-            n += 1;
-        }
-        if (n == 0)
-            throw value_error("rcm eval: judge features: '" + clips[i].performer + "' has no '" + neutral + "' clip to read " +
-                              clips[i].name + " against");
-        clip_feature_data d;
-        d.mean = xt::zeros<double>({sum.size()});
-        for (std::size_t k = 0; k < sum.size(); ++k) d.mean(k) = sum[k] / n;
-        out.push_back(std::move(d));
+        std::vector<const std::vector<double>*> ref;
+        for (std::size_t j = 0; j < clips.size(); ++j)
+            if (clips[j].performer == clips[i].performer && clips[j].emotion == neutral) ref.push_back(&f[j]);
+        out.push_back(judge_change(f[i], ref, "rcm eval: judge features: '" + clips[i].performer + "' has no '" + neutral + "' clip to read " + clips[i].name + " against"));
     }
     return out;
 }
@@ -934,7 +945,18 @@ inline std::vector<clip_feature_data> judge_features(const std::vector<training_
 struct window_clusters {
     std::size_t count = 0;
     std::vector<std::vector<std::size_t>> of_clip;  ///< [clips][windows]
+    pose_clustering clustering;                     ///< to assign the windows of other clips
 };
+
+/// The cluster of each window of one clip (of its centre frame's pose).
+inline std::vector<std::size_t> assign_windows(const pose_clustering& pc, const clip_feature_data& f, const std::vector<pose>& poses)
+{
+    std::vector<std::size_t> out;
+    const std::size_t frames = poses.size();
+    const auto starts = window_starts(frames, f.window_length);
+    for (std::size_t k = 0; k < f.windows.shape()[0]; ++k) out.push_back(pc.assign(poses[std::min(frames - 1, starts[k] + f.window_length / 2)]));
+    return out;
+}
 
 inline window_clusters cluster_windows(const std::vector<clip_feature_data>& feats, const std::vector<std::vector<pose>>& poses,
                                        const std::vector<std::size_t>& train, const std::vector<double>& weights,
@@ -943,16 +965,11 @@ inline window_clusters cluster_windows(const std::vector<clip_feature_data>& fea
     std::vector<pose> pool;
     for (std::size_t i : train) pool.insert(pool.end(), poses[i].begin(), poses[i].end());
     co.clusters = std::min(co.clusters, pool.size());
-    const pose_clustering pc = cluster_poses(pool, weights, co);
     window_clusters wc;
-    wc.count = pc.count();
+    wc.clustering = cluster_poses(pool, weights, co);
+    wc.count = wc.clustering.count();
     wc.of_clip.resize(feats.size());
-    for (std::size_t i = 0; i < feats.size(); ++i) {
-        const std::size_t frames = poses[i].size();
-        const auto starts = window_starts(frames, feats[i].window_length);
-        for (std::size_t k = 0; k < feats[i].windows.shape()[0]; ++k)
-            wc.of_clip[i].push_back(pc.assign(poses[i][std::min(frames - 1, starts[k] + feats[i].window_length / 2)]));
-    }
+    for (std::size_t i = 0; i < feats.size(); ++i) wc.of_clip[i] = assign_windows(wc.clustering, feats[i], poses[i]);
     return wc;
 }
 
@@ -965,63 +982,191 @@ inline std::vector<double> window_shares(const std::vector<std::size_t>& window_
     return s;
 }
 
-/// The analysis input `clusters`: fits the global model and one selection, PCA and Eq. 1 map per pose cluster on
-/// the training clips' normalised windows in it (averaged per clip), and answers each test clip's point as the
-/// mean of the clusters' points weighted by its windows' shares (the global point when no window reaches a cluster
-/// whose fit succeeded: a cluster with too few emotions or contents has none).
+/// The `clusters` input's fit: the global model and one selection, PCA and Eq. 1 map per pose cluster (none for a
+/// cluster with too few emotions or contents, or whose fit is singular).
+struct cluster_fit {
+    rcm_model global;
+    std::vector<std::optional<emotion_map>> maps;
+};
+
+/// The normalised mean of a clip's windows in cluster c, or nothing when none is there.
+inline std::optional<vector> cluster_mean(const rcm_model& global, const clip_feature_data& f, const std::vector<std::size_t>& window_cluster,
+                                          std::size_t c)
+{
+    vector acc = xt::zeros<double>({global.normaliser.lo.size()});
+    double n = 0;
+    for (std::size_t k = 0; k < window_cluster.size(); ++k) {
+        if (window_cluster[k] != c) continue;
+        const vector row = xt::view(f.windows, k, xt::all());
+        acc += global.normaliser.apply(row);
+        n += 1;
+    }
+    if (n == 0) return std::nullopt;
+    return vector(acc / n);
+}
+
+/// Fits the global model and one selection, PCA and Eq. 1 map per pose cluster on the training clips' normalised
+/// windows in it (averaged per clip).
+inline cluster_fit fit_clusters(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats, const window_clusters& wc,
+                                const std::vector<std::size_t>& train, feature_set fs, const circumplex_table& table,
+                                const std::string& table_name, const fit_options& opt)
+{
+    cluster_fit cf;
+    cf.global = fit_from_features(clips, feats, train, fs, table, table_name, opt);
+    const std::size_t D = cf.global.normaliser.lo.size();
+    cf.maps.resize(wc.count);
+    for (std::size_t c = 0; c < wc.count; ++c) {
+        std::vector<vector> rows;
+        std::vector<std::string> emo, perf;
+        for (std::size_t i : train)
+            if (auto r = cluster_mean(cf.global, feats[i], wc.of_clip[i], c))
+                rows.push_back(std::move(*r)), emo.push_back(clips[i].emotion), perf.push_back(clips[i].performer);
+        try {
+            cf.maps[c] = fit_emotion_map(rows_of(rows, D), emo, perf, table, table_name, opt.selection, opt.pca_keep);
+        } catch (const error&) {
+            cf.maps[c].reset();  // too few clips, emotions or contents reach this cluster, or its fit is singular
+        }
+    }
+    return cf;
+}
+
+/// A clip's point under the `clusters` input: the mean of the clusters' points weighted by its windows' shares
+/// (the global point when no window reaches a cluster whose fit succeeded).
+inline analysis analyse_clusters(const cluster_fit& cf, const clip_feature_data& f, const std::vector<std::size_t>& window_cluster)
+{
+    std::vector<analysis> points;
+    std::vector<double> weights;
+    const auto shares = window_shares(window_cluster, cf.maps.size());
+    for (std::size_t c = 0; c < cf.maps.size(); ++c) {
+        if (!cf.maps[c]) continue;
+        const auto r = cluster_mean(cf.global, f, window_cluster, c);
+        if (!r) continue;
+        points.push_back((*cf.maps[c])(*r));
+        weights.push_back(shares[c]);
+    }
+    return points.empty() ? analyse_mean(cf.global, f.mean) : weighted_point(points, weights);
+}
+
+/// The analysis input `clusters` on the clips `test`, fitted on `train`.
 inline std::vector<analysis> fit_and_analyse_clusters(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
                                                       const window_clusters& wc, const std::vector<std::size_t>& train,
                                                       const std::vector<std::size_t>& test, feature_set fs, const circumplex_table& table,
                                                       const std::string& table_name, const fit_options& opt)
 {
-    const rcm_model global = fit_from_features(clips, feats, train, fs, table, table_name, opt);
-    const std::size_t D = global.normaliser.lo.size();
-    // the normalised mean of clip i's windows in cluster c, or nothing when none is there
-    auto cluster_mean = [&](std::size_t i, std::size_t c) -> std::optional<vector> {
-        vector acc = xt::zeros<double>({D});
-        double n = 0;
-        for (std::size_t k = 0; k < wc.of_clip[i].size(); ++k) {
-            if (wc.of_clip[i][k] != c) continue;
-            const vector row = xt::view(feats[i].windows, k, xt::all());
-            acc += global.normaliser.apply(row);
-            n += 1;
-        }
-        if (n == 0) return std::nullopt;
-        return vector(acc / n);
-    };
-    std::vector<std::optional<emotion_map>> maps(wc.count);
-    for (std::size_t c = 0; c < wc.count; ++c) {
-        std::vector<vector> rows;
-        std::vector<std::string> emo, perf;
-        for (std::size_t i : train)
-            if (auto r = cluster_mean(i, c)) rows.push_back(std::move(*r)), emo.push_back(clips[i].emotion), perf.push_back(clips[i].performer);
-        try {
-            maps[c] = fit_emotion_map(rows_of(rows, D), emo, perf, table, table_name, opt.selection, opt.pca_keep);
-        } catch (const error&) {
-            maps[c].reset();  // too few clips, emotions or contents reach this cluster, or its fit is singular
-        }
-    }
+    const cluster_fit cf = fit_clusters(clips, feats, wc, train, fs, table, table_name, opt);
     std::vector<analysis> out;
-    for (std::size_t i : test) {
-        std::vector<analysis> points;
-        std::vector<double> weights;
-        const auto shares = window_shares(wc.of_clip[i], wc.count);
-        for (std::size_t c = 0; c < wc.count; ++c) {
-            if (!maps[c]) continue;
-            const auto r = cluster_mean(i, c);
-            if (!r) continue;
-            points.push_back((*maps[c])(*r));
-            weights.push_back(shares[c]);
-        }
-        out.push_back(points.empty() ? global.analyse_features([&] {
-            const vector all = global.normaliser.apply(feats[i].mean);
-            vector sel = xt::zeros<double>({global.selected.size()});
-            for (std::size_t k = 0; k < global.selected.size(); ++k) sel(k) = all(global.selected[k]);
-            return sel;
-        }())
-                                     : weighted_point(points, weights));
-    }
+    for (std::size_t i : test) out.push_back(analyse_clusters(cf, feats[i], wc.of_clip[i]));
     return out;
+}
+
+/// Every clip's features in every candidate input, computed once, and the fits and the inner choice on them.
+struct analysis_bank {
+    const std::vector<training_clip>* clips = nullptr;
+    const circumplex_table* table = nullptr;
+    std::string table_name, neutral;
+    fit_options opt, judge_opt;
+    std::vector<analysis_input> inputs;
+    feature_set fs{};
+    role_map roles;
+    std::vector<clip_feature_data> feats, rel, judge;
+    std::vector<std::vector<pose>> poses;
+    std::vector<double> pose_w;
+
+    analysis_bank(const std::vector<training_clip>& c, const circumplex_table& t, std::string name, const fit_options& o,
+                  std::vector<analysis_input> in, std::string neutral_label)
+        : clips(&c), table(&t), table_name(std::move(name)), neutral(std::move(neutral_label)), opt(o), judge_opt(o), inputs(std::move(in))
+    {
+        judge_opt.select = false;
+        roles = training_roles(c.front().motion->skel, opt.role_overrides, &fs);
+        feats = compute_features(c, roles, fs, opt.lma, opt.show_progress);
+        if (uses(analysis_input::relative)) rel = relative_to_neutral(c, feats, neutral);
+        if (uses(analysis_input::judge)) judge = judge_features(c, neutral);
+        if (uses(analysis_input::clusters)) {
+            for (const auto& x : c) poses.push_back(clip_poses(*x.motion, roles, opt.lma.up_axis));
+            pose_w = pose_weights(c.front().motion->skel, roles);
+        }
+    }
+    bool uses(analysis_input v) const { return std::find(inputs.begin(), inputs.end(), v) != inputs.end(); }
+    /// the pose clusters of the clips `train` (none without the clusters input)
+    window_clusters clusters_of(const std::vector<std::size_t>& train) const
+    {
+        return uses(analysis_input::clusters) ? cluster_windows(feats, poses, train, pose_w, opt.clustering) : window_clusters{};
+    }
+    /// input v fitted on `train`, the points of `test`; the fitted model (the global one for clusters) in *m
+    std::vector<analysis> predict(analysis_input v, const window_clusters& wc, const std::vector<std::size_t>& train,
+                                  const std::vector<std::size_t>& test, rcm_model* m) const
+    {
+        switch (v) {
+        case analysis_input::relative: return fit_and_analyse(*clips, rel, train, test, fs, *table, table_name, opt, m);
+        case analysis_input::judge: return fit_and_analyse(*clips, judge, train, test, fs, *table, table_name, judge_opt, m);
+        case analysis_input::clusters: {
+            if (m) *m = fit_from_features(*clips, feats, train, fs, *table, table_name, opt);
+            return fit_and_analyse_clusters(*clips, feats, wc, train, test, fs, *table, table_name, opt);
+        }
+        case analysis_input::paper: break;
+        }
+        return fit_and_analyse(*clips, feats, train, test, fs, *table, table_name, opt, m);
+    }
+    /// the constant predictor of the clips `train`: their labels' mean point
+    label_point mean_label(const std::vector<std::size_t>& train) const
+    {
+        label_point c{"constant", 0, 0};
+        for (std::size_t i : train) {
+            const auto& l = table->at((*clips)[i].emotion, table_name);
+            c.valence += l.valence / static_cast<double>(train.size());
+            c.arousal += l.arousal / static_cast<double>(train.size());
+        }
+        return c;
+    }
+    /// The inner leave-one-group-out on the clips `train` (their groups in `group`, one per clip of the bank): each
+    /// candidate input fitted without one group and its non-neutral clips analysed, then choose_variant() over the
+    /// weights. Inner folds one of the candidates cannot fit are left out for all. With one input and one weight,
+    /// that pair without fitting anything.
+    variant_choice choose(const std::vector<std::string>& group, const std::vector<std::size_t>& train, const std::vector<double>& weights,
+                          const window_clusters& wc) const
+    {
+        if (inputs.size() <= 1 && weights.size() <= 1) return {0, weights.empty() ? 1.0 : weights.front(), 0};
+        std::vector<std::string> inner_groups;
+        for (std::size_t i : train) inner_groups.push_back(group[i]);
+        std::vector<std::vector<analysis>> pred(inputs.size());
+        std::vector<label_point> constant, truth;
+        for (const auto& g : sorted_unique(inner_groups)) {
+            std::vector<std::size_t> in_train, in_test;
+            for (std::size_t i : train) {
+                if (group[i] != g) in_train.push_back(i);
+                else if (neutral.empty() || (*clips)[i].emotion != neutral) in_test.push_back(i);
+            }
+            if (in_test.empty()) continue;
+            std::vector<std::vector<analysis>> p;
+            try {
+                for (auto v : inputs) p.push_back(predict(v, wc, in_train, in_test, nullptr));
+            } catch (const error&) {
+                continue;  // an inner fold one of the candidates cannot fit is left out for all
+            }
+            const label_point c = mean_label(in_train);
+            for (std::size_t v = 0; v < inputs.size(); ++v) pred[v].insert(pred[v].end(), p[v].begin(), p[v].end());
+            for (std::size_t i : in_test) constant.push_back(c), truth.push_back(table->at((*clips)[i].emotion, table_name));
+        }
+        return choose_variant(pred, constant, truth, weights);
+    }
+};
+
+/// The candidate inputs of loo_options (from `relative` when none are listed); value_error for both given, or a
+/// missing neutral label with relative or judge inputs.
+inline std::vector<analysis_input> candidate_inputs(const loo_options& lo)
+{
+    if (!lo.inputs.empty() && lo.relative != relative_features::off)
+        throw value_error("rcm eval: give the relative option or the candidate inputs, not both");
+    std::vector<analysis_input> inputs = lo.inputs;
+    if (inputs.empty()) {
+        if (lo.relative != relative_features::on) inputs.push_back(analysis_input::paper);
+        if (lo.relative != relative_features::off) inputs.push_back(analysis_input::relative);
+    }
+    auto uses = [&](analysis_input v) { return std::find(inputs.begin(), inputs.end(), v) != inputs.end(); };
+    if ((uses(analysis_input::relative) || uses(analysis_input::judge)) && lo.neutral.empty())
+        throw value_error(std::string("rcm eval: ") + (uses(analysis_input::judge) && !uses(analysis_input::relative) ? "judge" : "relative") +
+                          " features need the neutral label");
+    return inputs;
 }
 
 }  // namespace detail
@@ -1042,53 +1187,9 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
 {
     if (clips.empty()) throw value_error("rcm eval: no clips");
     if (group.size() != clips.size()) throw shape_error("rcm eval: one group per clip needed");
-    if (!lo.inputs.empty() && lo.relative != relative_features::off)
-        throw value_error("rcm eval: give the relative option or the candidate inputs, not both");
-    std::vector<analysis_input> inputs = lo.inputs;
-    if (inputs.empty()) {
-        if (lo.relative != relative_features::on) inputs.push_back(analysis_input::paper);
-        if (lo.relative != relative_features::off) inputs.push_back(analysis_input::relative);
-    }
+    const std::vector<analysis_input> inputs = detail::candidate_inputs(lo);
     const std::vector<double> weights = lo.shrink.empty() ? std::vector<double>{1.0} : lo.shrink;
-    auto uses = [&](analysis_input v) { return std::find(inputs.begin(), inputs.end(), v) != inputs.end(); };
-    if ((uses(analysis_input::relative) || uses(analysis_input::judge)) && lo.neutral.empty())
-        throw value_error(std::string("rcm eval: ") + (uses(analysis_input::judge) && !uses(analysis_input::relative) ? "judge" : "relative") +
-                          " features need the neutral label");
-    feature_set fs{};
-    const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
-    const auto feats = compute_features(clips, r, fs, opt.lma, opt.show_progress);
-    const auto rel = uses(analysis_input::relative) ? detail::relative_to_neutral(clips, feats, lo.neutral) : std::vector<clip_feature_data>{};
-    const auto judge = uses(analysis_input::judge) ? detail::judge_features(clips, lo.neutral) : std::vector<clip_feature_data>{};
-    fit_options judge_opt = opt;
-    judge_opt.select = false;
-    std::vector<std::vector<pose>> poses;
-    std::vector<double> pose_w;
-    if (uses(analysis_input::clusters)) {
-        for (const auto& c : clips) poses.push_back(clip_poses(*c.motion, r, opt.lma.up_axis));
-        pose_w = pose_weights(clips.front().motion->skel, r);
-    }
-    auto predict = [&](analysis_input v, const detail::window_clusters& wc, const std::vector<std::size_t>& train,
-                       const std::vector<std::size_t>& test, rcm_model* m) -> std::vector<analysis> {
-        switch (v) {
-        case analysis_input::relative: return detail::fit_and_analyse(clips, rel, train, test, fs, table, table_name, opt, m);
-        case analysis_input::judge: return detail::fit_and_analyse(clips, judge, train, test, fs, table, table_name, judge_opt, m);
-        case analysis_input::clusters: {
-            if (m) *m = fit_from_features(clips, feats, train, fs, table, table_name, opt);
-            return detail::fit_and_analyse_clusters(clips, feats, wc, train, test, fs, table, table_name, opt);
-        }
-        case analysis_input::paper: break;
-        }
-        return detail::fit_and_analyse(clips, feats, train, test, fs, table, table_name, opt, m);
-    };
-    auto mean_label = [&](const std::vector<std::size_t>& train) {
-        label_point c{"constant", 0, 0};
-        for (std::size_t i : train) {
-            const auto& l = table.at(clips[i].emotion, table_name);
-            c.valence += l.valence / static_cast<double>(train.size());
-            c.arousal += l.arousal / static_cast<double>(train.size());
-        }
-        return c;
-    };
+    const detail::analysis_bank bank(clips, table, table_name, opt, inputs, lo.neutral);
     eval_report rep;
     rep.folds = detail::sorted_unique(group);
     progress bar("rcm eval folds", static_cast<long>(rep.folds.size()), opt.show_progress ? stderr : nullptr);
@@ -1097,36 +1198,12 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
     for (std::size_t f = 0; f < rep.folds.size(); ++f) {
         std::vector<std::size_t> train, test;
         for (std::size_t i = 0; i < clips.size(); ++i) (group[i] == rep.folds[f] ? test : train).push_back(i);
-        const label_point base = mean_label(train);
+        const label_point base = bank.mean_label(train);
         detail::window_clusters wc;
         variant_choice choice{0, weights.front(), 0};
         try {
-            if (uses(analysis_input::clusters)) wc = detail::cluster_windows(feats, poses, train, pose_w, opt.clustering);
-            if (inputs.size() > 1 || weights.size() > 1) {
-                // the inner leave-one-group-out on the fold's training clips
-                std::vector<std::string> inner_groups;
-                for (std::size_t i : train) inner_groups.push_back(group[i]);
-                std::vector<std::vector<analysis>> pred(inputs.size());
-                std::vector<label_point> constant, truth;
-                for (const auto& g : detail::sorted_unique(inner_groups)) {
-                    std::vector<std::size_t> in_train, in_test;
-                    for (std::size_t i : train) {
-                        if (group[i] != g) in_train.push_back(i);
-                        else if (lo.neutral.empty() || clips[i].emotion != lo.neutral) in_test.push_back(i);
-                    }
-                    if (in_test.empty()) continue;
-                    std::vector<std::vector<analysis>> p;
-                    try {
-                        for (auto v : inputs) p.push_back(predict(v, wc, in_train, in_test, nullptr));
-                    } catch (const error&) {
-                        continue;  // an inner fold one of the candidates cannot fit is left out for all
-                    }
-                    const label_point c = mean_label(in_train);
-                    for (std::size_t v = 0; v < inputs.size(); ++v) pred[v].insert(pred[v].end(), p[v].begin(), p[v].end());
-                    for (std::size_t i : in_test) constant.push_back(c), truth.push_back(table.at(clips[i].emotion, table_name));
-                }
-                choice = choose_variant(pred, constant, truth, weights);
-            }
+            wc = bank.clusters_of(train);
+            choice = bank.choose(group, train, weights, wc);
         } catch (const error& e) {
             rep.failed_folds.push_back(rep.folds[f] + ": " + e.what());
             bar.update(static_cast<long>(f + 1));
@@ -1136,7 +1213,7 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
         rcm_model m;
         std::vector<analysis> an;
         try {
-            an = predict(input, wc, train, test, &m);
+            an = bank.predict(input, wc, train, test, &m);
         } catch (const error& e) {
             rep.failed_folds.push_back(rep.folds[f] + ": " + e.what());
             bar.update(static_cast<long>(f + 1));
@@ -1187,6 +1264,159 @@ inline eval_report evaluate_loo(const std::vector<training_clip>& clips, const s
         rep.mean_shrink = shrink_sum / static_cast<double>(fitted);
     }
     return rep;
+}
+
+/// @brief What a clip is read against under the `relative` and `judge` inputs: the neutral clips of its content.
+struct neutral_reference {
+    vector mean_features;                         ///< the mean of their raw derived features (relative)
+    std::vector<std::vector<double>> full_rate;   ///< each one's metrics::full_rate_features() (judge)
+    std::size_t clips = 0;
+};
+
+/// @brief An analysis whose input and shrinkage weight were chosen on its own training clips, the way each fold of
+/// evaluate_loo() chooses them (an inner leave-one-group-out over the training contents, choose_variant()), kept to
+/// analyse other clips: the outputs of a transfer, read against the neutral clips of their content. fit_chosen()
+/// makes one; on a fold's training clips it gives, for that fold's held-out clips, the points evaluate_loo() does.
+class chosen_analysis {
+public:
+    analysis_input input() const noexcept { return input_; }
+    double shrink() const noexcept { return shrink_; }
+    /// the mean distance of the chosen pair over the inner held-out non-neutral clips (0 when nothing was chosen)
+    double inner_distance() const noexcept { return inner_distance_; }
+    /// the constant predictor the points are pulled toward: the training clips' mean label point
+    const label_point& constant() const noexcept { return constant_; }
+    /// the model of the chosen input's features (for `clusters`, the global one)
+    const rcm_model& model() const noexcept { return model_; }
+
+    /// @brief The reference of a content from its neutral clips (any number for the paper and clusters inputs, at
+    /// least one for relative and judge); `content` names it in errors.
+    /// @throws value_error when relative or judge has no neutral clip, or a clip's features cannot be computed.
+    neutral_reference reference(const std::vector<const clip*>& neutrals, const std::string& content) const
+    {
+        neutral_reference r;
+        r.clips = neutrals.size();
+        if (input_ != analysis_input::relative && input_ != analysis_input::judge) return r;
+        if (neutrals.empty()) throw value_error("rcm analysis: '" + content + "' has no neutral clip to read its clips against");
+        for (std::size_t k = 0; k < neutrals.size(); ++k) {
+            const std::string who = "the neutral clip " + std::to_string(k + 1) + " of '" + content + "'";
+            if (input_ == analysis_input::relative) {
+                const vector m = features_of(*neutrals[k], who).mean;
+                if (k == 0) r.mean_features = xt::zeros<double>({m.size()});
+                r.mean_features += m;
+            } else {
+                r.full_rate.push_back(full_rate_of(*neutrals[k], who));
+            }
+        }
+        if (input_ == analysis_input::relative) r.mean_features /= static_cast<double>(neutrals.size());
+        return r;
+    }
+
+    /// @brief The point of the chosen input for a clip of the content `ref` was made from, before the pull toward
+    /// the constant (its ranks among a content's clips are those of analyse() whenever shrink() > 0).
+    /// @throws shape_error for a skeleton other than the training one; value_error when its features cannot be computed.
+    analysis analyse_unshrunk(const clip& c, const neutral_reference& ref, const std::string& who = "clip") const
+    {
+        if (!c.skel.same_topology(skel_)) throw shape_error("rcm analysis: " + who + " has a skeleton other than the training clips'");
+        switch (input_) {
+        case analysis_input::judge: {
+            std::vector<const std::vector<double>*> n;
+            for (const auto& f : ref.full_rate) n.push_back(&f);
+            return detail::analyse_mean(model_, detail::judge_change(full_rate_of(c, who), n, "rcm analysis: " + who + " has no neutral clip to be read against").mean);
+        }
+        case analysis_input::relative: {
+            if (ref.mean_features.size() == 0) throw value_error("rcm analysis: " + who + " has no neutral clip to be read against");
+            return detail::analyse_mean(model_, vector(features_of(c, who).mean - ref.mean_features));
+        }
+        case analysis_input::clusters: {
+            const auto f = features_of(c, who);
+            return detail::analyse_clusters(clusters_, f, detail::assign_windows(clustering_, f, clip_poses(c, roles_, lma_.up_axis)));
+        }
+        case analysis_input::paper: break;
+        }
+        return detail::analyse_mean(model_, features_of(c, who).mean);
+    }
+
+    /// @brief The analysis of a clip of the content `ref` was made from: the chosen input's point pulled toward the
+    /// constant by the chosen weight.
+    analysis analyse(const clip& c, const neutral_reference& ref, const std::string& who = "clip") const
+    {
+        const analysis a = analyse_unshrunk(c, ref, who);
+        return shrink_ == 1.0 ? a : shrink_toward(a, constant_.valence, constant_.arousal, shrink_);
+    }
+
+private:
+    friend chosen_analysis fit_chosen(const std::vector<training_clip>&, const circumplex_table&, const std::string&, const fit_options&,
+                                      const loo_options&);
+    clip_feature_data features_of(const clip& c, const std::string& who) const
+    {
+        clip_feature_data d;
+        try {
+            d.windows = window_features(world_positions(c), c.fps, roles_, fs_, lma_);
+        } catch (const error& e) {
+            throw value_error("rcm analysis: " + who + ": " + e.what());
+        }
+        d.mean = xt::mean(d.windows, {0});
+        d.window_length = std::min(c.frames, window_length(c.fps, lma_));
+        return d;
+    }
+    static std::vector<double> full_rate_of(const clip& c, const std::string& who)
+    {
+        try {
+            return metrics::full_rate_features(c);
+        } catch (const error& e) {
+            throw value_error("rcm analysis: " + who + ": " + e.what());
+        }
+    }
+
+    analysis_input input_ = analysis_input::paper;
+    double shrink_ = 1, inner_distance_ = 0;
+    label_point constant_{"constant", 0, 0};
+    rcm_model model_;
+    detail::cluster_fit clusters_;
+    pose_clustering clustering_;
+    skeleton skel_;
+    role_map roles_;
+    feature_set fs_{};
+    lma_options lma_;
+};
+
+/// @brief Fits a chosen_analysis on labelled clips (one skeleton; `performer` is the content): the candidate inputs
+/// and weights of `lo` (as evaluate_loo() takes them; `--input auto --shrink auto` is lo.inputs =
+/// parse_analysis_inputs("auto"), lo.shrink = shrink_grid()), chosen by the inner leave-one-content-out over these
+/// clips, then the chosen input fitted on all of them.
+/// @throws value_error / shape_error as evaluate_loo() does, and when the chosen input's fit fails.
+inline chosen_analysis fit_chosen(const std::vector<training_clip>& clips, const circumplex_table& table, const std::string& table_name,
+                                  const fit_options& opt, const loo_options& lo)
+{
+    if (clips.empty()) throw value_error("rcm analysis: no training clips");
+    for (const auto& c : clips)
+        if (!c.motion->skel.same_topology(clips.front().motion->skel))
+            throw shape_error("rcm analysis: " + c.name + " has a different skeleton from " + clips.front().name);
+    const std::vector<analysis_input> inputs = detail::candidate_inputs(lo);
+    const std::vector<double> weights = lo.shrink.empty() ? std::vector<double>{1.0} : lo.shrink;
+    const detail::analysis_bank bank(clips, table, table_name, opt, inputs, lo.neutral);
+    std::vector<std::size_t> all(clips.size());
+    std::vector<std::string> group;
+    for (std::size_t i = 0; i < clips.size(); ++i) all[i] = i, group.push_back(clips[i].performer);
+    const detail::window_clusters wc = bank.clusters_of(all);
+    const variant_choice choice = bank.choose(group, all, weights, wc);
+    chosen_analysis a;
+    a.input_ = inputs[choice.input];
+    a.shrink_ = choice.shrink;
+    a.inner_distance_ = choice.distance;
+    a.constant_ = bank.mean_label(all);
+    a.skel_ = clips.front().motion->skel;
+    a.roles_ = bank.roles;
+    a.fs_ = bank.fs;
+    a.lma_ = opt.lma;
+    if (a.input_ == analysis_input::clusters) {
+        a.clusters_ = detail::fit_clusters(clips, bank.feats, wc, all, bank.fs, table, table_name, opt);
+        a.clustering_ = wc.clustering;
+        a.model_ = a.clusters_.global;
+    } else {
+        bank.predict(a.input_, wc, all, {}, &a.model_);
+    }
+    return a;
 }
 
 }  // namespace handemo::rcm
