@@ -1,6 +1,7 @@
 # `handemo eval` with the circumplex method (on by default when built) on a tiny synthetic set (hand-tiny, one
 # fold, a few iterations, no change gate): its rows must be in results.csv next to the others, its section and
-# per-clip CSV in the report; its options exclude --no-rcm, and a bad label table fails with one line naming it.
+# per-clip CSV in the report, with the analysis chosen per fold (input and shrinkage); its options exclude --no-rcm,
+# and a bad label table, analysis input or shrinkage fails with one line naming it.
 # Variables: HANDEMO_CLI, WORK_DIR.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
@@ -37,7 +38,7 @@ if(NOT md MATCHES "\\| all \\| 1 \\| 5 / 5 \\|[^\n]*\\| -?[01]\\.[0-9][0-9], -?[
   message(FATAL_ERROR "report.md's continuous section has no Spearman numbers for the outputs and the real clips")
 endif()
 foreach(s "## Circumplex (Aristidou et al. 2017)" "| all | rcm |" "circumplex quadrant reached (%)" "**vs rcm**" "--rcm-iters 10"
-          "rcm min_features 8")
+          "rcm min_features 8" "rcm analysis input auto shrink auto" "| input, shrink |")
   string(FIND "${md}" "${s}" at)
   if(at EQUAL -1)
     message(FATAL_ERROR "report.md lacks '${s}'")
@@ -48,6 +49,10 @@ run_fail(rcm_option_off eval --data ${WORK_DIR}/data --config hand-tiny --report
 expect_error_matches("--rcm-iters.*--no-rcm|--no-rcm.*--rcm-iters")
 run_fail(rcm_on_off eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --no-rcm --rcm)
 expect_error_matches("--rcm")
+run_fail(rcm_bad_input eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --rcm-input pca)
+expect_error_matches("--rcm-input pca is not paper, relative, clusters, judge or auto")
+run_fail(rcm_bad_shrink eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --rcm-shrink 2)
+expect_error_matches("--rcm-shrink 2 is not none, auto or a number")
 file(WRITE ${WORK_DIR}/bad_labels.json "{\"format\": \"something-else\"}")
 run_fail_file(rcm_bad_labels ${WORK_DIR}/bad_labels.json eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad
               --rcm --rcm-labels ${WORK_DIR}/bad_labels.json)

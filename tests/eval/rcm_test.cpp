@@ -1,7 +1,8 @@
 // The circumplex method of the leave-one-content-out evaluation (eval/rcm.hpp, the extension the protocol
-// calls): the regression numbers must be those of rcm::evaluate_loo() on the same folds (so the fold model is
-// fitted on the fold's training clips only), every (input, target) must give an rcm output, and the analysis
-// of a real clip as an output must be the fold model's analysis of that clip. No StarGAN is trained here.
+// calls): the regression numbers must be those of rcm::evaluate_loo() with the same candidate inputs and weights on
+// the same folds (so the fold's analysis is fitted and chosen on the fold's training clips only), every (input,
+// target) must give an rcm output, and the analysis of a real clip as an output must be the fold's analysis of that
+// clip. No StarGAN is trained here.
 #include <doctest/doctest.h>
 #include <handemo/eval/rcm.hpp>
 #include <handemo/motion/synth.hpp>
@@ -23,6 +24,7 @@ fold_context pointing_fold(const std::vector<labelled_clip>& clips, std::vector<
 {
     fold_context fc;
     fc.held_out = "pointing";
+    fc.neutral = "neutral";
     for (const auto& c : clips) (c.content == "pointing" ? fc.test.push_back(&c) : train.push_back(c));
     fc.train = &train;
     return fc;
@@ -36,15 +38,21 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
     // target), score() on every method's output and end_fold(); done here by hand for two folds (the wiring
     // through run_eval() is tested end to end by eval_rcm_cli, which counts the rows in results.csv).
     const auto clips = toy_set(4, 30.0);
+    // the default analysis (every input and weight, chosen per fold) and the paper's
+    for (const bool paper : {false, true}) {
+    CAPTURE(paper);
     rcm_eval_options ro;
     ro.table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
     ro.table_name = "circumplex.json";
     ro.fit.selection.min_features = 8;
     ro.stylise.iterations = 15;
+    if (paper) ro.inputs = {rcm::analysis_input::paper}, ro.shrink = {1.0};
     rcm_extension ext(ro);
     CHECK(ext.options_text().find("rcm min_features 8") != std::string::npos);
+    CHECK(ext.options_text().find(paper ? "rcm analysis input paper shrink none" : "rcm analysis input auto shrink auto") != std::string::npos);
     eval_result r;
     std::map<std::string, sample_record> real_score;  // held-out clip name -> score() of the clip itself
+    std::map<std::string, std::pair<double, double>> real_rank;  // and its circumplex_rank_point()
     std::size_t outputs = 0;
     for (const std::string held : {"patting", "gripping"}) {
         std::vector<labelled_clip> train;
@@ -63,6 +71,7 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
             s.target = real->emotion == "neutral" ? "angry" : real->emotion;
             ext.score(s, real->motion);
             real_score[real->path.filename().string()] = s;
+            real_rank[real->path.filename().string()] = ext.circumplex_rank_point(real->motion);
             if (real->emotion == "neutral") continue;
             const auto out = ext.transfer(*in, real->emotion);
             REQUIRE(out.size() == 1);
@@ -93,7 +102,7 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
     for (const auto& c : clips) tc.push_back({&c.motion, c.emotion, c.content, c.path.filename().string()}), group.push_back(c.content);
     rcm::fit_options fo = ro.fit;
     fo.cluster = false;
-    const auto loo = rcm::evaluate_loo(tc, group, ro.table, "circumplex.json", fo);
+    const auto loo = rcm::evaluate_loo(tc, group, ro.table, "circumplex.json", fo, {rcm::relative_features::off, "neutral", ro.inputs, ro.shrink});
     std::map<std::string, rcm::eval_sample> by_name;
     for (const auto& s : loo.samples) by_name[s.name] = s;
     const auto& reg = ext.regression();
@@ -113,6 +122,15 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
         CHECK(rs.circumplex_valence == doctest::Approx(s.valence).epsilon(1e-9));
         CHECK(rs.circumplex_arousal == doctest::Approx(s.arousal).epsilon(1e-9));
         if (s.emotion != "neutral") CHECK((rs.circumplex_quadrant_ok > 0.5) == s.quadrant_ok);
+        // (c) the point the Spearman correlations rank: the analysis before the pull toward the fold's constant c
+        // (the training clips' mean label point), so that the analysis is c + w (point - c), w the fold's weight
+        double cv = 0, ca = 0, n = 0;
+        for (const auto& c : clips)
+            if (c.content != s.fold) cv += ro.table.at(c.emotion, "t").valence, ca += ro.table.at(c.emotion, "t").arousal, n += 1;
+        cv /= n, ca /= n;
+        const auto& rr = real_rank[s.name];
+        CHECK(s.valence == doctest::Approx(cv + e.shrink * (rr.first - cv)).epsilon(1e-9));
+        CHECK(s.arousal == doctest::Approx(ca + e.shrink * (rr.second - ca)).epsilon(1e-9));
     }
     const auto pooled = rcm_extension::pool(reg);
     double d = 0, q = 0;  // rcm eval's pooled numbers over the same two folds (it ran all three)
@@ -123,7 +141,10 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
     REQUIRE(ext.folds().size() == 2);
     for (const auto& f : ext.folds()) {
         CHECK(f.error.empty());
-        CHECK(f.selected == 8);
+        if (paper) CHECK(f.input == "paper");
+        for (const auto& e : loo.samples)
+            if (e.held_out == f.fold) CHECK((f.input == e.input && f.shrink == e.shrink));
+        if (f.input != "judge") CHECK(f.selected == 8);
         CHECK(f.stylise_failed == 0);
         CHECK(f.stylised == 4);
     }
@@ -137,6 +158,7 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
     CHECK(sec.markdown.find("Pooled over the 10 held-out clips") != std::string::npos);
     CHECK(sec.file == "rcm_regression.csv");
     CHECK(std::count(sec.file_text.begin(), sec.file_text.end(), '\n') == 11);  // header + 10 clips
+    }
 }
 
 TEST_CASE("rcm extension: regression only, no rcm rows")
@@ -224,4 +246,57 @@ TEST_CASE("rcm extension: a held-out clip or target it cannot place is counted a
     REQUIRE(r.sections.size() == 1);
     CHECK(r.sections[0].markdown.find("1 held-out clip(s) could not be analysed") != std::string::npos);
     CHECK(r.sections[0].markdown.find("1 (input, target) pair(s) could not be stylised") != std::string::npos);
+}
+
+TEST_CASE("rcm extension: the analysis chosen per fold among every input and weight, as rcm eval chooses it")
+{
+    // the seven contents of the synthetic set, so that each fold's inner leave-one-content-out has contents to choose on (with the three of
+    // toy_set the inner fits cannot run and the choice falls to its first pair, the paper's analysis)
+    std::vector<labelled_clip> clips;
+    for (auto& it : synthesize_dataset(1, 7, 30.0)) {
+        labelled_clip c;
+        c.path = it.file_stem + ".bvh";
+        const auto n = stargan::parse_clip_name(it.file_stem);
+        c.content = n.content, c.emotion = n.emotion, c.take = n.take, c.motion = it.c;
+        clips.push_back(std::move(c));
+    }
+    rcm_eval_options ro;
+    ro.table = rcm::load_circumplex(HANDEMO_RCM_CIRCUMPLEX);
+    ro.fit.selection.min_features = 12;
+    ro.fit.clustering.max_samples = 300;
+    ro.synthesis = false;
+    rcm_extension ext(ro);
+    std::vector<rcm::training_clip> tc;
+    std::vector<std::string> group;
+    for (const auto& c : clips) tc.push_back({&c.motion, c.emotion, c.content, c.path.filename().string()}), group.push_back(c.content);
+    rcm::fit_options fo = ro.fit;
+    fo.cluster = false;
+    const auto loo = rcm::evaluate_loo(tc, group, ro.table, "t", fo, {rcm::relative_features::off, "neutral", ro.inputs, ro.shrink});
+    std::map<std::string, rcm::eval_sample> by_name;
+    for (const auto& s : loo.samples) by_name[s.name] = s;
+    bool other_than_paper = false;
+    for (const std::string held : {"pushing", "patting"}) {
+        std::vector<labelled_clip> train;
+        fold_context fc;
+        fc.held_out = held;
+        fc.neutral = "neutral";
+        for (const auto& c : clips) (c.content == held ? fc.test.push_back(&c) : train.push_back(c));
+        fc.train = &train;
+        ext.begin_fold(fc);
+        const auto& fi = ext.folds().back();
+        CAPTURE(fi.error);
+        REQUIRE(fi.error.empty());
+        other_than_paper = other_than_paper || fi.input != "paper" || fi.shrink != 1.0;
+        for (const auto* c : fc.test) {
+            const auto& e = by_name.at(c->path.filename().string());
+            CHECK((fi.input == e.input && fi.shrink == e.shrink));
+            sample_record s;
+            s.target = c->emotion;
+            ext.score(s, c->motion);
+            CHECK(s.circumplex_valence == doctest::Approx(e.valence).epsilon(1e-9));
+            CHECK(s.circumplex_arousal == doctest::Approx(e.arousal).epsilon(1e-9));
+        }
+    }
+    CHECK(other_than_paper);  // the choice did choose
+    CHECK(ext.regression().size() == 10);
 }

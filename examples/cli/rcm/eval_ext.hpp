@@ -1,4 +1,5 @@
-// `handemo eval ... [--no-rcm] [--rcm-iters N] [--rcm-labels FILE] [--rcm-min-features K] [--rcm-no-synthesis]`:
+// `handemo eval ... [--no-rcm] [--rcm-iters N] [--rcm-labels FILE] [--rcm-min-features K] [--rcm-no-synthesis]
+// [--rcm-input auto|paper|relative|clusters|judge] [--rcm-shrink auto|none|S]`:
 // the circumplex method of Aristidou et al. 2017 (on by default) in the StarGAN evaluation's folds and tables
 // (eval/rcm.hpp). Registered from this translation unit (the only one that sees LAPACK) through
 // eval_extensions() (registry.hpp); `handemo eval` itself lives in stargan/eval.hpp.
@@ -17,6 +18,7 @@ namespace handemo::cli::rcm_cmd {
 struct eval_ext_cli {
     bool off = false, explicit_on = false, no_synthesis = false;
     std::string labels = HANDEMO_RCM_CIRCUMPLEX;
+    std::string input = "auto", shrink = "auto";
     CLI::Option* labels_opt = nullptr;
     handemo::eval::rcm_eval_options opt;
 };
@@ -45,6 +47,14 @@ inline void add_eval_ext_options(CLI::App* sub)
         ->capture_default_str()
         ->excludes(off);
     sub->add_flag("--rcm-no-synthesis", s.no_synthesis, "Circumplex regression and quadrant numbers only, no 'rcm' rows")->excludes(off);
+    sub->add_option("--rcm-input", s.input,
+                    "The circumplex analysis's input, chosen per fold on its training clips as rcm eval --input does (auto: among "
+                    "paper, relative, clusters and judge; paper with --rcm-shrink none is the paper's analysis)")
+        ->capture_default_str()
+        ->excludes(off);
+    sub->add_option("--rcm-shrink", s.shrink, "Its pull toward the constant predictor (auto: chosen per fold, as rcm eval --shrink; none; or S in [0, 1])")
+        ->capture_default_str()
+        ->excludes(off);
 }
 
 inline std::shared_ptr<handemo::eval::method_extension> make_eval_ext()
@@ -52,6 +62,15 @@ inline std::shared_ptr<handemo::eval::method_extension> make_eval_ext()
     auto& s = eval_ext_state();
     if (s.off) return nullptr;
     auto o = s.opt;
+    try {  // parsed first: a mistyped option is an error before anything is loaded
+        o.inputs = handemo::rcm::parse_analysis_inputs(s.input);
+        o.shrink = handemo::rcm::parse_shrink(s.shrink);
+    } catch (const handemo::error& e) {
+        std::string m = e.what();
+        for (const std::string f : {"--input", "--shrink"})
+            if (const auto at = m.find("rcm eval: " + f); at != std::string::npos) m.replace(at, 10 + f.size(), "eval: --rcm-" + f.substr(2));
+        throw handemo::value_error(m);
+    }
     try {
         o.table = handemo::rcm::load_circumplex(s.labels);
     } catch (const handemo::error& e) {

@@ -10,6 +10,7 @@
 #include <handemo/motion/clip.hpp>
 #include <handemo/stargan/dataset.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -41,6 +42,14 @@ public:
     virtual std::vector<std::pair<std::string, clip>> transfer(const labelled_clip& input, const std::string& target) = 0;
     /// @brief Adds the extension's own numbers to a sample of any method whose output clip is `out`.
     virtual void score(sample_record& s, const clip& out) { (void)s, (void)out; }
+    /// @brief A circumplex point (valence, arousal) of a clip of the fold's held-out content whose ranks among that
+    /// content's clips are the extension's analysis's (NaN when it has none): what the continuous control's Spearman
+    /// correlations are taken on (eval/continuous.hpp).
+    virtual std::pair<double, double> circumplex_rank_point(const clip& out)
+    {
+        (void)out;
+        return {std::nan(""), std::nan("")};
+    }
     /// @brief Called after each fold's samples are in `r`: add or replace the extension's report sections.
     virtual void end_fold(eval_result& r) { (void)r; }
 };

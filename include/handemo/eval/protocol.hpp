@@ -1002,10 +1002,11 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
             circumplex_analysis analyse;
             if (!opt.extensions.empty())
                 analyse = [&](const clip& c) {
-                    sample_record s;
-                    s.target = info.neutral;
-                    for (const auto& x : opt.extensions) x->score(s, c);
-                    return std::pair{s.circumplex_valence, s.circumplex_arousal};
+                    for (const auto& x : opt.extensions) {
+                        const auto p = x->circumplex_rank_point(c);
+                        if (std::isfinite(p.first) || std::isfinite(p.second)) return p;
+                    }
+                    return std::pair{std::nan(""), std::nan("")};
                 };
             continuous_folds.push_back(measure_continuous<K>(models.model, control, clf, inputs, reals, held, 10, analyse));
         }

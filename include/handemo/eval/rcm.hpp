@@ -1,17 +1,20 @@
 // The circumplex method of Aristidou et al. 2017 inside `handemo eval`'s folds and tables, as an
 // extension of the leave-one-content-out protocol (eval/extension.hpp): in each fold a circumplex model
 // (rcm/model.hpp: LMA features, selection, PCA, the RBF maps of Eq. 1-4) is fitted on the fold's training
-// clips only, and
-//  - regression: every held-out clip (every emotion) is analysed (Eq. 1); the report gets the mean
-//    circumplex distance between the predicted and the label's (valence, arousal) and the share in the
-//    label's quadrant, next to a constant predictor (the training clips' mean label point), per fold and
-//    pooled: the same numbers as `handemo rcm eval --input paper --shrink none` (the paper's analysis; that
-//    command's default chooses its input and shrinkage per fold) for the same folds;
+// clips only, with an analysis whose input and shrinkage are chosen on those clips (rcm::fit_chosen(), by
+// default among every input and weight as `handemo rcm eval` chooses them), and
+//  - regression: every held-out clip (every emotion) is analysed, read against its content's neutral clips
+//    where the chosen input needs them; the report gets the mean circumplex distance between the predicted
+//    and the label's (valence, arousal) and the share in the label's quadrant, next to a constant predictor
+//    (the training clips' mean label point), per fold and pooled: the same numbers as `handemo rcm eval`
+//    with the same --input and --shrink for the same folds (--input paper --shrink none: the paper's analysis);
 //  - synthesis: each held-out neutral clip is moved to each target label's circumplex point
 //    (rcm::stylise_to_point(), Section 4: rules, IK, spline), the method "rcm", scored with the metrics of
 //    every other method (RMSE to the real clip, independent classifier, content kept, ROM and speed errors);
-//  - every method's output (StarGAN, the baselines, rcm, the real clip) is analysed by the fold's model: the
-//    metric "circumplex quadrant reached".
+//  - every method's output (StarGAN, the baselines, rcm, the real clip) is analysed by the fold's analysis:
+//    the metric "circumplex quadrant reached", and the continuous control's Spearman correlations
+//    (circumplex_rank_point(): the chosen input's point before the pull toward the constant, whose ranks
+//    are the analysis's whenever the weight is above 0).
 // Needs the target handemo::rcm (xtensor-blas, LAPACK); the core evaluation does not include this file.
 #pragma once
 
@@ -36,7 +39,31 @@ struct rcm_eval_options {
     rcm::fit_options fit;         ///< the per-fold fit (pose clusters are never fitted: neither side uses them here)
     rcm::point_options stylise;   ///< the synthesis of the "rcm" rows
     bool synthesis = true;        ///< add the "rcm" method rows (false: regression and quadrant scores only)
+    /// the analysis's candidate inputs and shrinkage weights, chosen per fold on its training clips (rcm eval's
+    /// --input and --shrink; the neutral label comes from the fold); {paper} and {1} are the paper's analysis
+    std::vector<rcm::analysis_input> inputs = rcm::parse_analysis_inputs("auto");
+    std::vector<double> shrink = rcm::shrink_grid();
 };
+
+/// @brief The names of candidate inputs as rcm eval's --input spells them: one name, or `auto` for all four.
+inline std::string inputs_text(const std::vector<rcm::analysis_input>& v)
+{
+    if (v == rcm::parse_analysis_inputs("auto")) return "auto";
+    std::string s;
+    for (auto x : v) s += std::string(s.empty() ? "" : ",") + rcm::to_string(x);
+    return s;
+}
+
+/// @brief Shrinkage weights as rcm eval's --shrink spells them: `auto`, `none`, or the weight.
+inline std::string shrink_text(const std::vector<double>& v)
+{
+    if (v == rcm::shrink_grid()) return "auto";
+    if (v.size() == 1 && v.front() == 1.0) return "none";
+    std::string s;
+    char b[32];
+    for (double x : v) std::snprintf(b, sizeof b, "%s%g", s.empty() ? "" : ",", x), s += b;
+    return s;
+}
 
 /// @brief One held-out clip analysed by its fold's model (the regression half).
 struct rcm_regression_sample {
@@ -53,6 +80,8 @@ struct rcm_regression_sample {
 struct rcm_fold_info {
     std::string fold, error;  ///< error: why the fold's fit failed (empty when it did not)
     std::size_t selected = 0, pca_dims = 0, stylised = 0, stylise_failed = 0, analyse_failed = 0;
+    std::string input = "paper";  ///< the analysis input chosen on the fold's training clips
+    double shrink = 1;            ///< and its shrinkage weight
     double fit_seconds = 0, stylise_seconds = 0;
     std::string first_stylise_error, first_analyse_error;  ///< the first of each kind, for the report
 };
@@ -72,7 +101,8 @@ public:
         std::snprintf(b, sizeof b, "rcm min_features %zu pca_variance %g window %g stylise_iters %d stylise_bound %g%s\n",
                       opt_.fit.selection.min_features, opt_.fit.pca_keep, static_cast<double>(opt_.fit.lma.window_frames_at_30),
                       opt_.stylise.iterations, opt_.stylise.bound, opt_.synthesis ? "" : " (no rcm rows)");
-        return std::string(b) + "rcm labels " + opt_.table_name + "\n";
+        return std::string(b) + "rcm labels " + opt_.table_name + "\nrcm analysis input " + inputs_text(opt_.inputs) + " shrink " +
+               shrink_text(opt_.shrink) + "\n";
     }
 
     void begin_fold(const fold_context& f) override
@@ -80,31 +110,36 @@ public:
         using clock = std::chrono::steady_clock;
         const auto t0 = clock::now();
         model_.reset();
+        analysis_.reset();
         info_.push_back({});
         auto& fi = info_.back();
         fi.fold = f.held_out;
         std::vector<rcm::training_clip> tc;
         for (const auto& c : *f.train) tc.push_back({&c.motion, c.emotion, c.content, c.path.filename().string()});
+        std::vector<const clip*> neutrals;
+        for (const auto* c : f.test)
+            if (c->emotion == f.neutral) neutrals.push_back(&c->motion);
         try {
             model_ = rcm::fit_model(tc, opt_.table, opt_.table_name, opt_.fit);
+            analysis_ = rcm::fit_chosen(tc, opt_.table, opt_.table_name, opt_.fit, {rcm::relative_features::off, f.neutral, opt_.inputs, opt_.shrink});
+            reference_ = analysis_->reference(neutrals, f.held_out);
         } catch (const error& e) {
+            model_.reset();
+            analysis_.reset();
             fi.error = e.what();
             if (f.progress_out) std::fprintf(f.progress_out, "eval: rcm: fold '%s': fit failed: %s\n", f.held_out.c_str(), e.what());
             return;
         }
-        fi.selected = model_->selected.size();
-        fi.pca_dims = model_->pca.dims();
-        double bv = 0, ba = 0;
-        for (const auto& c : tc) {
-            const auto& l = opt_.table.at(c.emotion, opt_.table_name);
-            bv += l.valence / static_cast<double>(tc.size());
-            ba += l.arousal / static_cast<double>(tc.size());
-        }
+        fi.selected = analysis_->model().selected.size();
+        fi.pca_dims = analysis_->model().pca.dims();
+        fi.input = rcm::to_string(analysis_->input());
+        fi.shrink = analysis_->shrink();
+        const double bv = analysis_->constant().valence, ba = analysis_->constant().arousal;
         for (const auto* c : f.test) {
             rcm::analysis a;
             rcm::label_point l;
             try {  // a held-out clip the model cannot analyse is counted and named, not the end of the evaluation
-                a = model_->analyse(c->motion);
+                a = analysis_->analyse(c->motion, reference_, c->path.filename().string());
                 l = opt_.table.at(c->emotion, opt_.table_name);
             } catch (const error& e) {
                 if (fi.analyse_failed++ == 0) fi.first_analyse_error = c->path.filename().string() + ": " + e.what();
@@ -142,14 +177,25 @@ public:
 
     void score(sample_record& s, const clip& out) override
     {
-        if (!model_) return;
+        if (!analysis_) return;
         try {
             const auto& l = opt_.table.at(s.target, opt_.table_name);
-            const rcm::analysis a = model_->analyse(out);
+            const rcm::analysis a = analysis_->analyse(out, reference_);
             s.circumplex_valence = a.valence, s.circumplex_arousal = a.arousal;
             s.circumplex_quadrant_ok = a.quadrant == rcm::quadrant(l.valence, l.arousal) ? 1.0 : 0.0;
         } catch (const error&) {
             // an output the features cannot be computed on (or a target without coordinates) stays "not measured"
+        }
+    }
+
+    std::pair<double, double> circumplex_rank_point(const clip& out) override
+    {
+        if (!analysis_) return {std::nan(""), std::nan("")};
+        try {
+            const rcm::analysis a = analysis_->analyse_unshrunk(out, reference_);
+            return {a.valence, a.arousal};
+        } catch (const error&) {
+            return {std::nan(""), std::nan("")};  // not measured, as in score()
         }
     }
 
@@ -208,12 +254,16 @@ private:
         std::string s =
             "A circumplex model (LMA features, effective/consistent selection with contents as performers, PCA, Gaussian RBF "
             "features -> (valence, arousal), Eq. 1-2) is fitted in each fold on the fold's training clips only (" +
-            opt_.table_name + "). **Regression**: every held-out clip is analysed; distance is the Euclidean distance on the "
-            "circumplex between the predicted point and its label's coordinates, right quadrant counts predictions in the "
-            "label's quadrant; the constant predictor answers the training clips' mean label point. Per clip: `rcm_regression.csv`.\n\n";
-        s += "| held out | clips | mean distance | right quadrant (%) | constant: distance | constant: quadrant (%) | features kept | PCA dims |";
+            opt_.table_name + "), with the analysis input (`paper`: the clip's Table 1 features; `relative`: the same against "
+            "its content's neutral clips; `clusters`: the per-pose-cluster maps; `judge`: the full-rate judge's features) and the "
+            "pull toward the constant predictor chosen on those clips by an inner leave-one-content-out (candidates: input " +
+            inputs_text(opt_.inputs) + ", shrink " + shrink_text(opt_.shrink) + "; as `handemo rcm eval`). **Regression**: every "
+            "held-out clip is analysed; distance is the Euclidean distance on the circumplex between the predicted point and its "
+            "label's coordinates, right quadrant counts predictions in the label's quadrant; the constant predictor answers the "
+            "training clips' mean label point. Per clip: `rcm_regression.csv`.\n\n";
+        s += "| held out | clips | mean distance | right quadrant (%) | constant: distance | constant: quadrant (%) | input, shrink | features kept | PCA dims |";
         if (opt_.synthesis) s += " rcm outputs | failed |";
-        s += "\n|---|---|---|---|---|---|---|---|";
+        s += "\n|---|---|---|---|---|---|---|---|---|";
         if (opt_.synthesis) s += "---|---|";
         s += "\n";
         std::vector<double> fd, fq;
@@ -228,7 +278,8 @@ private:
             const pooled p = pool(v);
             fd.push_back(p.distance), fq.push_back(100 * p.quadrant);
             s += "| " + fi.fold + " | " + std::to_string(p.clips) + " | " + fmt(p.distance, 3) + " | " + fmt(100 * p.quadrant, 1) + " | " +
-                 fmt(p.baseline_distance, 3) + " | " + fmt(100 * p.baseline_quadrant, 1) + " | " + std::to_string(fi.selected) + " | " +
+                 fmt(p.baseline_distance, 3) + " | " + fmt(100 * p.baseline_quadrant, 1) + " | " + fi.input + ", " + fmt(fi.shrink, 1) + " | " +
+                 std::to_string(fi.selected) + " | " +
                  std::to_string(fi.pca_dims) + " |";
             if (opt_.synthesis) s += " " + std::to_string(fi.stylised) + " | " + std::to_string(fi.stylise_failed) + " |";
             s += "\n";
@@ -255,8 +306,9 @@ private:
             s += "**Synthesis**: the **rcm** rows of the tables above are each held-out neutral clip moved to the target label's "
                  "circumplex point by the fold's model (Eq. 3-4 desired features, the rules of Table 2 fitted jointly, IK, "
                  "spline; `handemo rcm stylise` with " + std::to_string(opt_.stylise.iterations) + " iterations, bound " +
-                 fmt(opt_.stylise.bound, 2) + "). The column *circumplex quadrant reached* analyses every method's output with "
-                 "the same fold model.";
+                 fmt(opt_.stylise.bound, 2) + "; the paper's model of the fold, Table 1 features). The column *circumplex quadrant "
+                 "reached* analyses every method's output with the fold's analysis above, read against the held-out content's "
+                 "neutral clips.";
             std::size_t failed = 0;
             for (const auto& fi : info_) failed += fi.stylise_failed;
             if (failed) {
@@ -278,7 +330,9 @@ private:
     }
 
     rcm_eval_options opt_;
-    std::optional<rcm::rcm_model> model_;
+    std::optional<rcm::rcm_model> model_;             // the paper's model: the synthesis of the rcm rows
+    std::optional<rcm::chosen_analysis> analysis_;    // the analysis: regression, quadrant reached, Spearman
+    rcm::neutral_reference reference_;                // the held-out content's neutral clips, for that analysis
     std::vector<rcm_regression_sample> regression_;
     std::vector<rcm_fold_info> info_;
 };
