@@ -189,7 +189,7 @@ TEST_CASE("model: malformed files are errors naming the file and the field")
     j.erase("pca");
     expect(j, "pca");
     j = good;
-    j["version"] = 2;
+    j["version"] = 3;  // 1 and 2 are read
     expect(j, "version");
     j = good;
     j["format"] = "something-else";
@@ -591,4 +591,98 @@ TEST_CASE("model: a chosen analysis names what it cannot read")
     other.skel.joints.pop_back();
     CHECK_THROWS_WITH_AS(paper.analyse(other, paper.reference({}, "x"), "body.bvh"), doctest::Contains("body.bvh has a skeleton other"), shape_error);
     CHECK_THROWS_WITH_AS(rcm::fit_chosen({}, sh.table, "circumplex.json", opt, {}), doctest::Contains("no training clips"), value_error);
+}
+
+TEST_CASE("model: a chosen analysis written with its model and read back analyses as before")
+{
+    const auto& sh = shared();
+    auto opt = sh.opt;
+    opt.cluster = false;
+    const std::string held = sh.clips.front().performer;
+    std::vector<rcm::training_clip> train;
+    std::vector<const clip*> neutrals, test;
+    for (const auto& c : sh.clips) {
+        if (c.performer != held) train.push_back(c);
+        else test.push_back(c.motion);
+        if (c.performer == held && c.emotion == "neutral") neutrals.push_back(c.motion);
+    }
+    const auto m = rcm::fit_model(train, sh.table, "circumplex.json", opt);
+    const auto path = tmp_dir() / "chosen.json";
+    std::vector<rcm::loo_options> cases;
+    for (auto v : rcm::parse_analysis_inputs("auto")) cases.push_back({rcm::relative_features::off, "neutral", {v}, {0.6}});
+    cases.push_back({rcm::relative_features::off, "neutral", rcm::parse_analysis_inputs("auto"), rcm::shrink_grid()});
+    for (const auto& lo : cases) {
+        const std::string name = lo.inputs.size() == 1 ? rcm::to_string(lo.inputs.front()) : "auto";
+        CAPTURE(name);
+        const auto ca = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, lo);
+        rcm::save_model(m, ca, path);
+        const auto back = rcm::load_analysis(path);
+        CHECK(back.input() == ca.input());
+        CHECK(back.shrink() == ca.shrink());
+        CHECK(back.needs_neutral() == ca.needs_neutral());
+        CHECK(back.neutral_label() == "neutral");
+        const auto r0 = ca.reference(neutrals, held), r1 = back.reference(neutrals, held);
+        for (const clip* c : test) {
+            const auto a = ca.analyse(*c, r0), b = back.analyse(*c, r1);
+            CHECK(b.valence == Approx(a.valence).epsilon(1e-9));
+            CHECK(b.arousal == Approx(a.arousal).epsilon(1e-9));
+        }
+        // the file still reads as the model it was (the synthesis uses it)
+        CHECK(rcm::load_model(path).selected == m.selected);
+    }
+    // a version 1 file (no analysis block) is the paper's analysis of its model
+    rcm::save_model(m, path);
+    const auto paper = rcm::load_analysis(path);
+    CHECK(paper.input() == rcm::analysis_input::paper);
+    CHECK(paper.shrink() == 1.0);
+    for (const clip* c : test) CHECK(paper.analyse(*c, paper.reference({}, held)).valence == Approx(m.analyse(*c).valence).epsilon(1e-9));
+}
+
+TEST_CASE("model: a malformed analysis block is an error naming the file and the field")
+{
+    const auto& sh = shared();
+    auto opt = sh.opt;
+    opt.cluster = false;
+    std::vector<rcm::training_clip> train;
+    for (const auto& c : sh.clips)
+        if (c.performer != sh.clips.front().performer) train.push_back(c);
+    const auto m = rcm::fit_model(train, sh.table, "circumplex.json", opt);
+    const auto judge = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral", {rcm::analysis_input::judge}, {}});
+    const auto clusters = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral", {rcm::analysis_input::clusters}, {}});
+    const auto path = tmp_dir() / "bad_analysis.json";
+    auto edit = [&](const rcm::chosen_analysis& a, auto&& change) {
+        rcm::save_model(m, a, path);
+        auto j = nlohmann::json::parse(read_file(path));
+        change(j);
+        write_file_atomic(path, j.dump());
+    };
+    auto fails = [&](const std::string& field) {
+        CAPTURE(field);
+        const std::string want = path.string() + ": field '" + field;
+        CHECK_THROWS_WITH_AS(rcm::load_analysis(path), doctest::Contains(want.c_str()), format_error);
+    };
+    edit(judge, [](auto& j) { j["analysis"]["input"] = "pca"; });
+    fails("analysis.input");
+    edit(judge, [](auto& j) { j["analysis"]["input"] = "auto"; });
+    fails("analysis.input");
+    edit(judge, [](auto& j) { j["analysis"]["shrink"] = 1.5; });
+    fails("analysis.shrink");
+    edit(judge, [](auto& j) { j["analysis"]["neutral"] = ""; });
+    fails("analysis.neutral");
+    edit(judge, [](auto& j) { j["analysis"]["map"]["pca"].erase("mean"); });
+    fails("analysis.map.pca.mean");
+    edit(judge, [](auto& j) { j["analysis"]["map"]["selected"][0] = 100000; });
+    fails("analysis.map.selected[0]");
+    edit(judge, [](auto& j) { j["analysis"]["map"]["to_emotion"]["sigma"] = -1; });
+    fails("analysis.map.to_emotion.sigma");
+    edit(judge, [](auto& j) { j["analysis"]["candidates"]["inputs"][0] = "x"; });
+    fails("analysis.candidates.inputs[0]");
+    edit(clusters, [](auto& j) { j["analysis"]["clusters"]["maps"].erase(0); });
+    fails("analysis.clusters.maps");
+    edit(clusters, [](auto& j) { j["analysis"]["clusters"]["medoids"][0]["q"] = nlohmann::json::array(); });
+    fails("analysis.clusters.medoids[0].q");
+    edit(judge, [](auto& j) { j.erase("analysis"); });
+    fails("analysis");  // version 2 without its block
+    edit(judge, [](auto& j) { j["version"] = 3; });
+    fails("version");
 }

@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -68,6 +69,33 @@ inline void finish_options(fit_cli& o)
     }
     o.opt.performer_kind = "content";
     o.opt.show_progress = true;
+}
+
+/// The neutral label of a set: `given`, else the label called neutral, else Bandai's normal, else none.
+inline std::string neutral_label(const loaded_set& set, const std::string& given)
+{
+    if (!given.empty()) return given;
+    for (const char* n : {"neutral", "normal"})
+        if (std::any_of(set.clips.begin(), set.clips.end(), [&](const auto& c) { return c.emotion == n; })) return n;
+    return {};
+}
+
+/// The candidates of the analysis's choice from --input, --shrink and --neutral (rcm eval, rcm fit): `auto` without a
+/// neutral label tries the inputs that need none (said on stdout), unless --input auto was given explicitly.
+inline handemo::rcm::loo_options analysis_candidates(const loaded_set& set, const std::string& neutral, const std::string& input,
+                                                     bool input_given, const std::string& shrink, const std::string& cmd)
+{
+    handemo::rcm::loo_options lo;
+    lo.neutral = neutral_label(set, neutral);
+    lo.inputs = handemo::rcm::parse_analysis_inputs(input);
+    lo.shrink = handemo::rcm::parse_shrink(shrink);
+    if ((input == "relative" || input == "judge" || (input == "auto" && input_given)) && lo.neutral.empty())
+        throw handemo::value_error(cmd + ": --input " + input + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
+    if (lo.neutral.empty()) {
+        lo.inputs = {handemo::rcm::analysis_input::paper, handemo::rcm::analysis_input::clusters};
+        std::cout << cmd << ": no clip is labelled neutral or normal: --input auto tries paper and clusters only\n";
+    }
+    return lo;
 }
 
 }  // namespace handemo::cli::rcm_cmd

@@ -37,25 +37,15 @@ inline void run_eval(eval_run& o)
         else throw handemo::value_error("rcm eval: --by " + o.by + " is not 'content' or 'take'");
     }
     handemo::rcm::loo_options lo;
-    lo.neutral = o.neutral;
-    if (lo.neutral.empty())  // the label called neutral, else Bandai's normal
-        for (const char* n : {"neutral", "normal"})
-            if (lo.neutral.empty() && std::any_of(set.clips.begin(), set.clips.end(), [&](const auto& c) { return c.emotion == n; })) lo.neutral = n;
     if (!o.relative.empty()) {  // the earlier option: its inputs, and no shrinkage unless --shrink says so
         if (o.input_given) throw handemo::value_error("rcm eval: --relative " + o.relative + " and --input " + o.input + ": give one of them");
+        lo.neutral = neutral_label(set, o.neutral);
         lo.relative = handemo::rcm::parse_relative_features(o.relative);
         lo.shrink = handemo::rcm::parse_shrink(o.shrink_given ? o.shrink : "none");
         if (lo.relative != handemo::rcm::relative_features::off && lo.neutral.empty())
             throw handemo::value_error("rcm eval: --relative " + o.relative + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
     } else {
-        lo.inputs = handemo::rcm::parse_analysis_inputs(o.input);
-        lo.shrink = handemo::rcm::parse_shrink(o.shrink);
-        if ((o.input == "relative" || o.input == "judge" || (o.input == "auto" && o.input_given)) && lo.neutral.empty())
-            throw handemo::value_error("rcm eval: --input " + o.input + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
-        if (lo.neutral.empty()) {  // the default auto without a neutral label: the inputs that need none
-            lo.inputs = {handemo::rcm::analysis_input::paper, handemo::rcm::analysis_input::clusters};
-            std::cout << "rcm eval: no clip is labelled neutral or normal: --input auto tries paper and clusters only\n";
-        }
+        lo = analysis_candidates(set, o.neutral, o.input, o.input_given, o.shrink, "rcm eval");
     }
     const auto r = handemo::rcm::evaluate_loo(set.clips, group, table, o.f.labels, o.f.opt, lo);
     char buf[512];

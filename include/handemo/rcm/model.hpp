@@ -38,7 +38,7 @@
 
 namespace handemo::rcm {
 
-/// @brief Version of the model file this code writes and reads.
+/// @brief Version of the model file save_model() writes without a chosen analysis (with one it writes 2; both are read).
 inline constexpr int model_version = 1;
 
 /// @brief One labelled training clip. `performer` is the performer, or the content (motion type) for
@@ -552,7 +552,8 @@ inline rcm_model model_from_json(const nlohmann::json& j, const std::string& fil
     detail::model_reader rd{file};
     if (rd.text(j, "format", "") != "handemo-rcm-model") rd.fail("format", "is not \"handemo-rcm-model\"");
     const double ver = rd.number(j, "version", "");
-    if (ver != model_version) rd.fail("version", "is " + std::to_string(static_cast<int>(ver)) + ", this handemo reads " + std::to_string(model_version));
+    if (ver != 1 && ver != 2) rd.fail("version", "is " + std::to_string(static_cast<int>(ver)) + ", this handemo reads 1 and 2");
+    if (ver == 2 && !j.contains("analysis")) rd.fail("analysis", "is missing (a version 2 file has one)");
     rcm_model m;
     try {
         m.features = feature_set_from_string(rd.text(j, "feature_set", ""));
@@ -1316,7 +1317,44 @@ public:
     /// @throws shape_error for a skeleton other than the training one; value_error when its features cannot be computed.
     analysis analyse_unshrunk(const clip& c, const neutral_reference& ref, const std::string& who = "clip") const
     {
-        if (!c.skel.same_topology(skel_)) throw shape_error("rcm analysis: " + who + " has a skeleton other than the training clips'");
+        if (fitted_ && !c.skel.same_topology(skel_)) throw shape_error("rcm analysis: " + who + " has a skeleton other than the training clips'");
+        try {
+            return point_of(c, ref, who);
+        } catch (const shape_error& e) {  // a feature count other than the fit's (a read model, another skeleton)
+            throw shape_error("rcm analysis: " + who + ": " + e.what());
+        }
+    }
+
+    /// @brief The analysis of a clip of the content `ref` was made from: the chosen input's point pulled toward the
+    /// constant by the chosen weight.
+    analysis analyse(const clip& c, const neutral_reference& ref, const std::string& who = "clip") const
+    {
+        const analysis a = analyse_unshrunk(c, ref, who);
+        return shrink_ == 1.0 ? a : shrink_toward(a, constant_.valence, constant_.arousal, shrink_);
+    }
+
+    /// @brief True when the chosen input reads a clip against its content's neutral clips (relative, judge).
+    bool needs_neutral() const noexcept { return input_ == analysis_input::relative || input_ == analysis_input::judge; }
+    /// @brief The neutral label the choice read the training clips against (empty when none was given).
+    const std::string& neutral_label() const noexcept { return neutral_; }
+
+    /// @brief The paper's analysis of a model: its Table 1 map, no pull toward the constant.
+    static chosen_analysis paper(const rcm_model& m)
+    {
+        chosen_analysis a;
+        a.model_ = m;
+        return a;
+    }
+
+private:
+    friend chosen_analysis fit_chosen(const std::vector<training_clip>&, const circumplex_table&, const std::string&, const fit_options&,
+                                      const loo_options&);
+    friend nlohmann::json analysis_to_json(const chosen_analysis&);
+    friend chosen_analysis analysis_from_json(const nlohmann::json&, const rcm_model&, const std::string&);
+
+    role_map roles_of(const clip& c) const { return fitted_ ? roles_ : model_.roles_for(c.skel); }
+    analysis point_of(const clip& c, const neutral_reference& ref, const std::string& who) const
+    {
         switch (input_) {
         case analysis_input::judge: {
             std::vector<const std::vector<double>*> n;
@@ -1329,34 +1367,22 @@ public:
         }
         case analysis_input::clusters: {
             const auto f = features_of(c, who);
-            return detail::analyse_clusters(clusters_, f, detail::assign_windows(clustering_, f, clip_poses(c, roles_, lma_.up_axis)));
+            return detail::analyse_clusters(clusters_, f, detail::assign_windows(clustering_, f, clip_poses(c, roles_of(c), model_.lma.up_axis)));
         }
         case analysis_input::paper: break;
         }
         return detail::analyse_mean(model_, features_of(c, who).mean);
     }
-
-    /// @brief The analysis of a clip of the content `ref` was made from: the chosen input's point pulled toward the
-    /// constant by the chosen weight.
-    analysis analyse(const clip& c, const neutral_reference& ref, const std::string& who = "clip") const
-    {
-        const analysis a = analyse_unshrunk(c, ref, who);
-        return shrink_ == 1.0 ? a : shrink_toward(a, constant_.valence, constant_.arousal, shrink_);
-    }
-
-private:
-    friend chosen_analysis fit_chosen(const std::vector<training_clip>&, const circumplex_table&, const std::string&, const fit_options&,
-                                      const loo_options&);
     clip_feature_data features_of(const clip& c, const std::string& who) const
     {
         clip_feature_data d;
         try {
-            d.windows = window_features(world_positions(c), c.fps, roles_, fs_, lma_);
+            d.windows = window_features(world_positions(c), c.fps, roles_of(c), model_.features, model_.lma);
         } catch (const error& e) {
             throw value_error("rcm analysis: " + who + ": " + e.what());
         }
         d.mean = xt::mean(d.windows, {0});
-        d.window_length = std::min(c.frames, window_length(c.fps, lma_));
+        d.window_length = std::min(c.frames, window_length(c.fps, model_.lma));
         return d;
     }
     static std::vector<double> full_rate_of(const clip& c, const std::string& who)
@@ -1371,13 +1397,15 @@ private:
     analysis_input input_ = analysis_input::paper;
     double shrink_ = 1, inner_distance_ = 0;
     label_point constant_{"constant", 0, 0};
-    rcm_model model_;
+    std::string neutral_;
+    std::vector<analysis_input> candidates_{analysis_input::paper};  ///< what the choice chose among
+    std::vector<double> candidate_weights_{1.0};
+    rcm_model model_;  ///< the chosen input's map (its features, lma and role names: the training skeleton's)
     detail::cluster_fit clusters_;
     pose_clustering clustering_;
+    bool fitted_ = false;  ///< fitted here (the training skeleton and its roles known), not read from a file
     skeleton skel_;
     role_map roles_;
-    feature_set fs_{};
-    lma_options lma_;
 };
 
 /// @brief Fits a chosen_analysis on labelled clips (one skeleton; `performer` is the content): the candidate inputs
@@ -1405,10 +1433,12 @@ inline chosen_analysis fit_chosen(const std::vector<training_clip>& clips, const
     a.shrink_ = choice.shrink;
     a.inner_distance_ = choice.distance;
     a.constant_ = bank.mean_label(all);
+    a.neutral_ = lo.neutral;
+    a.candidates_ = inputs;
+    a.candidate_weights_ = weights;
+    a.fitted_ = true;
     a.skel_ = clips.front().motion->skel;
     a.roles_ = bank.roles;
-    a.fs_ = bank.fs;
-    a.lma_ = opt.lma;
     if (a.input_ == analysis_input::clusters) {
         a.clusters_ = detail::fit_clusters(clips, bank.feats, wc, all, bank.fs, table, table_name, opt);
         a.clustering_ = wc.clustering;
@@ -1416,7 +1446,196 @@ inline chosen_analysis fit_chosen(const std::vector<training_clip>& clips, const
     } else {
         bank.predict(a.input_, wc, all, {}, &a.model_);
     }
+    a.model_.roles = bank.roles.to_json();
+    a.model_.features = bank.fs;
+    a.model_.lma = opt.lma;
     return a;
+}
+
+namespace detail {
+
+/// The analysis half of a map as JSON: selected indices, PCA, Eq. 1 (and the normaliser when given).
+inline nlohmann::json map_to_json(const std::vector<std::size_t>& selected, const pca_model& pca, const rbf_map& to_emotion,
+                                  const feature_normaliser* norm = nullptr)
+{
+    nlohmann::json j;
+    if (norm) j["normaliser"] = {{"lo", norm->lo}, {"hi", norm->hi}};
+    j["selected"] = selected;
+    j["pca"] = {{"mean", to_json(pca.mean)}, {"components", to_json(pca.components)}, {"variances", to_json(pca.variances)},
+                {"total_variance", pca.total_variance}};
+    j["to_emotion"] = to_json(to_emotion);
+    return j;
+}
+
+/// Reads map_to_json()'s fields at `path` (a prefix ending in '.') on D normalised features (D from the normaliser
+/// when `norm` is given).
+inline void map_from_json(const model_reader& rd, const nlohmann::json& j, const std::string& path, std::size_t D, std::vector<std::size_t>& selected,
+                          pca_model& pca, rbf_map& to_emotion, feature_normaliser* norm = nullptr)
+{
+    if (norm) {
+        const auto& nm = rd.get(j, "normaliser", path);
+        const auto lo = rd.numbers(rd.get(nm, "lo", path + "normaliser."), path + "normaliser.lo");
+        if (lo.empty()) rd.fail(path + "normaliser.lo", "is empty");
+        const auto hi = rd.vec(nm, "hi", path + "normaliser.", lo.size());
+        norm->lo = lo;
+        norm->hi.assign(hi.begin(), hi.end());
+        D = lo.size();
+    }
+    selected = rd.indices(rd.get(j, "selected", path), path + "selected", D);
+    if (selected.empty()) rd.fail(path + "selected", "is empty");
+    const std::size_t S = selected.size();
+    const auto& pj = rd.get(j, "pca", path);
+    const auto& comps = rd.get(pj, "components", path + "pca.");
+    if (!comps.is_array() || comps.empty() || comps.size() > S)
+        rd.fail(path + "pca.components", "is not an array of 1 to " + std::to_string(S) + " rows");
+    const std::size_t d = comps.size();
+    pca.mean = rd.vec(pj, "mean", path + "pca.", S);
+    pca.components = rd.mat(pj, "components", path + "pca.", d, S);
+    pca.variances = rd.vec(pj, "variances", path + "pca.", d);
+    pca.total_variance = rd.number(pj, "total_variance", path + "pca.");
+    const auto& te = rd.get(j, "to_emotion", path);
+    model_reader sub{rd.file};
+    try {
+        to_emotion = sub.rbf(nlohmann::json{{"to_emotion", te}}, "to_emotion", d, 2);
+    } catch (const format_error& e) {  // the field path inside the map
+        std::string m = e.what();
+        if (const auto at = m.find("field 'to_emotion"); at != std::string::npos) m.replace(at, 7, "field '" + path);
+        throw format_error(m);
+    }
+}
+
+}  // namespace detail
+
+/// @brief A chosen analysis as the "analysis" block of a model file (see save_model()).
+inline nlohmann::json analysis_to_json(const chosen_analysis& a)
+{
+    nlohmann::json j;
+    j["input"] = to_string(a.input_);
+    j["shrink"] = a.shrink_;
+    j["inner_distance"] = a.inner_distance_;
+    j["constant"] = {{"valence", a.constant_.valence}, {"arousal", a.constant_.arousal}};
+    j["neutral"] = a.neutral_;
+    nlohmann::json cand = nlohmann::json::array();
+    for (auto v : a.candidates_) cand.push_back(to_string(v));
+    j["candidates"] = {{"inputs", cand}, {"shrink", a.candidate_weights_}};
+    if (a.input_ == analysis_input::relative || a.input_ == analysis_input::judge)
+        j["map"] = detail::map_to_json(a.model_.selected, a.model_.pca, a.model_.to_emotion, &a.model_.normaliser);
+    if (a.input_ == analysis_input::clusters) {
+        nlohmann::json med = nlohmann::json::array(), maps = nlohmann::json::array();
+        for (const auto& p : a.clustering_.medoids) med.push_back(detail::to_json(p));
+        for (const auto& m : a.clusters_.maps) maps.push_back(m ? detail::map_to_json(m->selected, m->pca, m->to_emotion) : nlohmann::json());
+        j["clusters"] = {{"weights", a.clustering_.weights}, {"height_weight", a.clustering_.height_weight},
+                         {"height_scale", a.clustering_.height_scale}, {"medoids", med}, {"maps", maps}};
+    }
+    return j;
+}
+
+/// @brief Reads the "analysis" block of a model file, the model `m` read from the same file (whose map the
+/// `paper` and `clusters` inputs use, and whose role names every input uses).
+/// @throws format_error naming `file` and the field.
+inline chosen_analysis analysis_from_json(const nlohmann::json& j, const rcm_model& m, const std::string& file)
+{
+    detail::model_reader rd{file};
+    const std::string p = "analysis.";
+    if (!j.is_object()) rd.fail("analysis", "is not an object");
+    chosen_analysis a;
+    const std::string input = rd.text(j, "input", p);
+    try {
+        a.input_ = parse_analysis_inputs(input).at(0);
+    } catch (const value_error&) {
+        rd.fail(p + "input", "is '" + input + "', expected paper, relative, clusters or judge");
+    }
+    if (input == "auto") rd.fail(p + "input", "is 'auto', expected the chosen input");
+    a.shrink_ = rd.number(j, "shrink", p);
+    if (!(a.shrink_ >= 0 && a.shrink_ <= 1)) rd.fail(p + "shrink", "is not in [0, 1]");
+    a.inner_distance_ = rd.number(j, "inner_distance", p);
+    const auto& c = rd.get(j, "constant", p);
+    a.constant_ = {"constant", rd.number(c, "valence", p + "constant."), rd.number(c, "arousal", p + "constant.")};
+    if (std::abs(a.constant_.valence) > 1 || std::abs(a.constant_.arousal) > 1) rd.fail(p + "constant", "is outside [-1, 1]");
+    a.neutral_ = rd.text(j, "neutral", p);
+    const auto& cand = rd.get(j, "candidates", p);
+    const auto& ci = rd.get(cand, "inputs", p + "candidates.");
+    if (!ci.is_array() || ci.empty()) rd.fail(p + "candidates.inputs", "is not a non-empty array");
+    a.candidates_.clear();
+    for (std::size_t i = 0; i < ci.size(); ++i) {
+        const std::string f = p + "candidates.inputs[" + std::to_string(i) + "]";
+        if (!ci[i].is_string()) rd.fail(f, "is not a string");
+        try {
+            const auto v = parse_analysis_inputs(ci[i].get<std::string>());
+            if (v.size() != 1) rd.fail(f, "is not one input");
+            a.candidates_.push_back(v.front());
+        } catch (const value_error&) {
+            rd.fail(f, "is not paper, relative, clusters or judge");
+        }
+    }
+    a.candidate_weights_ = rd.numbers(rd.get(cand, "shrink", p + "candidates."), p + "candidates.shrink");
+    if (a.needs_neutral() && a.neutral_.empty()) rd.fail(p + "neutral", "is empty, but input " + input + " reads clips against neutral clips");
+    a.model_ = m;
+    if (a.needs_neutral()) {
+        detail::map_from_json(rd, rd.get(j, "map", p), p + "map.", 0, a.model_.selected, a.model_.pca, a.model_.to_emotion, &a.model_.normaliser);
+        if (a.input_ == analysis_input::relative && a.model_.normaliser.lo.size() != derived_count(m.features))
+            rd.fail(p + "map.normaliser.lo", "has " + std::to_string(a.model_.normaliser.lo.size()) + " values, expected " +
+                                                 std::to_string(derived_count(m.features)));
+    }
+    if (a.input_ == analysis_input::clusters) {
+        const std::string q = p + "clusters.";
+        const auto& cj = rd.get(j, "clusters", p);
+        a.clustering_.weights = rd.numbers(rd.get(cj, "weights", q), q + "weights");
+        a.clustering_.height_weight = rd.number(cj, "height_weight", q);
+        a.clustering_.height_scale = rd.number(cj, "height_scale", q);
+        if (!(a.clustering_.height_scale > 0)) rd.fail(q + "height_scale", "is not positive");
+        const auto& med = rd.get(cj, "medoids", q);
+        if (!med.is_array() || med.empty()) rd.fail(q + "medoids", "is not a non-empty array");
+        const std::size_t J = a.clustering_.weights.size();
+        for (std::size_t k = 0; k < med.size(); ++k) {
+            const std::string r = q + "medoids[" + std::to_string(k) + "].";
+            pose ps;
+            ps.height = rd.number(med[k], "height", r);
+            const matrix qm = rd.mat(med[k], "q", r, J, 4);
+            for (std::size_t i = 0; i < J; ++i) ps.q.push_back({qm(i, 0), qm(i, 1), qm(i, 2), qm(i, 3)});
+            a.clustering_.medoids.push_back(std::move(ps));
+        }
+        const auto& maps = rd.get(cj, "maps", q);
+        if (!maps.is_array() || maps.size() != med.size()) rd.fail(q + "maps", "does not have one entry (a map or null) per medoid");
+        a.clusters_.global = m;
+        for (std::size_t k = 0; k < maps.size(); ++k) {
+            if (maps[k].is_null()) {
+                a.clusters_.maps.emplace_back();
+                continue;
+            }
+            emotion_map em;
+            detail::map_from_json(rd, maps[k], q + "maps[" + std::to_string(k) + "].", m.normaliser.lo.size(), em.selected, em.pca, em.to_emotion);
+            a.clusters_.maps.push_back(std::move(em));
+        }
+    }
+    return a;
+}
+
+/// @brief Writes a model file atomically with its chosen analysis: `"version": 2` and an "analysis" block (the
+/// chosen input and weight, the constant, and the chosen input's own map where it is not the model's).
+inline void save_model(const rcm_model& m, const chosen_analysis& a, const std::filesystem::path& path)
+{
+    nlohmann::json j = model_to_json(m);
+    j["version"] = 2;
+    j["analysis"] = analysis_to_json(a);
+    write_file_atomic(path, j.dump(1) + "\n");
+}
+
+/// @brief The chosen analysis of a model file: its "analysis" block (version 2), or the paper's analysis of its
+/// model (version 1, which has none).
+/// @throws io_error when it cannot be read, format_error naming the file and field when it is malformed.
+inline chosen_analysis load_analysis(const std::filesystem::path& path)
+{
+    const std::string text = read_file(path);
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw format_error("rcm model: " + path.string() + ": not JSON: " + e.what());
+    }
+    const rcm_model m = model_from_json(j, path.string());
+    if (!j.contains("analysis")) return chosen_analysis::paper(m);
+    return analysis_from_json(j.at("analysis"), m, path.string());
 }
 
 }  // namespace handemo::rcm
