@@ -19,15 +19,28 @@ using handemo::test::toy_set;
 
 namespace {
 
-/// The fold that holds pointing out: its held-out clips in fc.test, the others copied into `train`.
-fold_context pointing_fold(const std::vector<labelled_clip>& clips, std::vector<labelled_clip>& train)
+/// The fold that holds `held` out: its held-out clips in fc.test, the others copied into `train`.
+fold_context fold_of(const std::vector<labelled_clip>& clips, const std::string& held, std::vector<labelled_clip>& train)
 {
     fold_context fc;
-    fc.held_out = "pointing";
+    fc.held_out = held;
     fc.neutral = "neutral";
-    for (const auto& c : clips) (c.content == "pointing" ? fc.test.push_back(&c) : train.push_back(c));
+    for (const auto& c : clips) (c.content == held ? fc.test.push_back(&c) : train.push_back(c));
     fc.train = &train;
     return fc;
+}
+
+fold_context pointing_fold(const std::vector<labelled_clip>& clips, std::vector<labelled_clip>& train) { return fold_of(clips, "pointing", train); }
+
+/// What `handemo rcm eval` gives for every content held out in turn, with the extension's fit options and candidates.
+rcm::eval_report loo_of(const std::vector<labelled_clip>& clips, const rcm_eval_options& ro)
+{
+    std::vector<rcm::training_clip> tc;
+    std::vector<std::string> group;
+    for (const auto& c : clips) tc.push_back({&c.motion, c.emotion, c.content, c.path.filename().string()}), group.push_back(c.content);
+    rcm::fit_options fo = ro.fit;
+    fo.cluster = false;
+    return rcm::evaluate_loo(tc, group, ro.table, "circumplex.json", fo, {rcm::relative_features::off, "neutral", ro.inputs, ro.shrink});
 }
 
 }  // namespace
@@ -56,11 +69,7 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
     std::size_t outputs = 0;
     for (const std::string held : {"patting", "gripping"}) {
         std::vector<labelled_clip> train;
-        fold_context fc;
-        fc.held_out = held;
-        fc.neutral = "neutral";
-        for (const auto& c : clips) (c.content == held ? fc.test.push_back(&c) : train.push_back(c));
-        fc.train = &train;
+        const fold_context fc = fold_of(clips, held, train);
         ext.begin_fold(fc);
         const labelled_clip* in = nullptr;
         for (const auto* c : fc.test)
@@ -97,12 +106,7 @@ TEST_CASE("rcm extension: regression as rcm eval, rcm outputs, every output anal
 
     // (a) regression: the same numbers as `handemo rcm eval` (rcm::evaluate_loo) holding out the same contents,
     // so the fold model saw the training clips only
-    std::vector<rcm::training_clip> tc;
-    std::vector<std::string> group;
-    for (const auto& c : clips) tc.push_back({&c.motion, c.emotion, c.content, c.path.filename().string()}), group.push_back(c.content);
-    rcm::fit_options fo = ro.fit;
-    fo.cluster = false;
-    const auto loo = rcm::evaluate_loo(tc, group, ro.table, "circumplex.json", fo, {rcm::relative_features::off, "neutral", ro.inputs, ro.shrink});
+    const auto loo = loo_of(clips, ro);
     std::map<std::string, rcm::eval_sample> by_name;
     for (const auto& s : loo.samples) by_name[s.name] = s;
     const auto& reg = ext.regression();
@@ -266,22 +270,13 @@ TEST_CASE("rcm extension: the analysis chosen per fold among every input and wei
     ro.fit.clustering.max_samples = 300;
     ro.synthesis = false;
     rcm_extension ext(ro);
-    std::vector<rcm::training_clip> tc;
-    std::vector<std::string> group;
-    for (const auto& c : clips) tc.push_back({&c.motion, c.emotion, c.content, c.path.filename().string()}), group.push_back(c.content);
-    rcm::fit_options fo = ro.fit;
-    fo.cluster = false;
-    const auto loo = rcm::evaluate_loo(tc, group, ro.table, "t", fo, {rcm::relative_features::off, "neutral", ro.inputs, ro.shrink});
+    const auto loo = loo_of(clips, ro);
     std::map<std::string, rcm::eval_sample> by_name;
     for (const auto& s : loo.samples) by_name[s.name] = s;
     bool other_than_paper = false;
     for (const std::string held : {"pushing", "patting"}) {
         std::vector<labelled_clip> train;
-        fold_context fc;
-        fc.held_out = held;
-        fc.neutral = "neutral";
-        for (const auto& c : clips) (c.content == held ? fc.test.push_back(&c) : train.push_back(c));
-        fc.train = &train;
+        const fold_context fc = fold_of(clips, held, train);
         ext.begin_fold(fc);
         const auto& fi = ext.folds().back();
         CAPTURE(fi.error);

@@ -41,6 +41,31 @@ const rcm::rcm_model& fitted()
     return m;
 }
 
+/// Each clip's content, the group of a leave-one-content-out.
+std::vector<std::string> content_groups()
+{
+    std::vector<std::string> group;
+    for (const auto& c : shared().clips) group.push_back(c.performer);
+    return group;
+}
+
+/// The fixture's fit options without pose clusters (the evaluation's).
+rcm::fit_options loo_fit_options()
+{
+    auto opt = shared().opt;
+    opt.cluster = false;
+    return opt;
+}
+
+/// The fixture's clips of every content but one.
+std::vector<rcm::training_clip> clips_without(const std::string& content)
+{
+    std::vector<rcm::training_clip> out;
+    for (const auto& c : shared().clips)
+        if (c.performer != content) out.push_back(c);
+    return out;
+}
+
 std::filesystem::path tmp_dir()
 {
     const auto d = std::filesystem::temp_directory_path() / "handemo_rcm_model_test";
@@ -438,10 +463,8 @@ TEST_CASE("model: the judge's features are read against the same content's neutr
 TEST_CASE("model: leave-one-content-out with candidate inputs and shrinkage")
 {
     const auto& sh = shared();
-    std::vector<std::string> group;
-    for (const auto& c : sh.clips) group.push_back(c.performer);
-    auto opt = sh.opt;
-    opt.cluster = false;
+    const std::vector<std::string> group = content_groups();
+    const auto opt = loo_fit_options();
     const std::string file = "circumplex.json";
     using rcm::analysis_input;
     // weight 0 is the constant predictor, exactly
@@ -524,10 +547,8 @@ TEST_CASE("model: leave-one-content-out with candidate inputs and shrinkage")
 TEST_CASE("model: a chosen analysis fitted on a fold's training clips gives that fold's evaluate_loo points")
 {
     const auto& sh = shared();
-    std::vector<std::string> group;
-    for (const auto& c : sh.clips) group.push_back(c.performer);
-    auto opt = sh.opt;
-    opt.cluster = false;
+    const std::vector<std::string> group = content_groups();
+    const auto opt = loo_fit_options();
     const std::string file = "circumplex.json";
     using rcm::analysis_input;
     const auto all = rcm::parse_analysis_inputs("auto");
@@ -574,11 +595,8 @@ TEST_CASE("model: a chosen analysis fitted on a fold's training clips gives that
 TEST_CASE("model: a chosen analysis names what it cannot read")
 {
     const auto& sh = shared();
-    auto opt = sh.opt;
-    opt.cluster = false;
-    std::vector<rcm::training_clip> train;
-    for (const auto& c : sh.clips)
-        if (c.performer != sh.clips.front().performer) train.push_back(c);
+    const auto opt = loo_fit_options();
+    const auto train = clips_without(sh.clips.front().performer);
     for (auto v : {rcm::analysis_input::relative, rcm::analysis_input::judge}) {
         CAPTURE(rcm::to_string(v));
         const auto ca = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral", {v}, {}});
@@ -641,11 +659,8 @@ TEST_CASE("model: a chosen analysis written with its model and read back analyse
 TEST_CASE("model: a malformed analysis block is an error naming the file and the field")
 {
     const auto& sh = shared();
-    auto opt = sh.opt;
-    opt.cluster = false;
-    std::vector<rcm::training_clip> train;
-    for (const auto& c : sh.clips)
-        if (c.performer != sh.clips.front().performer) train.push_back(c);
+    const auto opt = loo_fit_options();
+    const auto train = clips_without(sh.clips.front().performer);
     const auto m = rcm::fit_model(train, sh.table, "circumplex.json", opt);
     const auto judge = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral", {rcm::analysis_input::judge}, {}});
     const auto clusters = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, {rcm::relative_features::off, "neutral", {rcm::analysis_input::clusters}, {}});

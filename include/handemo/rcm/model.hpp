@@ -646,6 +646,21 @@ inline rcm_model model_from_json(const nlohmann::json& j, const std::string& fil
     return m;
 }
 
+namespace detail {
+
+/// A model file's JSON. @throws io_error when it cannot be read, format_error when it is not JSON.
+inline nlohmann::json read_model_json(const std::filesystem::path& path)
+{
+    const std::string text = read_file(path);
+    try {
+        return nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw format_error("rcm model: " + path.string() + ": not JSON: " + e.what());
+    }
+}
+
+}  // namespace detail
+
 /// @brief Writes a model file atomically (JSON, `"format": "handemo-rcm-model"`, `"version": 1`).
 inline void save_model(const rcm_model& m, const std::filesystem::path& path)
 {
@@ -656,14 +671,7 @@ inline void save_model(const rcm_model& m, const std::filesystem::path& path)
 /// @throws io_error when it cannot be read, format_error naming the file and field when it is malformed.
 inline rcm_model load_model(const std::filesystem::path& path)
 {
-    const std::string text = read_file(path);
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw format_error("rcm model: " + path.string() + ": not JSON: " + e.what());
-    }
-    return model_from_json(j, path.string());
+    return model_from_json(detail::read_model_json(path), path.string());
 }
 
 // ---- evaluation ----
@@ -1626,13 +1634,7 @@ inline void save_model(const rcm_model& m, const chosen_analysis& a, const std::
 /// @throws io_error when it cannot be read, format_error naming the file and field when it is malformed.
 inline chosen_analysis load_analysis(const std::filesystem::path& path)
 {
-    const std::string text = read_file(path);
-    nlohmann::json j;
-    try {
-        j = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
-        throw format_error("rcm model: " + path.string() + ": not JSON: " + e.what());
-    }
+    const nlohmann::json j = detail::read_model_json(path);
     const rcm_model m = model_from_json(j, path.string());
     if (!j.contains("analysis")) return chosen_analysis::paper(m);
     return analysis_from_json(j.at("analysis"), m, path.string());
