@@ -120,7 +120,7 @@ public:
         for (const auto* c : f.test)
             if (c->emotion == f.neutral) neutrals.push_back(&c->motion);
         try {
-            model_ = rcm::fit_model(tc, opt_.table, opt_.table_name, opt_.fit);
+            if (opt_.synthesis) model_ = rcm::fit_model(tc, opt_.table, opt_.table_name, opt_.fit);  // the synthesis's model only
             analysis_ = rcm::fit_chosen(tc, opt_.table, opt_.table_name, opt_.fit, {rcm::relative_features::off, f.neutral, opt_.inputs, opt_.shrink});
             reference_ = analysis_->reference(neutrals, f.held_out);
         } catch (const error& e) {
@@ -159,7 +159,7 @@ public:
 
     std::vector<std::pair<std::string, clip>> transfer(const labelled_clip& input, const std::string& target) override
     {
-        if (!model_ || !opt_.synthesis) return {};
+        if (!model_) return {};  // fitted only with the synthesis on
         const auto t0 = std::chrono::steady_clock::now();
         auto& fi = info_.back();
         std::vector<std::pair<std::string, clip>> out;
