@@ -656,6 +656,41 @@ TEST_CASE("model: a chosen analysis written with its model and read back analyse
     for (const clip* c : test) CHECK(paper.analyse(*c, paper.reference({}, held)).valence == Approx(m.analyse(*c).valence).epsilon(1e-9));
 }
 
+TEST_CASE("model: the model and the chosen analysis fitted together are the two fitted apart")
+{
+    const auto& sh = shared();
+    const auto& opt = sh.opt;  // pose clusters on: the shared features feed the model's clusters too
+    const std::string held = sh.clips.front().performer;
+    std::vector<rcm::training_clip> train;
+    std::vector<const clip*> neutrals, test;
+    for (const auto& c : sh.clips) {
+        if (c.performer != held) train.push_back(c);
+        else test.push_back(c.motion);
+        if (c.performer == held && c.emotion == "neutral") neutrals.push_back(c.motion);
+    }
+    const rcm::loo_options lo{rcm::relative_features::off, "neutral", rcm::parse_analysis_inputs("auto"), rcm::shrink_grid()};
+    const auto both = rcm::fit_model_and_chosen(train, sh.table, "circumplex.json", opt, lo);
+    const auto m = rcm::fit_model(train, sh.table, "circumplex.json", opt);
+    const auto ca = rcm::fit_chosen(train, sh.table, "circumplex.json", opt, lo);
+    CHECK(both.model.selected == m.selected);
+    CHECK(both.model.has_clusters == m.has_clusters);
+    CHECK(both.model.cluster_selected == m.cluster_selected);
+    CHECK(both.analysis.input() == ca.input());
+    CHECK(both.analysis.shrink() == ca.shrink());
+    CHECK(both.analysis.inner_distance() == ca.inner_distance());
+    const auto r0 = ca.reference(neutrals, held), r1 = both.analysis.reference(neutrals, held);
+    for (const clip* c : test) {
+        const auto a = m.analyse(*c), b = both.model.analyse(*c);
+        CHECK(b.valence == a.valence);
+        CHECK(b.arousal == a.arousal);
+        const auto x = ca.analyse(*c, r0), y = both.analysis.analyse(*c, r1);
+        CHECK(y.valence == x.valence);
+        CHECK(y.arousal == x.arousal);
+    }
+    CHECK_THROWS_WITH_AS(rcm::fit_model_and_chosen({}, sh.table, "circumplex.json", opt, lo), doctest::Contains("rcm fit: no training clips"),
+                         value_error);
+}
+
 TEST_CASE("model: a malformed analysis block is an error naming the file and the field")
 {
     const auto& sh = shared();

@@ -56,12 +56,11 @@ inline void run_fit(fit_run& o)
     check_labels(set, table, o.f.labels);
     std::cout << "rcm fit: " << set.clips.size() << " clips from " << o.f.data << "; contents play the performers' role\n";
     const auto lo = analysis_candidates(set, o.neutral, o.input, o.input_given, o.shrink, "rcm fit");
-    auto m = handemo::rcm::fit_model(set.clips, table, o.f.labels, o.f.opt);
+    const auto fitted = handemo::rcm::fit_model_and_chosen(set.clips, table, o.f.labels, o.f.opt, lo);
+    const auto& m = fitted.model;
+    const auto& a = fitted.analysis;
     // the selection counts are not stored per feature in the file; print them now
     print_selection(m, std::cout);
-    auto fo = o.f.opt;
-    fo.show_progress = false;
-    const auto a = handemo::rcm::fit_chosen(set.clips, table, o.f.labels, fo, lo);
     char line[256];
     std::snprintf(line, sizeof line, "rcm fit: analysis: input %s, shrink %.1f toward (%.3f, %.3f)", handemo::rcm::to_string(a.input()), a.shrink(),
                   a.constant().valence, a.constant().arousal);

@@ -120,8 +120,14 @@ public:
         for (const auto* c : f.test)
             if (c->emotion == f.neutral) neutrals.push_back(&c->motion);
         try {
-            if (opt_.synthesis) model_ = rcm::fit_model(tc, opt_.table, opt_.table_name, opt_.fit);  // the synthesis's model only
-            analysis_ = rcm::fit_chosen(tc, opt_.table, opt_.table_name, opt_.fit, {rcm::relative_features::off, f.neutral, opt_.inputs, opt_.shrink});
+            const rcm::loo_options lo{rcm::relative_features::off, f.neutral, opt_.inputs, opt_.shrink};
+            if (opt_.synthesis) {  // the synthesis's model (the paper's) and the analysis, on the same features
+                auto both = rcm::fit_model_and_chosen(tc, opt_.table, opt_.table_name, opt_.fit, lo);
+                model_ = std::move(both.model);
+                analysis_ = std::move(both.analysis);
+            } else {
+                analysis_ = rcm::fit_chosen(tc, opt_.table, opt_.table_name, opt_.fit, lo);
+            }
             reference_ = analysis_->reference(neutrals, f.held_out);
         } catch (const error& e) {
             model_.reset();

@@ -315,6 +315,12 @@ inline rcm_model fit_from_features(const std::vector<training_clip>& clips, cons
     return m;
 }
 
+namespace detail {
+inline rcm_model fit_model_from_features(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
+                                         const role_map& r, feature_set fs, const circumplex_table& table, const std::string& table_name,
+                                         const fit_options& opt);
+}  // namespace detail
+
 /// @brief Fits a whole model on labelled clips (one skeleton), with pose clusters when opt.cluster.
 /// @throws value_error / shape_error as the steps do, naming the clip where one is at fault.
 inline rcm_model fit_model(const std::vector<training_clip>& clips, const circumplex_table& table, const std::string& table_name,
@@ -326,7 +332,16 @@ inline rcm_model fit_model(const std::vector<training_clip>& clips, const circum
             throw shape_error("rcm fit: " + c.name + " has a different skeleton from " + clips.front().name);
     feature_set fs{};
     const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
-    const auto feats = compute_features(clips, r, fs, opt.lma, opt.show_progress);
+    return detail::fit_model_from_features(clips, compute_features(clips, r, fs, opt.lma, opt.show_progress), r, fs, table, table_name, opt);
+}
+
+namespace detail {
+
+/// fit_model() on the features it computes (those of every clip, with roles r and feature set fs)
+inline rcm_model fit_model_from_features(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
+                                         const role_map& r, feature_set fs, const circumplex_table& table, const std::string& table_name,
+                                         const fit_options& opt)
+{
     std::vector<std::size_t> all(clips.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
     rcm_model m = fit_from_features(clips, feats, all, fs, table, table_name, opt);
@@ -383,6 +398,8 @@ inline rcm_model fit_model(const std::vector<training_clip>& clips, const circum
     }
     return m;
 }
+
+}  // namespace detail
 
 // ---- model file ----
 
@@ -1282,6 +1299,8 @@ struct neutral_reference {
     std::size_t clips = 0;
 };
 
+struct model_and_analysis;
+
 /// @brief An analysis whose input and shrinkage weight were chosen on its own training clips, the way each fold of
 /// evaluate_loo() chooses them (an inner leave-one-group-out over the training contents, choose_variant()), kept to
 /// analyse other clips: the outputs of a transfer, read against the neutral clips of their content. fit_chosen()
@@ -1355,6 +1374,48 @@ public:
     }
 
 private:
+    friend model_and_analysis fit_model_and_chosen(const std::vector<training_clip>&, const circumplex_table&, const std::string&,
+                                                   const fit_options&, const loo_options&);
+    static void check_clips(const std::vector<training_clip>& clips, const char* what)
+    {
+        if (clips.empty()) throw value_error(std::string(what) + ": no training clips");
+        for (const auto& c : clips)
+            if (!c.motion->skel.same_topology(clips.front().motion->skel))
+                throw shape_error(std::string(what) + ": " + c.name + " has a different skeleton from " + clips.front().name);
+    }
+    /// the inner choice over the bank's clips (groups: their performers), then the chosen input fitted on all of them
+    static chosen_analysis from_bank(const detail::analysis_bank& bank, const loo_options& lo)
+    {
+        const auto& clips = *bank.clips;
+        const std::vector<double> weights = lo.shrink.empty() ? std::vector<double>{1.0} : lo.shrink;
+        std::vector<std::size_t> all(clips.size());
+        std::vector<std::string> group;
+        for (std::size_t i = 0; i < clips.size(); ++i) all[i] = i, group.push_back(clips[i].performer);
+        const detail::window_clusters wc = bank.clusters_of(all);
+        const variant_choice choice = bank.choose(group, all, weights, wc);
+        chosen_analysis a;
+        a.input_ = bank.inputs[choice.input];
+        a.shrink_ = choice.shrink;
+        a.inner_distance_ = choice.distance;
+        a.constant_ = bank.mean_label(all);
+        a.neutral_ = lo.neutral;
+        a.candidates_ = bank.inputs;
+        a.candidate_weights_ = weights;
+        a.fitted_ = true;
+        a.skel_ = clips.front().motion->skel;
+        a.roles_ = bank.roles;
+        if (a.input_ == analysis_input::clusters) {
+            a.clusters_ = detail::fit_clusters(clips, bank.feats, wc, all, bank.fs, *bank.table, bank.table_name, bank.opt);
+            a.clustering_ = wc.clustering;
+            a.model_ = a.clusters_.global;
+        } else {
+            bank.predict(a.input_, wc, all, {}, &a.model_);
+        }
+        a.model_.roles = bank.roles.to_json();
+        a.model_.features = bank.fs;
+        a.model_.lma = bank.opt.lma;
+        return a;
+    }
     friend chosen_analysis fit_chosen(const std::vector<training_clip>&, const circumplex_table&, const std::string&, const fit_options&,
                                       const loo_options&);
     friend nlohmann::json analysis_to_json(const chosen_analysis&);
@@ -1424,40 +1485,31 @@ private:
 inline chosen_analysis fit_chosen(const std::vector<training_clip>& clips, const circumplex_table& table, const std::string& table_name,
                                   const fit_options& opt, const loo_options& lo)
 {
-    if (clips.empty()) throw value_error("rcm analysis: no training clips");
-    for (const auto& c : clips)
-        if (!c.motion->skel.same_topology(clips.front().motion->skel))
-            throw shape_error("rcm analysis: " + c.name + " has a different skeleton from " + clips.front().name);
+    chosen_analysis::check_clips(clips, "rcm analysis");
     const std::vector<analysis_input> inputs = detail::candidate_inputs(lo);
-    const std::vector<double> weights = lo.shrink.empty() ? std::vector<double>{1.0} : lo.shrink;
     const detail::analysis_bank bank(clips, table, table_name, opt, inputs, lo.neutral);
-    std::vector<std::size_t> all(clips.size());
-    std::vector<std::string> group;
-    for (std::size_t i = 0; i < clips.size(); ++i) all[i] = i, group.push_back(clips[i].performer);
-    const detail::window_clusters wc = bank.clusters_of(all);
-    const variant_choice choice = bank.choose(group, all, weights, wc);
-    chosen_analysis a;
-    a.input_ = inputs[choice.input];
-    a.shrink_ = choice.shrink;
-    a.inner_distance_ = choice.distance;
-    a.constant_ = bank.mean_label(all);
-    a.neutral_ = lo.neutral;
-    a.candidates_ = inputs;
-    a.candidate_weights_ = weights;
-    a.fitted_ = true;
-    a.skel_ = clips.front().motion->skel;
-    a.roles_ = bank.roles;
-    if (a.input_ == analysis_input::clusters) {
-        a.clusters_ = detail::fit_clusters(clips, bank.feats, wc, all, bank.fs, table, table_name, opt);
-        a.clustering_ = wc.clustering;
-        a.model_ = a.clusters_.global;
-    } else {
-        bank.predict(a.input_, wc, all, {}, &a.model_);
-    }
-    a.model_.roles = bank.roles.to_json();
-    a.model_.features = bank.fs;
-    a.model_.lma = opt.lma;
-    return a;
+    return chosen_analysis::from_bank(bank, lo);
+}
+
+/// @brief The paper's model and the chosen analysis of the same clips: fit_model(clips, table, table_name, opt) and
+/// fit_chosen(clips, table, table_name, opt, lo), with every clip's features computed once (what `rcm fit` stores).
+struct model_and_analysis {
+    rcm_model model;
+    chosen_analysis analysis;
+};
+
+/// @brief fit_model() and fit_chosen() on the same clips and options, sharing the clips' features.
+/// @throws as fit_model() and fit_chosen() do.
+inline model_and_analysis fit_model_and_chosen(const std::vector<training_clip>& clips, const circumplex_table& table,
+                                               const std::string& table_name, const fit_options& opt, const loo_options& lo)
+{
+    chosen_analysis::check_clips(clips, "rcm fit");
+    const std::vector<analysis_input> inputs = detail::candidate_inputs(lo);
+    const detail::analysis_bank bank(clips, table, table_name, opt, inputs, lo.neutral);
+    model_and_analysis r;
+    r.model = detail::fit_model_from_features(clips, bank.feats, bank.roles, bank.fs, table, table_name, opt);
+    r.analysis = chosen_analysis::from_bank(bank, lo);
+    return r;
 }
 
 namespace detail {
