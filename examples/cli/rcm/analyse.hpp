@@ -21,14 +21,6 @@ struct analyse_run {
     bool paper = false;
 };
 
-inline handemo::clip read_motion(const std::filesystem::path& in)
-{
-    const auto ext = in.extension().string();
-    handemo::clip c = (ext == ".csv" || ext == ".CSV") ? handemo::read_csv(in, handemo::hand_skeleton()) : handemo::read_bvh(in);
-    c.validate(in.string());
-    return c;
-}
-
 inline void run_analyse(const analyse_run& o)
 {
     if (!o.target.empty() && (o.target.size() != 2 || std::abs(o.target[0]) > 1 || std::abs(o.target[1]) > 1))

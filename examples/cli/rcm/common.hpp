@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <string>
@@ -96,6 +97,51 @@ inline handemo::rcm::loo_options analysis_candidates(const loaded_set& set, cons
         std::cout << cmd << ": no clip is labelled neutral or normal: --input auto tries paper and clusters only\n";
     }
     return lo;
+}
+
+/// A motion file: .csv as the hand, anything else as BVH; validated, the file named in any error.
+inline handemo::clip read_motion(const std::filesystem::path& in)
+{
+    const auto ext = in.extension().string();
+    handemo::clip c = (ext == ".csv" || ext == ".CSV") ? handemo::read_csv(in, handemo::hand_skeleton()) : handemo::read_bvh(in);
+    c.validate(in.string());
+    return c;
+}
+
+/// The analysis `rcm stylise` and `rcm path` print of their input and outputs: the model file's chosen one, read
+/// against the --neutral takes when its input needs them; the paper's with --paper, or when the chosen input needs
+/// neutral takes and none were given (the line `line` says which, and why).
+struct printed_analysis {
+    handemo::rcm::chosen_analysis analysis;
+    handemo::rcm::neutral_reference reference;
+    std::string line;
+    handemo::rcm::analysis of(const handemo::clip& c, const std::string& who) const { return analysis.analyse(c, reference, who); }
+};
+
+inline printed_analysis printed_analysis_of(const std::string& model_file, const handemo::rcm::rcm_model& m,
+                                            const std::vector<std::string>& neutral_files, bool paper, const std::string& cmd)
+{
+    printed_analysis p{paper ? handemo::rcm::chosen_analysis::paper(m) : handemo::rcm::load_analysis(model_file), {}, {}};
+    char b[200];
+    std::snprintf(b, sizeof b, "%s: analysis: input %s, shrink %.1f", cmd.c_str(), handemo::rcm::to_string(p.analysis.input()), p.analysis.shrink());
+    p.line = b;
+    if (paper) p.line += " (--paper)";
+    if (p.analysis.needs_neutral() && neutral_files.empty()) {
+        p.line = cmd + ": analysis: input paper, shrink 1.0 (the model's analysis, input " + handemo::rcm::to_string(p.analysis.input()) +
+                 ", reads a clip against neutral takes of its content: give them with --neutral FILE)";
+        p.analysis = handemo::rcm::chosen_analysis::paper(m);
+    }
+    std::vector<handemo::clip> neutral;
+    for (const auto& n : neutral_files) neutral.push_back(read_motion(n));
+    std::vector<const handemo::clip*> np;
+    for (const auto& n : neutral) np.push_back(&n);
+    try {
+        p.reference = p.analysis.reference(np, "the --neutral clips");
+    } catch (const handemo::error& e) {
+        throw handemo::value_error(cmd + ": " + e.what());
+    }
+    if (!neutral_files.empty() && !p.analysis.needs_neutral()) p.line += " (it reads no neutral takes: --neutral is not used)";
+    return p;
 }
 
 }  // namespace handemo::cli::rcm_cmd

@@ -2,7 +2,8 @@
 // stylised to a sequence of points along a path on the circumplex (rcm::parse_path(), sample_path(),
 // stylise_to_point() of rcm/control.hpp), drawn as a filmstrip (one column per point, the input first, as
 // `handemo render` draws them). Waypoints are labels (the model's, then the --labels table's) or explicit
-// points `V:A` / `(V,A)`. Prints, per column, the target point and `rcm analyse` of the output.
+// points `V:A` / `(V,A)`. Prints, per column, the target point and `rcm analyse` of the output (the model's chosen
+// analysis; --neutral takes for one that reads them, --paper for the paper's).
 #pragma once
 
 #include "common.hpp"
@@ -21,7 +22,8 @@ namespace handemo::cli::rcm_cmd {
 struct path_run {
     std::string model, input, path, out, labels = HANDEMO_RCM_CIRCUMPLEX, bvh_dir;
     std::size_t steps = 2, rows = 5, cell = 160;
-    bool no_input = false;
+    bool no_input = false, paper = false;
+    std::vector<std::string> neutral;
     handemo::rcm::point_options po;
 };
 
@@ -39,9 +41,9 @@ inline void run_path(const path_run& o)
         if (std::none_of(labels.begin(), labels.end(), [&](const rc::label_point& x) { return x.name == l.name; })) labels.push_back(l);
     const auto points = rc::sample_path(rc::parse_path(o.path, labels), o.steps);
     const std::filesystem::path in(o.input);
-    const auto iext = in.extension().string();
-    handemo::clip c = (iext == ".csv" || iext == ".CSV") ? handemo::read_csv(in, handemo::hand_skeleton()) : handemo::read_bvh(in);
-    c.validate(in.string());
+    const handemo::clip c = read_motion(in);
+    const auto pa = printed_analysis_of(o.model, m, o.neutral, o.paper, "rcm path");
+    std::cout << pa.line << "\n";
     std::vector<handemo::clip> clips;
     handemo::filmstrip_options fo;
     fo.rows = o.rows;
@@ -49,7 +51,7 @@ inline void run_path(const path_run& o)
     char line[256];
     rc::analysis a0;
     try {
-        a0 = m.analyse(c);
+        a0 = pa.of(c, in.string());
     } catch (const handemo::error& e) {
         throw handemo::value_error("rcm path: " + in.string() + ": " + e.what());
     }
@@ -69,7 +71,12 @@ inline void run_path(const path_run& o)
         } catch (const handemo::value_error& e) {
             throw handemo::value_error(std::string(e.what()) + " (" + in.string() + ")");
         }
-        const auto a = m.analyse(r.synth.motion);
+        rc::analysis a;
+        try {
+            a = pa.of(r.synth.motion, "column " + std::to_string(k));
+        } catch (const handemo::error& e) {
+            throw handemo::value_error("rcm path: " + std::string(e.what()));
+        }
         std::snprintf(line, sizeof line,
                       "step %zu: target %s valence %.3f arousal %.3f quadrant %d -> valence %.3f arousal %.3f quadrant %d, %zu frames\n", k,
                       rc::path_title(p).c_str(), p.valence, p.arousal, rc::quadrant(p.valence, p.arousal), a.valence, a.arousal, a.quadrant,
@@ -106,6 +113,10 @@ inline void add_path(CLI::App& rcm)
     sub->add_option("--cell", o->cell, "Cell side in pixels")->capture_default_str();
     sub->add_flag("--no-input", o->no_input, "Leave the input's column out");
     sub->add_option("--bvh-dir", o->bvh_dir, "Also write each column's motion as DIR/stepNN.bvh");
+    sub->add_option("--neutral", o->neutral,
+                    "Neutral takes of the input's content (.bvh, .csv): the model's analysis of each column reads them when its "
+                    "input is relative or judge (without them, the paper's analysis is printed)");
+    sub->add_flag("--paper", o->paper, "Print the paper's analysis of each column, whatever the model chose");
     sub->add_option("--iters", o->po.iterations, "BFGS iterations of each stylisation")->capture_default_str();
     sub->add_option("--bound", o->po.bound, "Largest |coefficient| (as rcm stylise)")->capture_default_str();
     sub->callback([o] { run_path(*o); });

@@ -2,7 +2,8 @@
 // et al. 2017 through rcm::stylise_to_point() (rcm/control.hpp): the model's multiquadric RBF (Eq. 3-4) gives
 // the selected features at (V, A), the differentiable ones become Eq. 6 targets, the rule coefficients are
 // fitted jointly, every fifth frame is moved by IK and the clip is splined back to full rate (duration / c4).
-// Prints what it targeted, the Eq. 6 losses, the coefficients and `rcm analyse` of the input and the output.
+// Prints what it targeted, the Eq. 6 losses, the coefficients and `rcm analyse` of the input and the output (the
+// model's chosen analysis; --neutral takes for one that reads them, --paper for the paper's).
 #pragma once
 
 #include "common.hpp"
@@ -19,7 +20,8 @@ struct stylise_run {
     double valence = 0, arousal = 0;
     int iterations = 100;
     double bound = 0.7;
-    bool frame_rate = false;
+    bool frame_rate = false, paper = false;
+    std::vector<std::string> neutral;
 };
 
 inline void run_stylise(const stylise_run& o)
@@ -30,9 +32,8 @@ inline void run_stylise(const stylise_run& o)
                                    ", " + std::to_string(o.arousal) + ")");
     const auto m = rc::load_model(o.model);
     const std::filesystem::path in(o.input);
-    const auto ext = in.extension().string();
-    handemo::clip c = (ext == ".csv" || ext == ".CSV") ? handemo::read_csv(in, handemo::hand_skeleton()) : handemo::read_bvh(in);
-    c.validate(in.string());
+    const handemo::clip c = read_motion(in);
+    const auto pa = printed_analysis_of(o.model, m, o.neutral, o.paper, "rcm stylise");
     rc::point_options po;
     po.iterations = o.iterations;
     po.bound = o.bound;
@@ -61,7 +62,14 @@ inline void run_stylise(const stylise_run& o)
     std::snprintf(line, sizeof line, "\nframes %zu -> %zu at %.4g fps (c4 = %.4f)", c.frames, res.motion.frames, res.motion.fps,
                   rc::time_scale(res.fit.coefficients));
     std::cout << line << "\n";
-    const auto a0 = m.analyse(c), a1 = m.analyse(res.motion);
+    rc::analysis a0, a1;
+    try {
+        a0 = pa.of(c, in.string());
+        a1 = pa.of(res.motion, o.out);
+    } catch (const handemo::error& e) {
+        throw handemo::value_error(std::string("rcm stylise: ") + e.what());
+    }
+    std::cout << pa.line << "\n";
     std::snprintf(line, sizeof line, "input  valence %.3f arousal %.3f quadrant %d\noutput valence %.3f arousal %.3f quadrant %d\n",
                   a0.valence, a0.arousal, a0.quadrant, a1.valence, a1.arousal, a1.quadrant);
     std::cout << line << "target valence " << o.valence << " arousal " << o.arousal << " quadrant " << rc::quadrant(o.valence, o.arousal)
@@ -80,6 +88,10 @@ inline void add_stylise(CLI::App& rcm)
     sub->add_option("--iters", o->iterations, "BFGS iterations of the joint coefficient fit")->capture_default_str();
     sub->add_option("--bound", o->bound, "Largest |coefficient| (c = e^a within [e^-bound, e^bound] for g1, g2, g4)")->capture_default_str();
     sub->add_flag("--frame-rate", o->frame_rate, "Apply g4 as a frame rate (same frames, fps * c4) instead of resampling");
+    sub->add_option("--neutral", o->neutral,
+                    "Neutral takes of the input's content (.bvh, .csv): the model's analysis of the input and the output reads "
+                    "them when its input is relative or judge (without them, the paper's analysis is printed)");
+    sub->add_flag("--paper", o->paper, "Print the paper's analysis of the input and the output, whatever the model chose");
     sub->callback([o] { run_stylise(*o); });
 }
 
