@@ -88,8 +88,8 @@ inline handemo::rcm::loo_options analysis_candidates(const loaded_set& set, cons
 {
     handemo::rcm::loo_options lo;
     lo.neutral = neutral_label(set, neutral);
-    lo.inputs = handemo::rcm::parse_analysis_inputs(input);
-    lo.shrink = handemo::rcm::parse_shrink(shrink);
+    lo.inputs = handemo::rcm::parse_analysis_inputs(input, cmd + ": --input");
+    lo.shrink = handemo::rcm::parse_shrink(shrink, cmd + ": --shrink");
     if ((input == "relative" || input == "judge" || (input == "auto" && input_given)) && lo.neutral.empty())
         throw handemo::value_error(cmd + ": --input " + input + ": no clip is labelled neutral or normal; name the neutral label with --neutral");
     if (lo.neutral.empty()) {

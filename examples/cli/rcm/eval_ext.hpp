@@ -62,15 +62,9 @@ inline std::shared_ptr<handemo::eval::method_extension> make_eval_ext()
     auto& s = eval_ext_state();
     if (s.off) return nullptr;
     auto o = s.opt;
-    try {  // parsed first: a mistyped option is an error before anything is loaded
-        o.inputs = handemo::rcm::parse_analysis_inputs(s.input);
-        o.shrink = handemo::rcm::parse_shrink(s.shrink);
-    } catch (const handemo::error& e) {
-        std::string m = e.what();
-        for (const std::string f : {"--input", "--shrink"})
-            if (const auto at = m.find("rcm eval: " + f); at != std::string::npos) m.replace(at, 10 + f.size(), "eval: --rcm-" + f.substr(2));
-        throw handemo::value_error(m);
-    }
+    // parsed first: a mistyped option is an error before anything is loaded
+    o.inputs = handemo::rcm::parse_analysis_inputs(s.input, "eval: --rcm-input");
+    o.shrink = handemo::rcm::parse_shrink(s.shrink, "eval: --rcm-shrink");
     try {
         o.table = handemo::rcm::load_circumplex(s.labels);
     } catch (const handemo::error& e) {

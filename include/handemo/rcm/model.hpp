@@ -751,13 +751,13 @@ inline const char* to_string(analysis_input v) noexcept
 }
 
 /// @brief `paper`, `relative`, `clusters` or `judge` as a one-element list, `auto` as all four (in that order, the
-/// order of preference on a tie); value_error naming the text otherwise.
-inline std::vector<analysis_input> parse_analysis_inputs(const std::string& s)
+/// order of preference on a tie); value_error naming the text and `option` (what gave it) otherwise.
+inline std::vector<analysis_input> parse_analysis_inputs(const std::string& s, const std::string& option = "rcm eval: --input")
 {
     if (s == "auto") return {analysis_input::paper, analysis_input::relative, analysis_input::clusters, analysis_input::judge};
     for (auto v : {analysis_input::paper, analysis_input::relative, analysis_input::clusters, analysis_input::judge})
         if (s == to_string(v)) return {v};
-    throw value_error("rcm eval: --input " + s + " is not paper, relative, clusters, judge or auto");
+    throw value_error(option + " " + s + " is not paper, relative, clusters, judge or auto");
 }
 
 /// @brief The shrinkage weights `auto` tries: 1, 0.9, .., 0 (in that order, the order of preference on a tie).
@@ -768,8 +768,9 @@ inline std::vector<double> shrink_grid()
     return g;
 }
 
-/// @brief `none` as {1}, `auto` as shrink_grid(), a number in [0, 1] as itself; value_error naming the text otherwise.
-inline std::vector<double> parse_shrink(const std::string& s)
+/// @brief `none` as {1}, `auto` as shrink_grid(), a number in [0, 1] as itself; value_error naming the text and
+/// `option` otherwise.
+inline std::vector<double> parse_shrink(const std::string& s, const std::string& option = "rcm eval: --shrink")
 {
     if (s == "none") return {1.0};
     if (s == "auto") return shrink_grid();
@@ -780,7 +781,7 @@ inline std::vector<double> parse_shrink(const std::string& s)
     } catch (const std::exception&) {
         used = 0;
     }
-    if (used != s.size() || !(v >= 0 && v <= 1)) throw value_error("rcm eval: --shrink " + s + " is not none, auto or a number in [0, 1]");
+    if (used != s.size() || !(v >= 0 && v <= 1)) throw value_error(option + " " + s + " is not none, auto or a number in [0, 1]");
     return {v};
 }
 
