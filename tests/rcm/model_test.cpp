@@ -66,6 +66,26 @@ std::vector<rcm::training_clip> clips_without(const std::string& content)
     return out;
 }
 
+/// The fixture's first content held out: its clips and neutral clips; the training clips are the others.
+struct held_out_fold {
+    std::string held;
+    std::vector<rcm::training_clip> train;
+    std::vector<const clip*> neutrals, test;
+};
+
+held_out_fold first_content_held_out()
+{
+    held_out_fold f;
+    f.held = shared().clips.front().performer;
+    f.train = clips_without(f.held);
+    for (const auto& c : shared().clips)
+        if (c.performer == f.held) {
+            f.test.push_back(c.motion);
+            if (c.emotion == "neutral") f.neutrals.push_back(c.motion);
+        }
+    return f;
+}
+
 std::filesystem::path tmp_dir()
 {
     const auto d = std::filesystem::temp_directory_path() / "handemo_rcm_model_test";
@@ -616,14 +636,7 @@ TEST_CASE("model: a chosen analysis written with its model and read back analyse
     const auto& sh = shared();
     auto opt = sh.opt;
     opt.cluster = false;
-    const std::string held = sh.clips.front().performer;
-    std::vector<rcm::training_clip> train;
-    std::vector<const clip*> neutrals, test;
-    for (const auto& c : sh.clips) {
-        if (c.performer != held) train.push_back(c);
-        else test.push_back(c.motion);
-        if (c.performer == held && c.emotion == "neutral") neutrals.push_back(c.motion);
-    }
+    const auto [held, train, neutrals, test] = first_content_held_out();
     const auto m = rcm::fit_model(train, sh.table, "circumplex.json", opt);
     const auto path = tmp_dir() / "chosen.json";
     std::vector<rcm::loo_options> cases;
@@ -660,14 +673,7 @@ TEST_CASE("model: the model and the chosen analysis fitted together are the two 
 {
     const auto& sh = shared();
     const auto& opt = sh.opt;  // pose clusters on: the shared features feed the model's clusters too
-    const std::string held = sh.clips.front().performer;
-    std::vector<rcm::training_clip> train;
-    std::vector<const clip*> neutrals, test;
-    for (const auto& c : sh.clips) {
-        if (c.performer != held) train.push_back(c);
-        else test.push_back(c.motion);
-        if (c.performer == held && c.emotion == "neutral") neutrals.push_back(c.motion);
-    }
+    const auto [held, train, neutrals, test] = first_content_held_out();
     const rcm::loo_options lo{rcm::relative_features::off, "neutral", rcm::parse_analysis_inputs("auto"), rcm::shrink_grid()};
     const auto both = rcm::fit_model_and_chosen(train, sh.table, "circumplex.json", opt, lo);
     const auto m = rcm::fit_model(train, sh.table, "circumplex.json", opt);
