@@ -316,26 +316,15 @@ inline rcm_model fit_from_features(const std::vector<training_clip>& clips, cons
 }
 
 namespace detail {
-inline rcm_model fit_model_from_features(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
-                                         const role_map& r, feature_set fs, const circumplex_table& table, const std::string& table_name,
-                                         const fit_options& opt);
-}  // namespace detail
 
-/// @brief Fits a whole model on labelled clips (one skeleton), with pose clusters when opt.cluster.
-/// @throws value_error / shape_error as the steps do, naming the clip where one is at fault.
-inline rcm_model fit_model(const std::vector<training_clip>& clips, const circumplex_table& table, const std::string& table_name,
-                           const fit_options& opt = {})
+/// value_error for no clips, shape_error naming the first clip whose skeleton differs from the first one's
+inline void check_training_clips(const std::vector<training_clip>& clips, const std::string& what)
 {
-    if (clips.empty()) throw value_error("rcm fit: no training clips");
+    if (clips.empty()) throw value_error(what + ": no training clips");
     for (const auto& c : clips)
         if (!c.motion->skel.same_topology(clips.front().motion->skel))
-            throw shape_error("rcm fit: " + c.name + " has a different skeleton from " + clips.front().name);
-    feature_set fs{};
-    const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
-    return detail::fit_model_from_features(clips, compute_features(clips, r, fs, opt.lma, opt.show_progress), r, fs, table, table_name, opt);
+            throw shape_error(what + ": " + c.name + " has a different skeleton from " + clips.front().name);
 }
-
-namespace detail {
 
 /// fit_model() on the features it computes (those of every clip, with roles r and feature set fs)
 inline rcm_model fit_model_from_features(const std::vector<training_clip>& clips, const std::vector<clip_feature_data>& feats,
@@ -400,6 +389,17 @@ inline rcm_model fit_model_from_features(const std::vector<training_clip>& clips
 }
 
 }  // namespace detail
+
+/// @brief Fits a whole model on labelled clips (one skeleton), with pose clusters when opt.cluster.
+/// @throws value_error / shape_error as the steps do, naming the clip where one is at fault.
+inline rcm_model fit_model(const std::vector<training_clip>& clips, const circumplex_table& table, const std::string& table_name,
+                           const fit_options& opt = {})
+{
+    detail::check_training_clips(clips, "rcm fit");
+    feature_set fs{};
+    const role_map r = training_roles(clips.front().motion->skel, opt.role_overrides, &fs);
+    return detail::fit_model_from_features(clips, compute_features(clips, r, fs, opt.lma, opt.show_progress), r, fs, table, table_name, opt);
+}
 
 // ---- model file ----
 
@@ -1377,13 +1377,6 @@ public:
 private:
     friend model_and_analysis fit_model_and_chosen(const std::vector<training_clip>&, const circumplex_table&, const std::string&,
                                                    const fit_options&, const loo_options&);
-    static void check_clips(const std::vector<training_clip>& clips, const char* what)
-    {
-        if (clips.empty()) throw value_error(std::string(what) + ": no training clips");
-        for (const auto& c : clips)
-            if (!c.motion->skel.same_topology(clips.front().motion->skel))
-                throw shape_error(std::string(what) + ": " + c.name + " has a different skeleton from " + clips.front().name);
-    }
     /// the inner choice over the bank's clips (groups: their performers), then the chosen input fitted on all of them
     static chosen_analysis from_bank(const detail::analysis_bank& bank, const loo_options& lo)
     {
@@ -1486,7 +1479,7 @@ private:
 inline chosen_analysis fit_chosen(const std::vector<training_clip>& clips, const circumplex_table& table, const std::string& table_name,
                                   const fit_options& opt, const loo_options& lo)
 {
-    chosen_analysis::check_clips(clips, "rcm analysis");
+    detail::check_training_clips(clips, "rcm analysis");
     const std::vector<analysis_input> inputs = detail::candidate_inputs(lo);
     const detail::analysis_bank bank(clips, table, table_name, opt, inputs, lo.neutral);
     return chosen_analysis::from_bank(bank, lo);
@@ -1504,7 +1497,7 @@ struct model_and_analysis {
 inline model_and_analysis fit_model_and_chosen(const std::vector<training_clip>& clips, const circumplex_table& table,
                                                const std::string& table_name, const fit_options& opt, const loo_options& lo)
 {
-    chosen_analysis::check_clips(clips, "rcm fit");
+    detail::check_training_clips(clips, "rcm fit");
     const std::vector<analysis_input> inputs = detail::candidate_inputs(lo);
     const detail::analysis_bank bank(clips, table, table_name, opt, inputs, lo.neutral);
     model_and_analysis r;
