@@ -186,15 +186,16 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')) == n_samples + 1);  // header + samples
     // comparisons exist for each baseline and metric with a direction, pooled and per target
     const auto cmp = compare_with_baselines(r);
-    // identity, mean-offset, amplitude-only, statistics, nearest-neighbour x 9 metrics x (pooled + 4 targets)
-    CHECK(cmp.size() == 5 * 9 * 5);
+    // identity, mean-offset, amplitude-only, statistics, nearest-neighbour x 10 metrics with a direction (the cadence
+    // ratio error the tenth) x (pooled + 4 targets)
+    CHECK(cmp.size() == 5 * 10 * 5);
     // the second judge: a prediction for every sample, its numbers in results.csv, its paragraph in the report, and
     // each fold's weight from the grid with its cross-validated accuracy
     for (const auto& s : r.samples) {
         CHECK(std::find(r.domains.begin(), r.domains.end(), s.predicted_emotion_full) != r.domains.end());
         CHECK(s.emotion_ok_full == (s.predicted_emotion_full == s.target));
     }
-    CHECK(csv.find(",duration_error,emotion_ok_full,predicted_emotion_full\n") != std::string::npos);
+    CHECK(csv.find(",duration_error,emotion_ok_full,predicted_emotion_full,cadence_ratio_full,real_cadence_ratio_full,cadence_error_full\n") != std::string::npos);
     CHECK(md.find("## The two emotion judges") != std::string::npos);
     CHECK(md.find("recognised, full-rate judge (%)") != std::string::npos);
     for (const auto& f : r.folds) {

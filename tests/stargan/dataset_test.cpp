@@ -121,6 +121,64 @@ TEST_CASE("tempo_fit recovers consistent duration ratios and prefers the simples
     CHECK(stargan::tempo_factors(d, domains, "neutral") == r.factors);
 }
 
+TEST_CASE("tempo basis: the cadence learns the tempo when takes hold different numbers of cycles")
+{
+    const std::vector<std::string> domains{"neutral", "slow", "fast"};
+    const double periods[] = {1.0, 1.2, 1.4, 1.6};
+    // every take two cycles: the durations and the cadences say the same
+    std::vector<handemo::labelled_clip> same;
+    for (int i = 0; i < 4; ++i) {
+        const std::string content = "c" + std::to_string(i);
+        same.push_back(cycling_clip(content, "neutral", periods[i], 2));
+        same.push_back(cycling_clip(content, "slow", 1.5 * periods[i], 2));
+        same.push_back(cycling_clip(content, "fast", 0.5 * periods[i], 2));
+    }
+    const auto agree = stargan::tempo_basis_check(same, domains, "neutral");
+    CHECK(agree.pairs == 8);
+    CHECK(agree.disagreement < 0.03);
+    CHECK(agree.basis == stargan::tempo_basis::duration);
+    const auto by_duration = stargan::tempo_fit(same, domains, "neutral");
+    const auto automatic = stargan::tempo_fit(same, domains, "neutral", false, stargan::tempo_basis::automatic);
+    CHECK(automatic.basis.basis == stargan::tempo_basis::duration);
+    CHECK(automatic.factors == by_duration.factors);  // the same numbers as before the option existed
+    CHECK(std::isnan(by_duration.basis.disagreement));
+    CHECK(by_duration.factors[1] == doctest::Approx(1.5).epsilon(0.02));
+
+    // the neutral takes are one-cycle fragments, the emotional ones four cycles: the durations count cycles
+    std::vector<handemo::labelled_clip> cut;
+    for (int i = 0; i < 4; ++i) {
+        const std::string content = "c" + std::to_string(i);
+        cut.push_back(cycling_clip(content, "neutral", periods[i], 1));
+        cut.push_back(cycling_clip(content, "slow", 1.5 * periods[i], 4));
+        cut.push_back(cycling_clip(content, "fast", 0.5 * periods[i], 4));
+    }
+    const auto disagree = stargan::tempo_basis_check(cut, domains, "neutral");
+    CHECK(disagree.basis == stargan::tempo_basis::cadence);
+    CHECK(disagree.disagreement == doctest::Approx(std::log(4.0)).epsilon(0.03));
+    const auto durations = stargan::tempo_fit(cut, domains, "neutral");
+    CHECK(durations.factors[1] == doctest::Approx(6.0).epsilon(0.02));  // 4 cycles x 1.5 against 1 cycle
+    const auto cadences = stargan::tempo_fit(cut, domains, "neutral", false, stargan::tempo_basis::cadence);
+    CHECK(cadences.basis.basis == stargan::tempo_basis::cadence);
+    CHECK(cadences.factors[1] == doctest::Approx(1.5).epsilon(0.03));
+    CHECK(cadences.factors[2] == doctest::Approx(0.5).epsilon(0.03));
+    const auto chosen = stargan::tempo_fit(cut, domains, "neutral", true, stargan::tempo_basis::automatic);
+    CHECK(chosen.basis.basis == stargan::tempo_basis::cadence);
+    CHECK(chosen.factors[1] == doctest::Approx(1.5).epsilon(0.03));
+    CHECK(stargan::tempo_factors(cut, domains, "neutral", false, stargan::tempo_basis::automatic) ==
+          stargan::tempo_fit(cut, domains, "neutral", false, stargan::tempo_basis::cadence).factors);
+
+    CHECK(stargan::parse_tempo_basis("auto") == stargan::tempo_basis::automatic);
+    CHECK_THROWS_WITH_AS(stargan::parse_tempo_basis("tempo", "train: tempo_basis"),
+                         doctest::Contains("train: tempo_basis 'tempo' is not duration, cadence or auto"), value_error);
+    stargan::train_options o;
+    o.tempo_basis = "cadences";
+    CHECK_THROWS_WITH_AS(o.validate(), doctest::Contains("tempo_basis 'cadences'"), value_error);
+    o.tempo_basis = "auto";
+    CHECK(o.to_json().at("tempo_basis") == "auto");
+    o.tempo_basis = "duration";
+    CHECK_FALSE(o.to_json().contains("tempo_basis"));  // older checkpoints' options stay equal
+}
+
 TEST_CASE("tempo_fit does not blow up when one content's neutral capture is truncated")
 {
     // Bandai's dash/run/walk-back neutrals are 20-31 frame fragments: the per-take ratio becomes 4-13x while the

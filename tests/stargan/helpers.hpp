@@ -66,6 +66,23 @@ inline handemo::labelled_clip timed_clip(const std::string& content, const std::
     return c;
 }
 
+/// A labelled clip of `cycles` cycles of a movement of period `period` seconds at 30 fps (a sine on every channel),
+/// for the tempo's cadence basis: its duration counts the cycles, its cadence_time() does not.
+inline handemo::labelled_clip cycling_clip(const std::string& content, const std::string& emotion, double period, double cycles,
+                                           const std::string& take = "0")
+{
+    handemo::labelled_clip c;
+    c.path = content + "_" + emotion + "_" + take;
+    c.content = content, c.emotion = emotion, c.take = take;
+    const double fps = 30;
+    c.motion = clip::make(hand_skeleton(), static_cast<std::size_t>(std::lround(cycles * period * fps)) + 1, fps);
+    const std::size_t C = c.motion.skel.size() * 3;
+    for (std::size_t f = 0; f < c.motion.frames; ++f)
+        for (std::size_t ch = 0; ch < C; ++ch)
+            c.motion.angles[f * C + ch] = 20.0 * std::sin(2 * 3.141592653589793 * static_cast<double>(f) / fps / period + 0.4 * static_cast<double>(ch));
+    return c;
+}
+
 /// The cross-validation error of one tempo estimator in a tempo_fit() result.
 inline double cv_error_of(const stargan::tempo_fit_result& r, stargan::tempo_estimator e)
 {

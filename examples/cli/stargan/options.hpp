@@ -21,7 +21,7 @@ struct train_overrides {
     std::optional<int> n_critic, gate_folds;
     std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, tempo_shrink;
     std::optional<double> gate_margin, gate_guard;
-    std::optional<std::string> range;
+    std::optional<std::string> range, tempo_basis;
 };
 
 /// @brief Adds `--inference-weights native|f16` (kernels::weight_storage) to `sub`, read into `w` (which must
@@ -92,6 +92,11 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
     sub->add_option("--tempo-shrink", o.tempo_shrink,
                     "Shrink the learned tempo factors toward keeping the duration by the weight (0, 0.25, .., 1) that best "
                     "predicts left-out training contents' durations (handemo false)");
+    sub->add_option("--tempo-basis", o.tempo_basis,
+                    "What the learned tempo factors are ratios of: 'duration' (the clips' durations), 'cadence' (how fast each "
+                    "clip moves through its own range, whatever the number of cycles it holds) or 'auto' (the cadence when the "
+                    "training pairs' durations and cadences disagree by more than a quarter in the median pair) (handemo duration)")
+        ->check(CLI::IsMember({"duration", "cadence", "auto"}));
     sub->add_option("--range", o.range, "Eq. 3 range: 'channel' (per channel, wrapped against a reference) or 'global' (the paper's)");
 }
 
@@ -125,6 +130,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.gate_auto_margin = o.gate_auto_margin.value_or(p.gate_auto_margin);
     t.gate_guard = o.gate_guard.value_or(p.gate_guard);
     t.tempo_shrink = o.tempo_shrink.value_or(p.tempo_shrink);
+    t.tempo_basis = o.tempo_basis.value_or(p.tempo_basis);
     t.validate();
 }
 

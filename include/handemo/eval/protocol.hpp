@@ -724,6 +724,11 @@ sample_record score_output(const clip& out, const prepared_clip<K>& in, const pr
     s.duration_ratio = metrics::ratio(out.duration(), in.src->motion.duration(), "duration");
     s.real_duration_ratio = metrics::ratio(real.src->motion.duration(), in.src->motion.duration(), "duration");
     s.duration_error = metrics::duration_error(out, real.src->motion);
+    if (full.cadence > 0 && in.full.cadence > 0 && real.full.cadence > 0) {
+        s.cadence_ratio_full = full.cadence / in.full.cadence;
+        s.real_cadence_ratio_full = real.full.cadence / in.full.cadence;
+        s.cadence_error_full = metrics::log_ratio_error(s.cadence_ratio_full, s.real_cadence_ratio_full);
+    }
     for (const auto& x : extensions) x->score(s, out);
     return s;
 }
@@ -918,8 +923,10 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
         const auto fold_detail = detail_layer::fit_checked(detail_data, info.neutral, K);  // the detail layer, from training clips only
         fsum.detail_strength = fold_detail.strength;
         {  // the tempo's check on the training clips, reported whether or not the model applies its weight
-            const auto tf = stargan::tempo_fit(train, info.domain_names, info.neutral, true);
+            const auto tf = stargan::tempo_fit(train, info.domain_names, info.neutral, true, stargan::parse_tempo_basis(to.tempo_basis));
             fsum.tempo_estimator = std::string(stargan::to_string(tf.estimator));
+            fsum.tempo_basis = std::string(stargan::to_string(tf.basis.basis));
+            fsum.tempo_basis_disagreement = tf.basis.disagreement;
             fsum.tempo_shrink_weight = tf.shrink_weight;
             fsum.tempo_shrink_applied = to.tempo_shrink;
             for (std::size_t w = 0; w < tf.shrink_errors.size(); ++w) {

@@ -53,6 +53,9 @@ struct sample_record {
     /// measure), not on their 9-keyframe reconstructions.
     double rom_ratio_full = 0, speed_ratio_full = 0, real_rom_ratio_full = 0, real_speed_ratio_full = 0;
     double rom_error_full = 0, speed_error_full = 0;
+    /// cadence_time() (motion/cadence.hpp) output / input and real target / input, and |log(ratio / real ratio)|: the
+    /// tempo a viewer sees, whatever the number of cycles the clips hold (NaN when a clip does not move)
+    double cadence_ratio_full = std::nan(""), real_cadence_ratio_full = std::nan(""), cadence_error_full = std::nan("");
     /// The fold's circumplex model's analysis of the output (eval/rcm.hpp; NaN when not measured) and whether it
     /// lies in the target label's quadrant (1 or 0; NaN when not measured).
     double circumplex_valence = std::nan(""), circumplex_arousal = std::nan(""), circumplex_quadrant_ok = std::nan("");
@@ -82,6 +85,10 @@ struct fold_summary {
     std::string tempo_estimator;
     double tempo_shrink_weight = std::nan(""), tempo_shrink_error = std::nan(""), tempo_unshrunk_error = std::nan("");
     bool tempo_shrink_applied = false;
+    /// the basis of the tempo factors (duration or cadence) and, when train_options::tempo_basis is "auto", the
+    /// median disagreement of the training pairs' duration and cadence ratios that chose it (NaN otherwise)
+    std::string tempo_basis;
+    double tempo_basis_disagreement = std::nan("");
 };
 
 /// @brief A report section written by an extension (eval/extension.hpp): Markdown placed after the summary, and
@@ -138,6 +145,7 @@ inline const std::vector<metric_def>& metric_defs()
         {"duration_error", "duration ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.duration_error; }},
         {"rom_error_full", "full-rate ROM ratio error", -1, [](const sample_record& r) { return r.rom_error_full; }},
         {"speed_error_full", "full-rate speed ratio error", -1, [](const sample_record& r) { return r.speed_error_full; }},
+        {"cadence_error", "cadence ratio error (abs log out/real)", -1, [](const sample_record& r) { return r.cadence_error_full; }, true},
         {"circumplex_quadrant", "circumplex quadrant reached (%)", +1,
          [](const sample_record& r) { return 100.0 * r.circumplex_quadrant_ok; }, true},
     };
@@ -245,7 +253,7 @@ inline std::string samples_csv(const eval_result& r)
     std::string s = "fold,target,take,method,rmse_real,rmse_input,emotion_ok,predicted_emotion,content_ok,predicted_content,"
                     "rom_ratio,speed_ratio,real_rom_ratio,real_speed_ratio,rom_error,speed_error,rom_ratio_full,speed_ratio_full,"
                     "real_rom_ratio_full,real_speed_ratio_full,rom_error_full,speed_error_full,duration_ratio,real_duration_ratio,"
-                    "duration_error,emotion_ok_full,predicted_emotion_full";
+                    "duration_error,emotion_ok_full,predicted_emotion_full,cadence_ratio_full,real_cadence_ratio_full,cadence_error_full";
     s += circ ? ",circumplex_valence,circumplex_arousal,circumplex_quadrant_ok\n" : "\n";
     for (const auto& x : r.samples) {
         s += x.fold + "," + x.target + "," + x.take + "," + x.method + "," + detail::csv_num(x.rmse_real) + "," +
@@ -256,7 +264,8 @@ inline std::string samples_csv(const eval_result& r)
              detail::csv_num(x.speed_ratio_full) + "," + detail::csv_num(x.real_rom_ratio_full) + "," +
              detail::csv_num(x.real_speed_ratio_full) + "," + detail::csv_num(x.rom_error_full) + "," + detail::csv_num(x.speed_error_full) +
              "," + detail::csv_num(x.duration_ratio) + "," + detail::csv_num(x.real_duration_ratio) + "," + detail::csv_num(x.duration_error) + "," +
-             (x.emotion_ok_full ? "1" : "0") + "," + x.predicted_emotion_full;
+             (x.emotion_ok_full ? "1" : "0") + "," + x.predicted_emotion_full + "," + detail::csv_num(x.cadence_ratio_full) + "," +
+             detail::csv_num(x.real_cadence_ratio_full) + "," + detail::csv_num(x.cadence_error_full);
         if (circ)
             s += "," + detail::csv_num(x.circumplex_valence) + "," + detail::csv_num(x.circumplex_arousal) + "," +
                  (std::isnan(x.circumplex_quadrant_ok) ? std::string("nan") : x.circumplex_quadrant_ok > 0.5 ? "1" : "0");
@@ -590,6 +599,20 @@ inline std::string report_versus_baselines(const eval_result& r, const std::vect
     return s;
 }
 
+namespace detail {
+/// The per-fold text of the tempo's basis: nothing for durations chosen by the option (the text of reports before
+/// the option existed), else which basis and, when chosen automatically, the disagreement that chose it.
+inline std::string tempo_basis_text(const fold_summary& f)
+{
+    const bool automatic = !std::isnan(f.tempo_basis_disagreement);
+    if (f.tempo_basis.empty() || (f.tempo_basis == "duration" && !automatic)) return {};
+    return " of the " + f.tempo_basis + "s" +
+           (automatic ? " (--tempo-basis auto: the training pairs' duration and cadence ratios differ by a factor " +
+                            fmt(std::exp(f.tempo_basis_disagreement), 2) + " in the median pair)"
+                      : std::string());
+}
+}  // namespace detail
+
 /// @brief One table per fold, with the fold's training and evaluation facts.
 inline std::string report_folds(const eval_result& r, const std::vector<metric_def>& ms, const std::vector<std::string>& targets)
 {
@@ -607,8 +630,9 @@ inline std::string report_folds(const eval_result& r, const std::vector<metric_d
              (f.judge_inputs.empty() ? std::string() : ", inputs " + f.judge_inputs + " of " + f.judge_candidates) + "); seen-content transfer (training contents' neutral takes to their real targets) RMSE " +
              detail::fmt(f.seen_rmse_stargan) + " deg for StarGAN vs " + detail::fmt(f.seen_rmse_identity) + " for identity" +
              (f.tempo_estimator.empty() ? std::string()
-                                        : "; tempo " + f.tempo_estimator + ", shrink weight " + detail::fmt(f.tempo_shrink_weight) +
-                                              " by the check on the training contents (duration error " + detail::fmt(f.tempo_shrink_error, 3) +
+                                        : "; tempo " + f.tempo_estimator + detail::tempo_basis_text(f) + ", shrink weight " + detail::fmt(f.tempo_shrink_weight) +
+                                              " by the check on the training contents (" + (f.tempo_basis == "cadence" ? "cadence" : "duration") +
+                                              " error " + detail::fmt(f.tempo_shrink_error, 3) +
                                               " against " + detail::fmt(f.tempo_unshrunk_error, 3) + " unshrunk), " +
                                               (f.tempo_shrink_applied ? "applied" : "not applied (--tempo-shrink false)")) +
              (f.reused_model ? "; model reused from an earlier run" : "") + ". Loss curves: `folds/" +

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <handemo/core/error.hpp>
+#include <handemo/motion/cadence.hpp>
 #include <handemo/motion/clip.hpp>
 #include <handemo/motion/detail_layer.hpp>
 #include <handemo/motion/keyframes.hpp>
@@ -89,6 +90,7 @@ struct characteristics {
     double range_of_motion = 0;  ///< degrees, see range_of_motion()
     double speed = 0;            ///< degrees per second, see mean_speed()
     double duration = 0;         ///< seconds
+    double cadence = 0;          ///< seconds, cadence_time() (measure_full() only; 0 when the clip does not move)
 };
 
 /// @brief Range of motion, speed and duration of the keyframe view of `c`.
@@ -99,10 +101,11 @@ characteristics measure(const clip& c)
     return {range_of_motion(v), mean_speed(v), c.duration()};
 }
 
-/// @brief Range of motion, speed and duration of `c` as it is (full rate: a capture's tremor and noise count).
+/// @brief Range of motion, speed, duration and cadence of `c` as it is (full rate: a capture's tremor and noise
+/// count in the first two; the cadence is measured on the smoothed tracks, motion/cadence.hpp).
 inline characteristics measure_full(const clip& c)
 {
-    return {range_of_motion(c), mean_speed(c), c.duration()};
+    return {range_of_motion(c), mean_speed(c), c.duration(), ::handemo::detail::cadence_time_of(c, 0.2)};
 }
 
 /// @brief `num / den` of a characteristic; a ratio to a motionless input is undefined.

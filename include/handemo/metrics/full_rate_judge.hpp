@@ -17,6 +17,7 @@
 #pragma once
 
 #include <handemo/core/error.hpp>
+#include <handemo/motion/cadence.hpp>
 #include <handemo/motion/clip.hpp>
 #include <handemo/motion/codec.hpp>
 
@@ -43,32 +44,7 @@ struct full_rate_feature_options {
 constexpr std::size_t full_rate_feature_count(std::size_t joints) noexcept { return 6 * joints + 8; }
 
 namespace detail {
-
-/// Savitzky-Golay smoothing (a least-squares quadratic over 2h + 1 frames, the centre's value):
-///   s_i = sum_{k=-h..h} c_k v_{i+k},  c_k = (3 (3h^2 + 3h - 1) - 15 k^2) / ((2h + 1)(4h^2 + 4h - 3)).
-/// It keeps a track's curvature, so a slow large motion leaves almost nothing in v - s while a tremor faster than
-/// the window stays there. Near the ends the window shrinks to stay centred (h = i or n - 1 - i; h = 0 keeps v_i).
-inline std::vector<double> quadratic_smooth(const std::vector<double>& v, std::size_t h)
-{
-    const std::size_t n = v.size();
-    std::vector<double> out(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const std::size_t r = std::min({h, i, n - 1 - i});
-        if (r == 0) {
-            out[i] = v[i];
-            continue;
-        }
-        const double R = static_cast<double>(r), norm = (2 * R + 1) * (4 * R * R + 4 * R - 3);
-        double s = 0;
-        for (std::size_t k = i - r; k <= i + r; ++k) {
-            const double d = static_cast<double>(k) - static_cast<double>(i);
-            s += (3 * (3 * R * R + 3 * R - 1) - 15 * d * d) / norm * v[k];
-        }
-        out[i] = s;
-    }
-    return out;
-}
-
+using ::handemo::detail::quadratic_smooth;  // motion/cadence.hpp
 }  // namespace detail
 
 /// @brief Full-rate motion features of a clip (see the header comment), 6J + 8 values in this order: J log(1 +

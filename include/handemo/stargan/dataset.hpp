@@ -9,12 +9,17 @@
 // Bandai, truncated neutral captures (20-31 frames) make per-take ratios of 3-13x. Optionally
 // (train_options::tempo_shrink) the chosen factors are shrunk toward 1 in log space by a weight chosen by the
 // same leave-one-content-out check (tempo_shrink_fit()): factors that do not carry over to a left-out content are
-// pulled toward keeping the duration.
+// pulled toward keeping the duration. The ratios are of the clips' durations (tempo_basis::duration), or of their
+// cadences (tempo_basis::cadence, motion/cadence.hpp: how fast a clip moves through its own range, whatever the
+// number of cycles it holds), or of whichever tempo_basis_check() finds in the training pairs (tempo_basis::automatic:
+// the cadence when the durations and the cadences of the pairs disagree, as they do when takes hold different
+// numbers of cycles).
 #pragma once
 
 #include <handemo/core/error.hpp>
 #include <handemo/core/io.hpp>
 #include <handemo/motion/bvh.hpp>
+#include <handemo/motion/cadence.hpp>
 #include <handemo/motion/clip.hpp>
 #include <handemo/motion/csv.hpp>
 #include <handemo/motion/hand.hpp>
@@ -242,6 +247,42 @@ constexpr std::string_view to_string(tempo_estimator e) noexcept
     return n[static_cast<int>(e)];
 }
 
+/// @brief What the tempo factors are ratios of (train_options::tempo_basis).
+enum class tempo_basis : std::uint8_t {
+    duration,   ///< the clips' durations: the transfer's output lasts the input's duration times the factor
+    cadence,    ///< the clips' cadence_time() (motion/cadence.hpp): the factor is how much slower the emotion moves
+    automatic,  ///< the cadence when tempo_basis_check() finds that the training pairs' durations and cadences disagree
+};
+
+/// @brief Name of a basis: duration, cadence, auto.
+constexpr std::string_view to_string(tempo_basis b) noexcept
+{
+    constexpr std::string_view n[] = {"duration", "cadence", "auto"};
+    return n[static_cast<int>(b)];
+}
+
+/// @brief The basis named `name` (duration, cadence, auto).
+/// @throws value_error naming `what` (the option) and the accepted names.
+inline tempo_basis parse_tempo_basis(std::string_view name, const std::string& what = "tempo_basis")
+{
+    for (auto b : {tempo_basis::duration, tempo_basis::cadence, tempo_basis::automatic})
+        if (name == to_string(b)) return b;
+    throw value_error(what + " '" + std::string(name) + "' is not duration, cadence or auto");
+}
+
+/// @brief The median disagreement above which tempo_basis_check() chooses the cadence: log(1.25), the durations
+/// and the cadences of half the pairs differing by more than a quarter.
+inline const double tempo_basis_threshold = std::log(1.25);
+
+/// @brief What tempo_basis::automatic found in the training pairs.
+struct tempo_basis_choice {
+    tempo_basis basis = tempo_basis::duration;  ///< duration or cadence
+    /// median over the (emotion clip, neutral clip) pairs of |log(duration ratio) - log(cadence ratio)|: 0 when every
+    /// take of a content holds the same number of cycles; NaN without pairs
+    double disagreement = std::nan("");
+    std::size_t pairs = 0;  ///< the pairs it was measured on
+};
+
 /// @brief One candidate of tempo_fit(): its factors on the whole set and its cross-validation error.
 struct tempo_candidate {
     tempo_estimator estimator;
@@ -260,6 +301,8 @@ struct tempo_fit_result {
     /// weight of tempo_shrink_grid; without: 0 and empty
     double shrink_weight = 0;
     std::vector<double> shrink_errors;
+    /// the basis the factors are ratios of (duration or cadence) and, for tempo_basis::automatic, what decided it
+    tempo_basis_choice basis;
 };
 
 /// @brief The weights tempo_shrink_fit() chooses from: 0 keeps the fitted factors, 1 keeps the input's duration.
@@ -282,25 +325,48 @@ struct tempo_shrink_check {
 
 namespace detail {
 
-/// One emotion clip and the neutral duration it is compared with (same content and take, otherwise the mean
-/// over the content's neutral takes).
+/// The per-clip quantity the tempo factors are ratios of: the duration, or the cadence (computed once per clip).
+struct tempo_values {
+    tempo_basis basis = tempo_basis::duration;  ///< duration or cadence
+    std::map<const labelled_clip*, double> cadence;
+    /// the clip's value; 0 when it has none (a cadence of a clip that does not move)
+    double operator()(const labelled_clip* c) const
+    {
+        if (basis == tempo_basis::duration) return c->motion.duration();
+        const auto it = cadence.find(c);
+        return it == cadence.end() ? 0.0 : it->second;
+    }
+};
+
+/// The values of basis `b` (duration or cadence) for every clip of `d`.
+inline tempo_values make_tempo_values(const std::vector<const labelled_clip*>& d, tempo_basis b)
+{
+    tempo_values v;
+    v.basis = b == tempo_basis::cadence ? tempo_basis::cadence : tempo_basis::duration;
+    if (v.basis == tempo_basis::cadence)
+        for (const auto* c : d) v.cadence[c] = ::handemo::detail::cadence_time_of(c->motion, 0.2);
+    return v;
+}
+
+/// One emotion clip and the neutral value it is compared with (same content and take, otherwise the mean over the
+/// content's neutral takes); the values are durations or cadences (tempo_values).
 struct tempo_pair {
     std::size_t domain;
     std::string content;
-    double duration, neutral_duration;
-    double ratio() const noexcept { return duration / neutral_duration; }
+    double value, neutral_value;
+    double ratio() const noexcept { return value / neutral_value; }
 };
 
 inline std::vector<tempo_pair> tempo_pairs(const std::vector<const labelled_clip*>& d, const std::vector<std::string>& domains,
-                                           const std::string& neutral)
+                                           const std::string& neutral, const tempo_values& v)
 {
     std::map<std::pair<std::string, std::string>, double> neutral_by_take;
     std::map<std::string, std::pair<double, int>> neutral_mean;
     for (const auto* c : d)
-        if (c->emotion == neutral) {
-            neutral_by_take[{c->content, c->take}] = c->motion.duration();
+        if (c->emotion == neutral && v(c) > 0) {
+            neutral_by_take[{c->content, c->take}] = v(c);
             auto& m = neutral_mean[c->content];
-            m.first += c->motion.duration();
+            m.first += v(c);
             m.second += 1;
         }
     std::vector<tempo_pair> out;
@@ -313,8 +379,7 @@ inline std::vector<tempo_pair> tempo_pairs(const std::vector<const labelled_clip
             base = it->second;
         else if (auto m = neutral_mean.find(c->content); m != neutral_mean.end())
             base = m->second.first / m->second.second;
-        if (base > 0 && c->motion.duration() > 0)
-            out.push_back({static_cast<std::size_t>(k - domains.begin()), c->content, c->motion.duration(), base});
+        if (base > 0 && v(c) > 0) out.push_back({static_cast<std::size_t>(k - domains.begin()), c->content, v(c), base});
     }
     return out;
 }
@@ -326,10 +391,10 @@ inline double median_of(std::vector<double> v)
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-/// Tukey's median polish of log duration over rows (content, take) and columns (domains): alternately
+/// Tukey's median polish of the log value (duration or cadence) over rows (content, take) and columns (domains): alternately
 /// subtract row and column medians of the residuals. Returns exp(column effect - neutral column effect).
 inline std::vector<double> tempo_two_way(const std::vector<const labelled_clip*>& d, const std::vector<std::string>& domains,
-                                         const std::string& neutral)
+                                         const std::string& neutral, const tempo_values& v)
 {
     std::vector<double> out(domains.size(), 1.0);
     const auto nk = std::find(domains.begin(), domains.end(), neutral);
@@ -339,10 +404,10 @@ inline std::vector<double> tempo_two_way(const std::vector<const labelled_clip*>
     std::map<std::pair<std::size_t, std::size_t>, std::pair<double, int>> sums;
     for (const auto* c : d) {
         const auto k = std::find(domains.begin(), domains.end(), c->emotion);
-        if (k == domains.end() || !(c->motion.duration() > 0)) continue;
+        if (k == domains.end() || !(v(c) > 0)) continue;
         const auto row = row_of.try_emplace({c->content, c->take}, row_of.size()).first->second;
         auto& s = sums[{row, static_cast<std::size_t>(k - domains.begin())}];
-        s.first += std::log(c->motion.duration());
+        s.first += std::log(v(c));
         s.second += 1;
     }
     struct cell {
@@ -381,17 +446,17 @@ inline std::vector<double> tempo_two_way(const std::vector<const labelled_clip*>
 }
 
 inline std::vector<double> tempo_estimate(tempo_estimator e, const std::vector<const labelled_clip*>& d,
-                                          const std::vector<std::string>& domains, const std::string& neutral)
+                                          const std::vector<std::string>& domains, const std::string& neutral, const tempo_values& v)
 {
     std::vector<double> out(domains.size(), 1.0);
     if (e == tempo_estimator::keep) return out;
-    if (e == tempo_estimator::two_way) return tempo_two_way(d, domains, neutral);
-    const auto pairs = tempo_pairs(d, domains, neutral);
+    if (e == tempo_estimator::two_way) return tempo_two_way(d, domains, neutral, v);
+    const auto pairs = tempo_pairs(d, domains, neutral, v);
     for (std::size_t k = 0; k < domains.size(); ++k) {
         std::vector<double> ratios;
         double num = 0, den = 0, logs = 0;
         for (const auto& p : pairs)
-            if (p.domain == k) ratios.push_back(p.ratio()), num += p.duration, den += p.neutral_duration, logs += std::log(p.ratio());
+            if (p.domain == k) ratios.push_back(p.ratio()), num += p.value, den += p.neutral_value, logs += std::log(p.ratio());
         if (ratios.empty()) continue;
         switch (e) {
         case tempo_estimator::median: out[k] = median_of(std::move(ratios)); break;
@@ -404,88 +469,48 @@ inline std::vector<double> tempo_estimate(tempo_estimator e, const std::vector<c
 
 }  // namespace detail
 
-/// @brief The tempo factors of one estimator (see tempo_estimator): per domain, the duration of its clips
-/// relative to the neutral clip of the same content (the same take when there is one, otherwise the mean over
-/// the content's neutral takes). Domains without data, and the neutral domain itself, get 1.
+/// @brief The tempo factors of one estimator (see tempo_estimator): per domain, the duration (or with
+/// tempo_basis::cadence the cadence_time()) of its clips relative to the neutral clip of the same content (the same
+/// take when there is one, otherwise the mean over the content's neutral takes). Domains without data, and the
+/// neutral domain itself, get 1.
 /// @param domains domain names in label order; @param neutral name of the neutral domain
+/// @param basis duration or cadence (tempo_basis::automatic is tempo_fit()'s: it reads as duration here)
 /// @return [C] factors
 inline std::vector<double> tempo_estimate(tempo_estimator e, const std::vector<labelled_clip>& d,
-                                          const std::vector<std::string>& domains, const std::string& neutral)
+                                          const std::vector<std::string>& domains, const std::string& neutral,
+                                          tempo_basis basis = tempo_basis::duration)
 {
     std::vector<const labelled_clip*> p;
     for (const auto& c : d) p.push_back(&c);
-    return detail::tempo_estimate(e, p, domains, neutral);
+    return detail::tempo_estimate(e, p, domains, neutral, detail::make_tempo_values(p, basis));
 }
 
-/// @brief Fits the tempo factors of the transfer step: every tempo_estimator is scored by leave-one-content-out
-/// cross-validation inside `d` (for each content holding (emotion, neutral) pairs: fit on the other contents,
-/// error = mean over that content's pairs of |log(predicted factor / real duration ratio)|; the score is the
-/// mean of these errors over the contents) and the estimator with the lowest score wins, ties going to the
-/// simpler (earlier in tempo_estimator). Only the given clips are used: pass the training set, never held-out
-/// data. With fewer than two contents holding pairs there is no cross-validation: `weighted` is used and
-/// every cv_error is NaN.
-/// @param domains domain names in label order; @param neutral name of the neutral domain
-/// @return the chosen factors ([C], 1 for the neutral domain and domains without data), the estimator and
-///         every candidate's factors and score.
-inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
-                                  const std::string& neutral)
-{
-    std::vector<const labelled_clip*> all;
-    for (const auto& c : d) all.push_back(&c);
-    const auto pairs = detail::tempo_pairs(all, domains, neutral);
-    std::set<std::string> scored;
-    for (const auto& p : pairs) scored.insert(p.content);
+namespace detail {
 
-    tempo_fit_result r;
-    r.pairs = pairs.size();
-    r.cv_contents = scored.size() >= 2 ? scored.size() : 0;
-    for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
-        const auto e = static_cast<tempo_estimator>(i);
-        r.candidates.push_back({e, detail::tempo_estimate(e, all, domains, neutral), std::nan("")});
-    }
-    if (r.cv_contents == 0) {
-        r.estimator = tempo_estimator::weighted;
-        r.factors = r.candidates[static_cast<std::size_t>(r.estimator)].factors;
-        return r;
-    }
-    std::vector<double> total(tempo_estimator_count, 0.0);
-    for (const auto& held : scored) {
-        std::vector<const labelled_clip*> train;
-        for (const auto* c : all)
-            if (c->content != held) train.push_back(c);
-        for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
-            const auto f = detail::tempo_estimate(static_cast<tempo_estimator>(i), train, domains, neutral);
-            double err = 0;
-            std::size_t n = 0;
-            for (const auto& p : pairs)
-                if (p.content == held) err += std::abs(std::log(f[p.domain] / p.ratio())), ++n;
-            total[i] += err / static_cast<double>(n);
-        }
-    }
-    std::size_t best = 0;
-    for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
-        r.candidates[i].cv_error = total[i] / static_cast<double>(scored.size());
-        if (r.candidates[i].cv_error < r.candidates[best].cv_error - 1e-12) best = i;
-    }
-    r.estimator = static_cast<tempo_estimator>(best);
-    r.factors = r.candidates[best].factors;
+inline tempo_basis_choice tempo_basis_check(const std::vector<const labelled_clip*>& all, const std::vector<std::string>& domains,
+                                            const std::string& neutral, const tempo_values& cadence)
+{
+    // the clips that have a cadence (a clip that does not move has none), so that both lists hold the same pairs
+    std::vector<const labelled_clip*> moving;
+    for (const auto* c : all)
+        if (cadence(c) > 0) moving.push_back(c);
+    const auto by_duration = tempo_pairs(moving, domains, neutral, make_tempo_values(moving, tempo_basis::duration));
+    const auto by_cadence = tempo_pairs(moving, domains, neutral, cadence);
+    tempo_basis_choice r;
+    std::vector<double> gaps;
+    for (std::size_t i = 0; i < std::min(by_duration.size(), by_cadence.size()); ++i)
+        gaps.push_back(std::abs(std::log(by_duration[i].ratio()) - std::log(by_cadence[i].ratio())));
+    r.pairs = gaps.size();
+    if (gaps.empty()) return r;
+    r.disagreement = median_of(gaps);
+    r.basis = r.disagreement > tempo_basis_threshold ? tempo_basis::cadence : tempo_basis::duration;
     return r;
 }
 
-/// @brief The shrink weight of one estimator's factors, chosen inside `d` by leave-one-content-out: for each weight
-/// w of tempo_shrink_grid and each content holding (emotion, neutral) pairs, the estimator is fitted on the other
-/// contents, its factors shrunk by w (shrink_tempo()), and the error is the mean over that content's pairs of
-/// |log(predicted factor / real duration ratio)|; a weight's score is the mean of these errors over the contents
-/// (tempo_fit()'s score for the estimator at w = 0). The lowest score wins, ties (within 1e-12) going to less
-/// shrinkage. Factors that hold on every content keep weight 0; factors that no left-out content follows are
-/// shrunk. Only the given clips are used: pass the training set.
-/// @param domains domain names in label order; @param neutral name of the neutral domain
-inline tempo_shrink_check tempo_shrink_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
-                                           const std::string& neutral, tempo_estimator e)
+inline tempo_shrink_check tempo_shrink_fit(const std::vector<const labelled_clip*>& all, const std::vector<std::string>& domains,
+                                           const std::string& neutral, tempo_estimator e, const tempo_values& values)
 {
-    std::vector<const labelled_clip*> all;
-    for (const auto& c : d) all.push_back(&c);
-    const auto pairs = detail::tempo_pairs(all, domains, neutral);
+    const auto pairs = tempo_pairs(all, domains, neutral, values);
     std::set<std::string> scored;
     for (const auto& p : pairs) scored.insert(p.content);
     tempo_shrink_check r;
@@ -497,7 +522,7 @@ inline tempo_shrink_check tempo_shrink_fit(const std::vector<labelled_clip>& d, 
         std::vector<const labelled_clip*> train;
         for (const auto* c : all)
             if (c->content != held) train.push_back(c);
-        const auto fitted = detail::tempo_estimate(e, train, domains, neutral);
+        const auto fitted = tempo_estimate(e, train, domains, neutral, values);
         for (std::size_t w = 0; w < tempo_shrink_grid.size(); ++w) {
             const auto f = shrink_tempo(fitted, tempo_shrink_grid[w]);
             double err = 0;
@@ -516,27 +541,119 @@ inline tempo_shrink_check tempo_shrink_fit(const std::vector<labelled_clip>& d, 
     return r;
 }
 
-/// @brief tempo_fit(), then with `shrink` its factors shrunk toward 1 by the weight tempo_shrink_fit() chooses for
-/// the chosen estimator (train_options::tempo_shrink).
-inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
-                                  const std::string& neutral, bool shrink)
+}  // namespace detail
+
+/// @brief tempo_basis::automatic's choice on `d` (pass the training set): the median over the (emotion clip, neutral
+/// clip) pairs of |log(duration ratio) - log(cadence ratio)|. A take's duration is its cadence times the number of
+/// cycles it holds (motion/cadence.hpp), so the two ratios agree when the takes of a content hold the same number
+/// of cycles (the synthetic hand set: two cycles each) and disagree when they do not (captures cut to fragments,
+/// walks of different lengths). Above tempo_basis_threshold the durations are mostly counting cycles, which the
+/// transfer keeps from its input, and the cadence is chosen; at or below it the duration (the simpler, and the
+/// basis when the two agree). Without pairs: duration.
+/// @param domains domain names in label order; @param neutral name of the neutral domain
+inline tempo_basis_choice tempo_basis_check(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
+                                            const std::string& neutral)
 {
-    auto r = tempo_fit(d, domains, neutral);
-    if (!shrink) return r;
-    const auto check = tempo_shrink_fit(d, domains, neutral, r.estimator);
-    r.shrink_weight = check.weight;
-    r.shrink_errors = check.errors;
-    r.factors = shrink_tempo(std::move(r.factors), check.weight);
+    std::vector<const labelled_clip*> all;
+    for (const auto& c : d) all.push_back(&c);
+    return detail::tempo_basis_check(all, domains, neutral, detail::make_tempo_values(all, tempo_basis::cadence));
+}
+
+/// @brief Fits the tempo factors of the transfer step: every tempo_estimator is scored by leave-one-content-out
+/// cross-validation inside `d` (for each content holding (emotion, neutral) pairs: fit on the other contents,
+/// error = mean over that content's pairs of |log(predicted factor / real ratio)|; the score is the mean of these
+/// errors over the contents) and the estimator with the lowest score wins, ties going to the simpler (earlier in
+/// tempo_estimator). The ratios are of durations or cadences (`basis`; tempo_basis::automatic decides by
+/// tempo_basis_check() on `d`). Only the given clips are used: pass the training set, never held-out data. With
+/// fewer than two contents holding pairs there is no cross-validation: `weighted` is used and every cv_error is NaN.
+/// With `shrink` the chosen factors are then shrunk toward 1 by the weight tempo_shrink_fit() chooses for the
+/// chosen estimator (train_options::tempo_shrink).
+/// @param domains domain names in label order; @param neutral name of the neutral domain
+/// @return the chosen factors ([C], 1 for the neutral domain and domains without data), the estimator, every
+///         candidate's factors and score, and the basis.
+inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
+                                  const std::string& neutral, bool shrink = false, tempo_basis basis = tempo_basis::duration)
+{
+    std::vector<const labelled_clip*> all;
+    for (const auto& c : d) all.push_back(&c);
+    tempo_fit_result r;
+    auto values = detail::make_tempo_values(all, basis == tempo_basis::duration ? tempo_basis::duration : tempo_basis::cadence);
+    if (basis == tempo_basis::automatic) {
+        r.basis = detail::tempo_basis_check(all, domains, neutral, values);
+        if (r.basis.basis == tempo_basis::duration) values = detail::make_tempo_values(all, tempo_basis::duration);
+    } else {
+        r.basis.basis = basis;
+    }
+    const auto pairs = detail::tempo_pairs(all, domains, neutral, values);
+    std::set<std::string> scored;
+    for (const auto& p : pairs) scored.insert(p.content);
+
+    r.pairs = pairs.size();
+    r.cv_contents = scored.size() >= 2 ? scored.size() : 0;
+    for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
+        const auto e = static_cast<tempo_estimator>(i);
+        r.candidates.push_back({e, detail::tempo_estimate(e, all, domains, neutral, values), std::nan("")});
+    }
+    if (r.cv_contents == 0) {
+        r.estimator = tempo_estimator::weighted;
+        r.factors = r.candidates[static_cast<std::size_t>(r.estimator)].factors;
+        return r;
+    }
+    std::vector<double> total(tempo_estimator_count, 0.0);
+    for (const auto& held : scored) {
+        std::vector<const labelled_clip*> train;
+        for (const auto* c : all)
+            if (c->content != held) train.push_back(c);
+        for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
+            const auto f = detail::tempo_estimate(static_cast<tempo_estimator>(i), train, domains, neutral, values);
+            double err = 0;
+            std::size_t n = 0;
+            for (const auto& p : pairs)
+                if (p.content == held) err += std::abs(std::log(f[p.domain] / p.ratio())), ++n;
+            total[i] += err / static_cast<double>(n);
+        }
+    }
+    std::size_t best = 0;
+    for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
+        r.candidates[i].cv_error = total[i] / static_cast<double>(scored.size());
+        if (r.candidates[i].cv_error < r.candidates[best].cv_error - 1e-12) best = i;
+    }
+    r.estimator = static_cast<tempo_estimator>(best);
+    r.factors = r.candidates[best].factors;
+    if (shrink) {
+        const auto check = detail::tempo_shrink_fit(all, domains, neutral, r.estimator, values);
+        r.shrink_weight = check.weight;
+        r.shrink_errors = check.errors;
+        r.factors = shrink_tempo(std::move(r.factors), check.weight);
+    }
     return r;
 }
 
+/// @brief The shrink weight of one estimator's factors, chosen inside `d` by leave-one-content-out: for each weight
+/// w of tempo_shrink_grid and each content holding (emotion, neutral) pairs, the estimator is fitted on the other
+/// contents, its factors shrunk by w (shrink_tempo()), and the error is the mean over that content's pairs of
+/// |log(predicted factor / real ratio)|; a weight's score is the mean of these errors over the contents
+/// (tempo_fit()'s score for the estimator at w = 0). The lowest score wins, ties (within 1e-12) going to less
+/// shrinkage. Factors that hold on every content keep weight 0; factors that no left-out content follows are
+/// shrunk. Only the given clips are used: pass the training set.
+/// @param domains domain names in label order; @param neutral name of the neutral domain
+/// @param basis duration or cadence, the ratios' basis (tempo_basis::automatic reads as duration here)
+inline tempo_shrink_check tempo_shrink_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
+                                           const std::string& neutral, tempo_estimator e, tempo_basis basis = tempo_basis::duration)
+{
+    std::vector<const labelled_clip*> all;
+    for (const auto& c : d) all.push_back(&c);
+    return detail::tempo_shrink_fit(all, domains, neutral, e, detail::make_tempo_values(all, basis));
+}
+
 /// @brief Tempo factor per domain: tempo_fit()'s choice (used by prepare_data() and stored in checkpoints), shrunk
-/// by the checked weight when `shrink` (train_options::tempo_shrink).
+/// by the checked weight when `shrink` (train_options::tempo_shrink), of durations or cadences (`basis`,
+/// train_options::tempo_basis).
 /// @param domains domain names in label order; @param neutral name of the neutral domain
 inline std::vector<double> tempo_factors(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
-                                         const std::string& neutral, bool shrink = false)
+                                         const std::string& neutral, bool shrink = false, tempo_basis basis = tempo_basis::duration)
 {
-    return tempo_fit(d, domains, neutral, shrink).factors;
+    return tempo_fit(d, domains, neutral, shrink, basis).factors;
 }
 
 }  // namespace handemo::stargan

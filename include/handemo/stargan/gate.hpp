@@ -159,13 +159,13 @@ std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>&
 
 namespace detail {
 
-/// The training options without the gate's own (gate_folds, gate_prior, gate_margin, ...) and tempo_shrink (the
+/// The training options without the gate's own (gate_folds, gate_prior, gate_margin, ...) and the tempo's (the
 /// images are time-normalised: the tempo never reaches G): two checkpoints whose options agree on these trained
 /// the same G, whatever gate and tempo were fitted around it.
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "tempo_shrink"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "tempo_shrink", "tempo_basis"}) o.erase(k);
     return o;
 }
 
@@ -600,7 +600,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         reused_folds += reused;
         auto ck_info = ck.second;
         // a reused inner model may have been fitted with another tempo option: the tempo training would store now
-        ck_info.tempo = tempo_factors(train, info.domain_names, info.neutral, opt.tempo_shrink);
+        ck_info.tempo = tempo_factors(train, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis));
         detail::emotion_model_impl<Config> model(ck.first, ck_info);
         if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
         detail::score_gate_group<Config>(model, train, held, info, opt, set, tallies[f]);
@@ -637,7 +637,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
 
 /// @brief Fits the change gate again around a model already trained into `out_dir` (its inner models reused
 /// when they match, see fit_change_gate()) and rewrites the checkpoint's gate, prior, tempo factors
-/// (train_options::tempo_shrink) and options in place (atomically, new checksum); G's weights are untouched. `handemo eval --reuse-models` uses it when only
+/// (train_options::tempo_shrink, tempo_basis) and options in place (atomically, new checksum); G's weights are untouched. `handemo eval --reuse-models` uses it when only
 /// the gate options changed since the model was trained.
 /// @throws value_error when the checkpoint was trained with other options (the gate's aside) or steps.
 template <stargan_config Config>
@@ -658,7 +658,7 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
                  {"prior", g.prior.empty() ? std::vector<double>(C, 0.0) : g.prior},
                  {"prior_posture", opt.gate_prior && opt.gate_folds > 0 ? posture_prior<Config::keyframes>(clips, info)
                                                                         : std::vector<std::vector<double>>{}}};
-    j["tempo"] = tempo_factors(clips, info.domain_names, info.neutral, opt.tempo_shrink);
+    j["tempo"] = tempo_factors(clips, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis));
     j["options"] = opt.to_json();
     f.metadata["handemo"] = j.dump();
     f.metadata["checksum"] = detail::checkpoint_checksum(f);

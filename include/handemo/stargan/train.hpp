@@ -116,6 +116,11 @@ struct train_options {
     /// predicts left-out training contents' durations best (tempo_fit(..., true), tempo_shrink_fit()); G is the
     /// same with or without it (the images are time-normalised), so a stored model takes it by refit_gate()
     bool tempo_shrink = false;
+    /// tempo: what the learned factors are ratios of (tempo_basis): "duration" (the clips' durations), "cadence"
+    /// (their cadence_time(): how fast each moves through its own range, whatever the number of cycles it holds) or
+    /// "auto" (the cadence when the training pairs' durations and cadences disagree, tempo_basis_check()); like
+    /// tempo_shrink it never reaches G, so a stored model takes it by refit_gate()
+    std::string tempo_basis = "duration";
 
     /// @throws value_error naming the option.
     void validate() const
@@ -137,6 +142,7 @@ struct train_options {
         if (shards > 2) bad("shards " + std::to_string(shards) + " is not 0, 1 or 2");
         if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; <= -1: off)");
         if (!(gate_guard < 1) || std::isnan(gate_guard)) bad("gate_guard " + std::to_string(gate_guard) + " is not below 1 (a share; < 0: off)");
+        parse_tempo_basis(tempo_basis, "train: tempo_basis");
     }
     nlohmann::json to_json() const
     {
@@ -150,6 +156,7 @@ struct train_options {
         if (gate_auto_margin) j["gate_auto_margin"] = true;  // written only when on: older checkpoints' options stay equal
         if (gate_guard >= 0) j["gate_guard"] = gate_guard;
         if (tempo_shrink) j["tempo_shrink"] = true;
+        if (tempo_basis != "duration") j["tempo_basis"] = tempo_basis;  // written only when not the duration
         return j;
     }
 };
@@ -380,6 +387,7 @@ inline void crop_image(const float* src, std::size_t H, std::size_t W, float* ds
 /// @param range_mode "global" (the paper's one p_min/p_max) or "channel" (compute_channel_range()), when
 ///        `range` is not given.
 /// @param tempo_shrink the tempo factors shrunk by the checked weight (train_options::tempo_shrink)
+/// @param basis what the tempo factors are ratios of (train_options::tempo_basis)
 /// @param amplitude_normalise train in the amplitude-normalised space of the amplitude stage
 ///        (train_options::amplitude): every image's excursions about its per-channel keyframe mean are divided
 ///        by its emotion's amplitude factor, so G learns what the emotions change besides amplitude and
@@ -390,7 +398,8 @@ inline void crop_image(const float* src, std::size_t H, std::size_t W, float* ds
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
                            std::optional<angle_range> range = {}, std::string_view range_mode = "global",
-                           bool amplitude_normalise = false, bool tempo_shrink = false)
+                           bool amplitude_normalise = false, bool tempo_shrink = false,
+                           tempo_basis basis = tempo_basis::duration)
 {
     constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
     if (clips.empty()) throw value_error("train: no clips to train on");
@@ -439,7 +448,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
             if (rank(static_cast<int>(q)) > rank(slot)) slot = static_cast<int>(q);
         }
     }
-    p.tempo = tempo_factors(clips, info.domain_names, info.neutral, tempo_shrink);
+    p.tempo = tempo_factors(clips, info.domain_names, info.neutral, tempo_shrink, basis);
     p.amplitude = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
     p.amplitude_check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
     {
@@ -458,12 +467,13 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     return p;
 }
 
-/// @brief prepare_data() with the range mode, amplitude normalisation and tempo shrinking of `opt`.
+/// @brief prepare_data() with the range mode, amplitude normalisation and tempo (shrinking, basis) of `opt`.
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
                            std::optional<angle_range> range = {})
 {
-    return prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink);
+    return prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink,
+                                parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"));
 }
 
 namespace detail {
