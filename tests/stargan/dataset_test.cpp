@@ -124,15 +124,20 @@ TEST_CASE("tempo_fit recovers consistent duration ratios and prefers the simples
 TEST_CASE("tempo basis: the cadence learns the tempo when takes hold different numbers of cycles")
 {
     const std::vector<std::string> domains{"neutral", "slow", "fast"};
-    const double periods[] = {1.0, 1.2, 1.4, 1.6};
+    // four contents of periods 1.0-1.6 s; "slow" moves 1.5x slower than neutral, "fast" twice as fast
+    const auto set_of = [](double neutral_cycles, double emotion_cycles) {
+        std::vector<handemo::labelled_clip> d;
+        for (int i = 0; i < 4; ++i) {
+            const std::string content = "c" + std::to_string(i);
+            const double period = 1.0 + 0.2 * i;
+            d.push_back(cycling_clip(content, "neutral", period, neutral_cycles));
+            d.push_back(cycling_clip(content, "slow", 1.5 * period, emotion_cycles));
+            d.push_back(cycling_clip(content, "fast", 0.5 * period, emotion_cycles));
+        }
+        return d;
+    };
     // every take two cycles: the durations and the cadences say the same
-    std::vector<handemo::labelled_clip> same;
-    for (int i = 0; i < 4; ++i) {
-        const std::string content = "c" + std::to_string(i);
-        same.push_back(cycling_clip(content, "neutral", periods[i], 2));
-        same.push_back(cycling_clip(content, "slow", 1.5 * periods[i], 2));
-        same.push_back(cycling_clip(content, "fast", 0.5 * periods[i], 2));
-    }
+    const auto same = set_of(2, 2);
     const auto agree = stargan::tempo_basis_check(same, domains, "neutral");
     CHECK(agree.pairs == 8);
     CHECK(agree.disagreement < 0.03);
@@ -145,13 +150,7 @@ TEST_CASE("tempo basis: the cadence learns the tempo when takes hold different n
     CHECK(by_duration.factors[1] == doctest::Approx(1.5).epsilon(0.02));
 
     // the neutral takes are one-cycle fragments, the emotional ones four cycles: the durations count cycles
-    std::vector<handemo::labelled_clip> cut;
-    for (int i = 0; i < 4; ++i) {
-        const std::string content = "c" + std::to_string(i);
-        cut.push_back(cycling_clip(content, "neutral", periods[i], 1));
-        cut.push_back(cycling_clip(content, "slow", 1.5 * periods[i], 4));
-        cut.push_back(cycling_clip(content, "fast", 0.5 * periods[i], 4));
-    }
+    const auto cut = set_of(1, 4);
     const auto disagree = stargan::tempo_basis_check(cut, domains, "neutral");
     CHECK(disagree.basis == stargan::tempo_basis::cadence);
     CHECK(disagree.disagreement == doctest::Approx(std::log(4.0)).epsilon(0.03));

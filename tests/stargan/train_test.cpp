@@ -397,10 +397,10 @@ TEST_CASE("end to end: G learns an emotion effect that depends on the content, w
     REQUIRE(test.size() == 35);
     const auto info = make_info<hand_embedded>("hand-embedded", hand_domains(), "neutral");
     auto o = handemo_options();
-    // a short run: 400 steps at 5x the preset's learning rate, an EMA over about the last 100 steps, and the paired
+    // a short run: 300 steps at 5x the preset's learning rate, an EMA over about the last 100 steps, and the paired
     // loss leading (lambda_pair 100): with the preset's 10, G's change follows D's domain classifier more than the
     // paired takes and does not beat statistics() at this length (5.7 deg against 5.2)
-    o.iters = 400;
+    o.iters = 300;
     o.g_lr = o.d_lr = 5e-4;
     o.ema = 0.99;
     o.lambda_pair = 100;
