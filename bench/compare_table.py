@@ -287,6 +287,19 @@ for cfg, keys in (("paper", ("paper", "(64,")), ("embedded", ("embedded", "(32,"
         print(f"| {cfg} | {label} | {fmt_flop(flop)} | {fmt_b(b)} | {f'{gfl:.1f}' if gfl else 'n/a'} | "
               f"{f'{gfl / peak:.0%}' if gfl and peak else 'n/a'}{rng} |")
 print()
+# the iteration the product trains (handemo preset: a fourth pass of G for the identity term, EMA, augmentation)
+pre_rows = [(name, star_bench((key,), "stargan_train_preset/", "threads:1"))
+            for name, key in (("hand-embedded", "preset/embedded("), ("body-embedded", "preset/body-embedded("))]
+if any(b for _, b in pre_rows):
+    paper_step = star_bench(("embedded", "(32,"), "stargan_train/", "threads:1")
+    print("Training iteration of the handemo preset (what `handemo train` and `handemo eval` run), batch 16, 1 thread:")
+    print()
+    print("| config | handemo preset | against the paper's options' step (hand-embedded, the roofline's row) |")
+    print("|---|---|---|")
+    for name, b in pre_rows:
+        ratio = f"{seconds(b) / seconds(paper_step):.2f}x" if b and paper_step else "n/a"
+        print(f"| {name} | {fmt_b(b)} | {ratio} |")
+    print()
 layers = load_json(o.layers)
 if layers:
     print("Per-layer conv kernels (CPU time GFLOP/s" + (f", fraction of {peak:.0f} GFLOP/s peak" if peak else "") + "):")
