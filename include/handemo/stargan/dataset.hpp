@@ -344,7 +344,7 @@ inline tempo_values make_tempo_values(const std::vector<const labelled_clip*>& d
     tempo_values v;
     v.basis = b == tempo_basis::cadence ? tempo_basis::cadence : tempo_basis::duration;
     if (v.basis == tempo_basis::cadence)
-        for (const auto* c : d) v.cadence[c] = ::handemo::detail::cadence_time_of(c->motion, 0.2);
+        for (const auto* c : d) v.cadence[c] = ::handemo::detail::cadence_time_of(c->motion, cadence_smooth_seconds);
     return v;
 }
 
@@ -507,6 +507,32 @@ inline tempo_basis_choice tempo_basis_check(const std::vector<const labelled_cli
     return r;
 }
 
+/// The leave-one-content-out check tempo_fit() and tempo_shrink_fit() score their candidates by: for each content of
+/// `scored` (in order), `fit(train)` on the clips of the other contents gives one factor vector per candidate; a
+/// candidate's score is the mean over the contents of the mean |log(factor / real ratio)| over that content's pairs.
+template <class Fit>
+std::vector<double> tempo_loo_scores(const std::vector<const labelled_clip*>& all, const std::vector<tempo_pair>& pairs,
+                                     const std::set<std::string>& scored, std::size_t candidates, Fit&& fit)
+{
+    std::vector<double> total(candidates, 0.0);
+    for (const auto& held : scored) {
+        std::vector<const labelled_clip*> train;
+        for (const auto* c : all)
+            if (c->content != held) train.push_back(c);
+        const std::vector<std::vector<double>> factors = fit(train);
+        for (std::size_t i = 0; i < candidates; ++i) {
+            const auto& f = factors[i];
+            double err = 0;
+            std::size_t n = 0;
+            for (const auto& p : pairs)
+                if (p.content == held) err += std::abs(std::log(f[p.domain] / p.ratio())), ++n;
+            total[i] += err / static_cast<double>(n);
+        }
+    }
+    for (auto& t : total) t /= static_cast<double>(scored.size());
+    return total;
+}
+
 inline tempo_shrink_check tempo_shrink_fit(const std::vector<const labelled_clip*>& all, const std::vector<std::string>& domains,
                                            const std::string& neutral, tempo_estimator e, const tempo_values& values)
 {
@@ -517,26 +543,15 @@ inline tempo_shrink_check tempo_shrink_fit(const std::vector<const labelled_clip
     r.errors.assign(tempo_shrink_grid.size(), std::nan(""));
     if (scored.size() < 2) return r;
     r.contents = scored.size();
-    std::vector<double> total(tempo_shrink_grid.size(), 0.0);
-    for (const auto& held : scored) {
-        std::vector<const labelled_clip*> train;
-        for (const auto* c : all)
-            if (c->content != held) train.push_back(c);
+    r.errors = tempo_loo_scores(all, pairs, scored, tempo_shrink_grid.size(), [&](const std::vector<const labelled_clip*>& train) {
         const auto fitted = tempo_estimate(e, train, domains, neutral, values);
-        for (std::size_t w = 0; w < tempo_shrink_grid.size(); ++w) {
-            const auto f = shrink_tempo(fitted, tempo_shrink_grid[w]);
-            double err = 0;
-            std::size_t n = 0;
-            for (const auto& p : pairs)
-                if (p.content == held) err += std::abs(std::log(f[p.domain] / p.ratio())), ++n;
-            total[w] += err / static_cast<double>(n);
-        }
-    }
+        std::vector<std::vector<double>> f;
+        for (double w : tempo_shrink_grid) f.push_back(shrink_tempo(fitted, w));
+        return f;
+    });
     std::size_t best = 0;
-    for (std::size_t w = 0; w < tempo_shrink_grid.size(); ++w) {
-        r.errors[w] = total[w] / static_cast<double>(scored.size());
+    for (std::size_t w = 0; w < tempo_shrink_grid.size(); ++w)
         if (r.errors[w] < r.errors[best] - 1e-12) best = w;
-    }
     r.weight = tempo_shrink_grid[best];
     return r;
 }
@@ -599,23 +614,15 @@ inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std
         r.factors = r.candidates[static_cast<std::size_t>(r.estimator)].factors;
         return r;
     }
-    std::vector<double> total(tempo_estimator_count, 0.0);
-    for (const auto& held : scored) {
-        std::vector<const labelled_clip*> train;
-        for (const auto* c : all)
-            if (c->content != held) train.push_back(c);
-        for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
-            const auto f = detail::tempo_estimate(static_cast<tempo_estimator>(i), train, domains, neutral, values);
-            double err = 0;
-            std::size_t n = 0;
-            for (const auto& p : pairs)
-                if (p.content == held) err += std::abs(std::log(f[p.domain] / p.ratio())), ++n;
-            total[i] += err / static_cast<double>(n);
-        }
-    }
+    const auto scores = detail::tempo_loo_scores(all, pairs, scored, tempo_estimator_count, [&](const std::vector<const labelled_clip*>& train) {
+        std::vector<std::vector<double>> f;
+        for (std::size_t i = 0; i < tempo_estimator_count; ++i)
+            f.push_back(detail::tempo_estimate(static_cast<tempo_estimator>(i), train, domains, neutral, values));
+        return f;
+    });
     std::size_t best = 0;
     for (std::size_t i = 0; i < tempo_estimator_count; ++i) {
-        r.candidates[i].cv_error = total[i] / static_cast<double>(scored.size());
+        r.candidates[i].cv_error = scores[i];
         if (r.candidates[i].cv_error < r.candidates[best].cv_error - 1e-12) best = i;
     }
     r.estimator = static_cast<tempo_estimator>(best);
