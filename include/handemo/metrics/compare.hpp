@@ -105,7 +105,7 @@ characteristics measure(const clip& c)
 /// count in the first two; the cadence is measured on the smoothed tracks, motion/cadence.hpp).
 inline characteristics measure_full(const clip& c)
 {
-    return {range_of_motion(c), mean_speed(c), c.duration(), ::handemo::detail::cadence_time_of(c, 0.2)};
+    return {range_of_motion(c), mean_speed(c), c.duration(), ::handemo::detail::cadence_time_of(c, cadence_smooth_seconds)};
 }
 
 /// @brief `num / den` of a characteristic; a ratio to a motionless input is undefined.

@@ -22,6 +22,10 @@
 
 namespace handemo {
 
+/// @brief The smoothing cadence_time() measures on by default (seconds): the window of the full-rate judge's tremor
+/// residual, so a fast tremor is left out of the cadence as it is kept out of that judge's motion.
+inline constexpr double cadence_smooth_seconds = 0.2;
+
 namespace detail {
 
 /// Savitzky-Golay smoothing (a least-squares quadratic over 2h + 1 frames, the centre's value):
@@ -78,7 +82,7 @@ inline double cadence_time_of(const clip& c, double smooth_seconds)
 /// channels over their summed mean speed, on tracks unwrapped and smoothed over `smooth_seconds`.
 /// @throws value_error naming the clip for fewer than 3 frames, a non-positive frame rate, non-finite angles or a
 /// clip that does not move.
-inline double cadence_time(const clip& c, double smooth_seconds = 0.2)
+inline double cadence_time(const clip& c, double smooth_seconds = cadence_smooth_seconds)
 {
     const auto bad = [&](const std::string& why) { throw value_error("cadence_time: clip " + c.skel.name + " " + why); };
     if (c.frames < 3) bad("has " + std::to_string(c.frames) + " frames, at least 3 are needed");
