@@ -625,6 +625,74 @@ TEST_CASE("shared gate plan: every fold's groups partition its training contents
     CHECK_THROWS_WITH_AS(parse_gate_groups("random"), doctest::Contains("--gate-groups 'random'"), value_error);
 }
 
+TEST_CASE("ring gate plan: every fold's groups partition its training contents, N inner models for an odd N")
+{
+    for (std::size_t N : {3u, 5u, 7u, 9u, 4u, 12u}) {
+        CAPTURE(N);
+        std::vector<std::string> contents;
+        for (std::size_t i = 0; i < N; ++i) contents.push_back(std::string(1, char('a' + i)) + "-content");
+        std::map<fs::path, std::pair<std::set<std::string>, std::uint64_t>> models;  // dir -> (contents trained on, seed)
+        std::map<fs::path, int> folds_using;
+        for (const auto& held : contents) {
+            CAPTURE(held);
+            const auto plan = ring_gate_plan(contents, held, "inner", 5);
+            REQUIRE(plan.has_value());
+            REQUIRE(plan->groups.size() == 2);
+            REQUIRE(plan->dirs.size() == 2);
+            REQUIRE(plan->seeds.size() == 2);
+            std::set<std::string> all_listed;
+            for (const auto& g : plan->groups) {
+                CHECK(std::is_sorted(g.begin(), g.end()));
+                for (const auto& c : g) CHECK(all_listed.insert(c).second);  // no content twice
+            }
+            std::set<std::string> train(contents.begin(), contents.end());
+            train.erase(held);
+            CHECK(all_listed == train);  // a partition of the fold's training contents
+            const auto a = plan->groups[0].size(), b = plan->groups[1].size();
+            CHECK(std::max(a, b) - std::min(a, b) == (N % 2 == 1 ? 0u : 1u));
+            CHECK(plan->dirs[0] != plan->dirs[1]);
+            for (std::size_t f = 0; f < 2; ++f) {
+                // group f is scored by the G trained on the other group: the same model wherever the same dir is named
+                std::set<std::string> on(plan->groups[1 - f].begin(), plan->groups[1 - f].end());
+                const auto [it, fresh] = models.emplace(plan->dirs[f], std::pair{on, plan->seeds[f]});
+                if (!fresh) {
+                    CHECK(it->second.first == on);
+                    CHECK(it->second.second == plan->seeds[f]);
+                }
+                ++folds_using[plan->dirs[f]];
+            }
+        }
+        if (N % 2 == 1) {
+            CHECK(models.size() == N);  // one fewer than the shared plan
+            for (const auto& [dir, n] : folds_using) {
+                CHECK(dir.filename().string().rfind("ring", 0) == 0);  // never a shared plan's folder
+                CHECK(n == 2);
+            }
+        } else {
+            CHECK(models.size() == N + 1);  // the shared plan's
+            for (const auto& held : contents)
+                CHECK(ring_gate_plan(contents, held, "inner", 5)->dirs == shared_gate_plan(contents, held, "inner", 5)->dirs);
+        }
+        std::set<std::uint64_t> seeds;
+        for (const auto& [dir, m] : models) seeds.insert(m.second);
+        CHECK(seeds.size() == models.size());
+    }
+    // the fold holding out the first of 7 contents: the runs of 3 after it
+    const std::vector<std::string> seven{"a", "b", "c", "d", "e", "f", "g"};
+    const auto p0 = ring_gate_plan(seven, "a", "inner", 1);
+    REQUIRE(p0.has_value());
+    CHECK(p0->groups[0] == std::vector<std::string>{"b", "c", "d"});
+    CHECK(p0->groups[1] == std::vector<std::string>{"e", "f", "g"});
+    const auto p6 = ring_gate_plan(seven, "g", "inner", 1);  // wraps round the ring
+    REQUIRE(p6.has_value());
+    CHECK(p6->groups[0] == std::vector<std::string>{"a", "b", "c"});
+    CHECK(p6->groups[1] == std::vector<std::string>{"d", "e", "f"});
+    CHECK(!ring_gate_plan({"a", "b"}, "a", "inner", 1).has_value());
+    CHECK_THROWS_WITH_AS(ring_gate_plan({"a", "b", "c"}, "d", "inner", 1), doctest::Contains("'d'"), value_error);
+    CHECK(parse_gate_groups("ring") == gate_groups::ring);
+    CHECK(std::string(to_string(gate_groups::ring)) == "ring");
+}
+
 TEST_CASE("training jobs: a job starts only after those it waits on; the first error is rethrown")
 {
     std::atomic<int> first_done{0};
@@ -871,6 +939,34 @@ TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner 
     auto to = o.train;
     to.seed = o.train.seed;  // gripping is the first content
     CHECK(read_file(base / "two" / "folds" / "gripping" / "gate" / "groups.txt") == gate_groups_text(train, to, nullptr));
+
+    // the ring plan on the same models: the runs of one content after the held one, 3 inner models for 3 contents
+    // (the shared plan's 4), each scoring for two folds; --jobs 2 trains them first, bit for bit --jobs 1's
+    o.gate_grouping = gate_groups::ring;
+    o.jobs = 1;
+    const auto ring_one = run_eval<hand_tiny>(clips, info, o, base / "one");
+    o.jobs = 2;
+    std::FILE* ring_log = std::tmpfile();
+    REQUIRE(ring_log != nullptr);
+    o.progress_out = ring_log;
+    const auto ring = run_eval<hand_tiny>(clips, info, o, base / "two");
+    o.progress_out = nullptr;
+    std::string ring_printed(static_cast<std::size_t>(std::ftell(ring_log)), '\0');
+    std::rewind(ring_log);
+    CHECK(std::fread(ring_printed.data(), 1, ring_printed.size(), ring_log) == ring_printed.size());
+    std::fclose(ring_log);
+    CHECK(ring_printed.find("eval: training 3 models (3 for the change gates, 0 folds), 2 at a time") != std::string::npos);
+    CHECK(ring.options_text.find("gate groups ring\n") != std::string::npos);
+    REQUIRE(ring.samples.size() == ring_one.samples.size());
+    for (std::size_t i = 0; i < ring.samples.size(); ++i) CHECK(ring.samples[i].rmse_real == ring_one.samples[i].rmse_real);
+    for (int m : {1, 2, 3})
+        CHECK(read_file(base / "one" / "inner" / ("ring" + std::to_string(m)) / "checkpoint.safetensors") ==
+              read_file(base / "two" / "inner" / ("ring" + std::to_string(m)) / "checkpoint.safetensors"));
+    CHECK(!fs::exists(base / "two" / "inner" / "ring4"));
+    const std::vector<std::string> contents{"gripping", "patting", "pointing"};
+    const auto ring_plan = ring_gate_plan(contents, "gripping", base / "two" / "inner", o.train.seed);
+    REQUIRE(ring_plan.has_value());
+    CHECK(read_file(base / "two" / "folds" / "gripping" / "gate" / "groups.txt") == gate_groups_text(train, to, &*ring_plan));
     fs::remove_all(base);
 }
 

@@ -108,8 +108,9 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
                       "one process bit for bit");
     sub->add_option_function<std::string>(
            "--gate-groups", [o](const std::string& v) { o->opt.gate_grouping = handemo::eval::parse_gate_groups(v); },
-           "The change gate's inner groups: shared (inner models shared by the folds: 8 trainings instead of 14 for 7 contents) "
-           "or per-fold (each fold's own, as `handemo train` forms them); default shared");
+           "The change gate's inner groups: shared (inner models shared by the folds: 8 trainings instead of 14 for 7 contents), "
+           "ring (runs of consecutive contents: 7 for 7 contents, the shared plan's for an even number) or per-fold (each "
+           "fold's own, as `handemo train` forms them); default shared");
     auto* seed_opt = sub->add_option("--synth-seed", o->synth_seed,
                                      "Seed of a synthetic hand set (`handemo synth --seed`): adds the 'oracle' method, the input "
                                      "take re-synthesised in the target's style");

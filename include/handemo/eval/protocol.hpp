@@ -311,12 +311,13 @@ inline stargan::train_options fold_train_options(const eval_options& opt, const 
     return to;
 }
 
-/// The change gate's plan of the fold holding out `held`: the shared plan (schedule.hpp) under <out_dir>/inner,
-/// or nothing (per-fold groups, no gate, or too few contents).
+/// The change gate's plan of the fold holding out `held`: the shared or the ring plan (schedule.hpp) under
+/// <out_dir>/inner, or nothing (per-fold groups, no gate, or too few contents).
 inline std::optional<stargan::gate_plan> fold_gate_plan(const eval_options& opt, const std::vector<std::string>& contents,
                                                         const std::string& held, const std::filesystem::path& out_dir)
 {
-    if (opt.gate_grouping != gate_groups::shared || opt.train.gate_folds != 2) return std::nullopt;
+    if (opt.gate_grouping == gate_groups::per_fold || opt.train.gate_folds != 2) return std::nullopt;
+    if (opt.gate_grouping == gate_groups::ring) return ring_gate_plan(contents, held, out_dir / "inner", opt.train.seed);
     return shared_gate_plan(contents, held, out_dir / "inner", opt.train.seed);
 }
 

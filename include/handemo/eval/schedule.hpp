@@ -15,6 +15,17 @@
 // clip is read. Inner model i (in the order above) is trained with seed train.seed + 7919 (i + 1) into
 // <report>/inner/model<i + 1>/, whichever fold asks for it first; every other fold reuses it.
 //
+// The ring plan needs one model fewer for an odd number of contents. The contents sit on a ring, c_{N} = c_0,
+// and the run R_s = c_s .. c_{s+a-1} (indices mod N) holds a = (N - 1) / 2 consecutive contents. The fold holding
+// out c_k has the groups R_{k+1} and R_{k+a+1}, which together hold every content but c_k; each is scored with the
+// G trained on the other. The inner models are the G on each run, N of them (7 for 7 contents, against 8 shared and
+// 14 per fold), each shared by two folds (G on R_s scores for the folds holding out c_{s-1} and c_{s+a-1}); the
+// groups are a and a contents, as even as the shared plan's. With N + 1 inner models and N final Gs, 2 trainings at
+// a time leave one training alone at the end; with N they pair up exactly. For an even N the two groups of a fold
+// differ in size, the runs of both sizes would be 2 N models, and the ring plan is the shared plan. Ring model s is
+// trained with seed train.seed + 7919 (s + 1) into <report>/inner/ring<s + 1>/ (other folders than the shared
+// plan's, so that --reuse-models never takes one plan's model for the other's).
+//
 // train_all() trains every inner model and every fold's final G first, `jobs` of them at once on their own
 // threads, each with train.threads threads (1 when it is 0 and jobs > 1); a final G waits for its two inner
 // models. Training is deterministic for a seed and thread count, so the models are bit for bit those of
@@ -60,20 +71,25 @@ namespace handemo::eval {
 
 /// @brief How the change gate's inner groups are formed in an evaluation (eval_options::gate_groups).
 enum class gate_groups {
-    shared,   ///< the shared plan (schedule.hpp): N + 1 inner models for N folds
-    per_fold  ///< each fold's sorted training contents dealt round the groups (`handemo train`'s own): 2 N
+    shared,    ///< the shared plan (schedule.hpp): N + 1 inner models for N folds
+    per_fold,  ///< each fold's sorted training contents dealt round the groups (`handemo train`'s own): 2 N
+    ring       ///< the ring plan (schedule.hpp): N inner models for an odd N, the shared plan's for an even N
 };
 
-/// @brief "shared" or "per-fold".
-inline const char* to_string(gate_groups g) noexcept { return g == gate_groups::shared ? "shared" : "per-fold"; }
+/// @brief "shared", "per-fold" or "ring".
+inline const char* to_string(gate_groups g) noexcept
+{
+    return g == gate_groups::shared ? "shared" : g == gate_groups::ring ? "ring" : "per-fold";
+}
 
-/// @brief Parses "shared" or "per-fold".
+/// @brief Parses "shared", "per-fold" or "ring".
 /// @throws value_error naming the value.
 inline gate_groups parse_gate_groups(const std::string& s)
 {
     if (s == "shared") return gate_groups::shared;
     if (s == "per-fold") return gate_groups::per_fold;
-    throw value_error("eval: --gate-groups '" + s + "' is not 'shared' or 'per-fold'");
+    if (s == "ring") return gate_groups::ring;
+    throw value_error("eval: --gate-groups '" + s + "' is not 'shared', 'ring' or 'per-fold'");
 }
 
 /// @brief The shared plan's inner groups for the fold holding out `held` (see the header comment).
@@ -118,6 +134,41 @@ inline std::optional<stargan::gate_plan> shared_gate_plan(const std::vector<std:
         g0.push_back(contents[p]);
         add(std::move(g0), 1);
         add(range(a, N, p), 1 + (N - a) + k);
+    }
+    return plan;
+}
+
+/// @brief The ring plan's inner groups for the fold holding out `held` (see the header comment): for an odd
+/// number of contents N, the runs of (N - 1) / 2 contents that follow `held` on the ring of sorted contents;
+/// for an even N, shared_gate_plan()'s.
+/// @param contents every content of the data set, sorted
+/// @param inner_root where the shared inner models live (<report>/inner)
+/// @param seed the evaluation's base seed (train.seed)
+/// @return the plan, or nothing for fewer than 3 contents (no two inner groups to form)
+/// @throws value_error when `held` is not one of `contents`.
+inline std::optional<stargan::gate_plan> ring_gate_plan(const std::vector<std::string>& contents, const std::string& held,
+                                                        const std::filesystem::path& inner_root, std::uint64_t seed)
+{
+    const std::size_t N = contents.size();
+    if (N % 2 == 0) return shared_gate_plan(contents, held, inner_root, seed);
+    const auto at = std::find(contents.begin(), contents.end(), held);
+    if (at == contents.end()) throw value_error("eval: ring gate plan: content '" + held + "' is not in the data set");
+    if (N < 3) return std::nullopt;
+    const std::size_t a = (N - 1) / 2;
+    const std::size_t k = static_cast<std::size_t>(at - contents.begin());
+    auto run = [&](std::size_t s) {  // R_s, sorted
+        std::vector<std::string> v;
+        for (std::size_t i = 0; i < a; ++i) v.push_back(contents[(s + i) % N]);
+        std::sort(v.begin(), v.end());
+        return v;
+    };
+    const std::size_t s0 = (k + 1) % N, s1 = (k + a + 1) % N;
+    stargan::gate_plan plan;
+    // group R_{s0} is scored by the G trained on R_{s1}, and the other way round
+    for (const auto& [group, scored_by] : {std::pair{s0, s1}, std::pair{s1, s0}}) {
+        plan.groups.push_back(run(group));
+        plan.dirs.push_back(inner_root / ("ring" + std::to_string(scored_by + 1)));
+        plan.seeds.push_back(seed + 7919 * static_cast<std::uint64_t>(scored_by + 1));
     }
     return plan;
 }
