@@ -4,4 +4,5 @@
 #pragma once
 
 #include <handemo/core/thread_pool.hpp>
+#include <handemo/kernels/activation.hpp>
 #include <handemo/kernels/conv.hpp>

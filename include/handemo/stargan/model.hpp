@@ -12,6 +12,7 @@
 #include <handemo/autodiff.hpp>
 #include <handemo/core/error.hpp>
 #include <handemo/core/thread_pool.hpp>
+#include <handemo/kernels/activation.hpp>
 #include <handemo/kernels/norm.hpp>
 #include <handemo/kernels/packed.hpp>
 #include <handemo/tensor/aligned.hpp>
@@ -425,10 +426,7 @@ public:
         convt(5, a, c, n_images);
         norm(c, int(n_images), int(cd), int(HW), true);
         conv(6, c, out, n_images);
-        if (residual)
-            for (std::size_t i = 0; i < n_images * 3 * HW; ++i) out[i] = x[i] + std::tanh(out[i]);
-        else
-            for (std::size_t i = 0; i < n_images * 3 * HW; ++i) out[i] = std::tanh(out[i]);
+        kernels::tanh_inplace(out, n_images * 3 * HW, residual ? x : nullptr);
     }
 
     /// @brief A snapshot of the weights packed for fast repeated inference (see frozen_generator).
