@@ -93,9 +93,8 @@ public:
         for (std::size_t n = 0; n < images; ++n) {
             const T* xn = x + n * x_per;
             for (int c = 0; c < in_c_; ++c)
-                for (int r = 0; r < in_h_; ++r)
-                    std::memcpy(xp + c * HWp + std::size_t(r + pad_h_) * Wp_ + pad_w_, xn + (std::size_t(c) * in_h_ + r) * in_w_,
-                                std::size_t(in_w_) * sizeof(T));
+                detail::copy_rows(xp + c * HWp + std::size_t(pad_h_) * Wp_ + pad_w_, Wp_, xn + std::size_t(c) * in_h_ * in_w_, in_w_,
+                                  in_h_, in_w_);
             for (const auto& ph : phases_) {
                 detail::ws_job j = ph.job;
                 j.koff = koff_.data() + ph.koff_off;
