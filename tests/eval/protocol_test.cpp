@@ -580,39 +580,57 @@ TEST_CASE("end to end: an emotion effect that depends on the content, which the 
     fs::remove_all(dir);
 }
 
+namespace {
+
+/// dir -> (contents its G is trained on, seed), gathered over the folds of a gate plan
+using plan_models = std::map<fs::path, std::pair<std::set<std::string>, std::uint64_t>>;
+
+/// Checks the gate plan of the fold holding out `held`: two sorted, non-empty groups that partition the fold's
+/// training contents, as even as dealing them round, each scored by a model trained on the other group, and the
+/// same model (dir, contents, seed) wherever an earlier fold named the same dir (recorded in `models`).
+void check_fold_plan(const stargan::gate_plan& plan, const std::vector<std::string>& contents, const std::string& held,
+                     plan_models& models)
+{
+    REQUIRE(plan.groups.size() == 2);
+    REQUIRE(plan.dirs.size() == 2);
+    REQUIRE(plan.seeds.size() == 2);
+    CHECK(plan.dirs[0] != plan.dirs[1]);
+    std::set<std::string> all_listed;
+    for (const auto& g : plan.groups) {
+        CHECK(!g.empty());
+        CHECK(std::is_sorted(g.begin(), g.end()));
+        for (const auto& c : g) CHECK(all_listed.insert(c).second);  // no content twice
+    }
+    std::set<std::string> train(contents.begin(), contents.end());
+    train.erase(held);
+    CHECK(all_listed == train);  // a partition of the fold's training contents
+    const auto a = plan.groups[0].size(), b = plan.groups[1].size();
+    CHECK(std::max(a, b) - std::min(a, b) <= 1);  // as even as dealing them round
+    for (std::size_t f = 0; f < 2; ++f) {
+        // group f is scored by the G trained on the other group: the same model wherever the same dir is named
+        std::set<std::string> on(plan.groups[1 - f].begin(), plan.groups[1 - f].end());
+        const auto [it, fresh] = models.emplace(plan.dirs[f], std::pair{on, plan.seeds[f]});
+        if (!fresh) {
+            CHECK(it->second.first == on);
+            CHECK(it->second.second == plan.seeds[f]);
+        }
+    }
+}
+
+}  // namespace
+
 TEST_CASE("shared gate plan: every fold's groups partition its training contents, N + 1 inner models shared by the folds")
 {
     for (std::size_t N : {3u, 4u, 7u, 12u}) {
         CAPTURE(N);
         std::vector<std::string> contents;
         for (std::size_t i = 0; i < N; ++i) contents.push_back(std::string(1, char('a' + i)) + "-content");
-        std::map<fs::path, std::pair<std::set<std::string>, std::uint64_t>> models;  // dir -> (contents trained on, seed)
+        plan_models models;
         for (const auto& held : contents) {
             CAPTURE(held);
             const auto plan = shared_gate_plan(contents, held, "inner", 5);
             REQUIRE(plan.has_value());
-            REQUIRE(plan->groups.size() == 2);
-            REQUIRE(plan->dirs.size() == 2);
-            REQUIRE(plan->seeds.size() == 2);
-            std::set<std::string> all_listed;
-            for (const auto& g : plan->groups) {
-                CHECK(!g.empty());
-                for (const auto& c : g) CHECK(all_listed.insert(c).second);  // no content twice
-            }
-            std::set<std::string> train(contents.begin(), contents.end());
-            train.erase(held);
-            CHECK(all_listed == train);  // a partition of the fold's training contents
-            const auto a = plan->groups[0].size(), b = plan->groups[1].size();
-            CHECK(std::max(a, b) - std::min(a, b) <= 1);  // as even as dealing them round
-            for (std::size_t f = 0; f < 2; ++f) {
-                // group f is scored by the G trained on the other group: the same model wherever the same dir is named
-                std::set<std::string> on(plan->groups[1 - f].begin(), plan->groups[1 - f].end());
-                const auto [it, fresh] = models.emplace(plan->dirs[f], std::pair{on, plan->seeds[f]});
-                if (!fresh) {
-                    CHECK(it->second.first == on);
-                    CHECK(it->second.second == plan->seeds[f]);
-                }
-            }
+            check_fold_plan(*plan, contents, held, models);
         }
         CHECK(models.size() == N + 1);  // against 2 N with per-fold groups
         std::set<std::uint64_t> seeds;
@@ -631,36 +649,16 @@ TEST_CASE("ring gate plan: every fold's groups partition its training contents, 
         CAPTURE(N);
         std::vector<std::string> contents;
         for (std::size_t i = 0; i < N; ++i) contents.push_back(std::string(1, char('a' + i)) + "-content");
-        std::map<fs::path, std::pair<std::set<std::string>, std::uint64_t>> models;  // dir -> (contents trained on, seed)
+        plan_models models;
         std::map<fs::path, int> folds_using;
         for (const auto& held : contents) {
             CAPTURE(held);
             const auto plan = ring_gate_plan(contents, held, "inner", 5);
             REQUIRE(plan.has_value());
-            REQUIRE(plan->groups.size() == 2);
-            REQUIRE(plan->dirs.size() == 2);
-            REQUIRE(plan->seeds.size() == 2);
-            std::set<std::string> all_listed;
-            for (const auto& g : plan->groups) {
-                CHECK(std::is_sorted(g.begin(), g.end()));
-                for (const auto& c : g) CHECK(all_listed.insert(c).second);  // no content twice
-            }
-            std::set<std::string> train(contents.begin(), contents.end());
-            train.erase(held);
-            CHECK(all_listed == train);  // a partition of the fold's training contents
+            check_fold_plan(*plan, contents, held, models);
             const auto a = plan->groups[0].size(), b = plan->groups[1].size();
             CHECK(std::max(a, b) - std::min(a, b) == (N % 2 == 1 ? 0u : 1u));
-            CHECK(plan->dirs[0] != plan->dirs[1]);
-            for (std::size_t f = 0; f < 2; ++f) {
-                // group f is scored by the G trained on the other group: the same model wherever the same dir is named
-                std::set<std::string> on(plan->groups[1 - f].begin(), plan->groups[1 - f].end());
-                const auto [it, fresh] = models.emplace(plan->dirs[f], std::pair{on, plan->seeds[f]});
-                if (!fresh) {
-                    CHECK(it->second.first == on);
-                    CHECK(it->second.second == plan->seeds[f]);
-                }
-                ++folds_using[plan->dirs[f]];
-            }
+            for (std::size_t f = 0; f < 2; ++f) ++folds_using[plan->dirs[f]];
         }
         if (N % 2 == 1) {
             CHECK(models.size() == N);  // one fewer than the shared plan
@@ -915,15 +913,21 @@ TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner 
     o.jobs = 1;
     const auto per_fold_one = run_eval<hand_tiny>(clips, info, o, base / "one");
     o.jobs = 2;
-    std::FILE* log = std::tmpfile();
-    REQUIRE(log != nullptr);
-    o.progress_out = log;
-    const auto per_fold = run_eval<hand_tiny>(clips, info, o, base / "two");
-    o.progress_out = nullptr;
-    std::string printed(static_cast<std::size_t>(std::ftell(log)), '\0');
-    std::rewind(log);
-    CHECK(std::fread(printed.data(), 1, printed.size(), log) == printed.size());
-    std::fclose(log);
+    // runs the evaluation into base / "two" and returns it with what it printed
+    auto run_printing = [&](std::string& printed) {
+        std::FILE* log = std::tmpfile();
+        REQUIRE(log != nullptr);
+        o.progress_out = log;
+        auto r = run_eval<hand_tiny>(clips, info, o, base / "two");
+        o.progress_out = nullptr;
+        printed.assign(static_cast<std::size_t>(std::ftell(log)), '\0');
+        std::rewind(log);
+        CHECK(std::fread(printed.data(), 1, printed.size(), log) == printed.size());
+        std::fclose(log);
+        return r;
+    };
+    std::string printed;
+    const auto per_fold = run_printing(printed);
     // G reused in both folds; the two folds' own inner models (2 each) trained first, two at a time
     CHECK(printed.find("eval: training 4 models (4 for the change gates, 0 folds), 2 at a time") != std::string::npos);
     CHECK(per_fold.folds[0].reused_model);
@@ -946,15 +950,8 @@ TEST_CASE("eval --jobs 2: the models of --jobs 1 bit for bit, each shared inner 
     o.jobs = 1;
     const auto ring_one = run_eval<hand_tiny>(clips, info, o, base / "one");
     o.jobs = 2;
-    std::FILE* ring_log = std::tmpfile();
-    REQUIRE(ring_log != nullptr);
-    o.progress_out = ring_log;
-    const auto ring = run_eval<hand_tiny>(clips, info, o, base / "two");
-    o.progress_out = nullptr;
-    std::string ring_printed(static_cast<std::size_t>(std::ftell(ring_log)), '\0');
-    std::rewind(ring_log);
-    CHECK(std::fread(ring_printed.data(), 1, ring_printed.size(), ring_log) == ring_printed.size());
-    std::fclose(ring_log);
+    std::string ring_printed;
+    const auto ring = run_printing(ring_printed);
     CHECK(ring_printed.find("eval: training 3 models (3 for the change gates, 0 folds), 2 at a time") != std::string::npos);
     CHECK(ring.options_text.find("gate groups ring\n") != std::string::npos);
     REQUIRE(ring.samples.size() == ring_one.samples.size());
