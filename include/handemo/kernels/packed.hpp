@@ -92,9 +92,7 @@ public:
         std::memset(xp, 0, std::size_t(in_c_) * HWp * sizeof(T));
         for (std::size_t n = 0; n < images; ++n) {
             const T* xn = x + n * x_per;
-            for (int c = 0; c < in_c_; ++c)
-                detail::copy_rows(xp + c * HWp + std::size_t(pad_h_) * Wp_ + pad_w_, Wp_, xn + std::size_t(c) * in_h_ * in_w_, in_w_,
-                                  in_h_, in_w_);
+            detail::copy_into_padded(xp, Hp_, Wp_, pad_h_, pad_w_, xn, in_c_, in_h_, in_w_);
             for (const auto& ph : phases_) {
                 detail::ws_job j = ph.job;
                 j.koff = koff_.data() + ph.koff_off;

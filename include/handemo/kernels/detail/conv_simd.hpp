@@ -20,7 +20,9 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <type_traits>
+#include <utility>
 
 #include <xsimd/xsimd.hpp>
 #if defined(__x86_64__) || defined(__i386__)
@@ -30,6 +32,31 @@
 #include <handemo/kernels/reference.hpp>
 
 namespace handemo::kernels::detail {
+
+/// rows rows of `width` elements from src (row stride ss) to dst (row stride ds). Widths up to 16 are copies of
+/// a size known at compile time, which the compiler turns into a few moves; a call to memcpy per row of 3 to 9
+/// floats (the generator's inner layers) cost more than the copy.
+template <class T>
+inline void copy_rows(T* dst, std::ptrdiff_t ds, const T* src, std::ptrdiff_t ss, int rows, int width) noexcept
+{
+    auto fixed = [&]<int Wd>() {
+        for (int r = 0; r < rows; ++r) std::memcpy(dst + r * ds, src + r * ss, std::size_t(Wd) * sizeof(T));
+    };
+    const bool done = [&]<int... I>(std::integer_sequence<int, I...>) {
+        return ((width == I + 1 ? (fixed.template operator()<I + 1>(), true) : false) || ...);
+    }(std::make_integer_sequence<int, 16>{});
+    if (!done)
+        for (int r = 0; r < rows; ++r) std::memcpy(dst + r * ds, src + r * ss, std::size_t(width) * sizeof(T));
+}
+
+/// x [C, H, W] into a [C, Hp, Wp] buffer with its top-left corner at (top, left): the image copy of every path
+/// that reads a zero-padded input. The padding is not written (the caller zeroes the buffer once).
+template <class T>
+inline void copy_into_padded(T* dst, int Hp, int Wp, int top, int left, const T* x, int C, int H, int W) noexcept
+{
+    for (int c = 0; c < C; ++c)
+        copy_rows(dst + (std::ptrdiff_t(c) * Hp + top) * Wp + left, Wp, x + std::ptrdiff_t(c) * H * W, W, H, W);
+}
 
 /// Whether xsimd found a SIMD instruction set for this target (false: conv.hpp uses the reference kernels).
 inline constexpr bool has_simd = !std::is_same_v<xsimd::default_arch, xsimd::unavailable>;
@@ -399,10 +426,7 @@ inline void forward_dot(const conv_geometry& g, const T* x, const T* w, const T*
     for (int n = 0; n < g.batch; ++n) {
         const T* xn = x + std::ptrdiff_t(n) * Ci * HW;
         if (g.pad > 0) std::fill(xp, xp + Ci * HWp, T(0));
-        for (int c = 0; c < Ci; ++c)
-            for (int r = 0; r < g.in_h; ++r)
-                std::copy(xn + c * HW + std::ptrdiff_t(r) * g.in_w, xn + c * HW + std::ptrdiff_t(r + 1) * g.in_w,
-                          xp + c * HWp + std::ptrdiff_t(r + g.pad) * Wp + g.pad);
+        copy_into_padded(xp, Hp, Wp, g.pad, g.pad, xn, Ci, g.in_h, g.in_w);
         for (int r = 0; r < P; ++r) {
             const int p = n * P + r;
             ybase[p] = std::ptrdiff_t(n) * Co * P + r;
@@ -470,12 +494,7 @@ inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, cons
     for (std::size_t i = 0; i < npad; ++i) xp[i] = T(0);
     for (int n = 0; n < g.batch; ++n) {
         const T* xn = x + std::ptrdiff_t(n) * g.in_channels * g.in_h * g.in_w;
-        for (int c = 0; c < g.in_channels; ++c)
-            for (int r = 0; r < g.in_h; ++r) {
-                const T* src = xn + (std::ptrdiff_t(c) * g.in_h + r) * g.in_w;
-                T* dst = xp + (std::ptrdiff_t(c) * Hp + r + g.pad) * Wp + g.pad;
-                for (int q = 0; q < g.in_w; ++q) dst[q] = src[q];
-            }
+        copy_into_padded(xp, Hp, Wp, g.pad, g.pad, xn, g.in_channels, g.in_h, g.in_w);
         T* yn = y + std::ptrdiff_t(n) * Co * P;
         for (int k0 = 0; k0 < K; k0 += forward_kc) {
             const int kc = std::min(forward_kc, K - k0);
@@ -776,12 +795,7 @@ inline void backward_weight_stride1(const conv_geometry& g, const T* x, const T*
     T out[dot_no * dot_np];
     for (int n = 0; n < g.batch; ++n) {
         const T* xn = x + std::ptrdiff_t(n) * g.in_channels * g.in_h * g.in_w;
-        for (int c = 0; c < g.in_channels; ++c)
-            for (int r = 0; r < g.in_h; ++r) {
-                const T* src = xn + (std::ptrdiff_t(c) * g.in_h + r) * g.in_w;
-                T* dst = xp + (std::ptrdiff_t(c) * Hp + r + g.pad) * Wp + g.pad;
-                for (int q = 0; q < g.in_w; ++q) dst[q] = src[q];
-            }
+        copy_into_padded(xp, Hp, Wp, g.pad, g.pad, xn, g.in_channels, g.in_h, g.in_w);
         const T* gyn = gy + std::ptrdiff_t(n) * Co * P;
         for (int o = 0; o < Co; ++o)
             for (int r = 0; r < oh; ++r)

@@ -18,9 +18,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <type_traits>
-#include <utility>
 #include <vector>
 
 #include <handemo/core/half.hpp>
@@ -267,23 +265,6 @@ inline void ws_pack(int co, int K, T* dst, F&& value)
                 const int o = pn * MR + i;
                 dst[(std::ptrdiff_t(pn) * K + k) * MR + i] = o < co ? value(o, k) : T(0);
             }
-}
-
-/// rows rows of `width` elements from src (row stride ss) to dst (row stride ds): the zero-padded input copy of
-/// the packed forward pass, one row per input channel and image row. Widths up to 16 are copies of a size known
-/// at compile time, which the compiler turns into a few moves; a call to memcpy per row of 3 to 9 floats (the
-/// generator's inner layers) cost more than the copy.
-template <class T>
-inline void copy_rows(T* dst, std::ptrdiff_t ds, const T* src, std::ptrdiff_t ss, int rows, int width) noexcept
-{
-    auto fixed = [&]<int Wd>() {
-        for (int r = 0; r < rows; ++r) std::memcpy(dst + r * ds, src + r * ss, std::size_t(Wd) * sizeof(T));
-    };
-    const bool done = [&]<int... I>(std::integer_sequence<int, I...>) {
-        return ((width == I + 1 ? (fixed.template operator()<I + 1>(), true) : false) || ...);
-    }(std::make_integer_sequence<int, 16>{});
-    if (!done)
-        for (int r = 0; r < rows; ++r) std::memcpy(dst + r * ds, src + r * ss, std::size_t(width) * sizeof(T));
 }
 
 /// Elements of the packed panels of `co` output channels and reduction length K.
