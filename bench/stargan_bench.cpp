@@ -5,7 +5,8 @@
 // library's trainer (D step with WGAN-GP + G step, batch 16, Adam on both), data-parallel on 2 threads and on 1
 // (threads:N), and two independent half-batch steps at once on two threads (stargan_train_pair: the bound of the
 // 2-thread step with the memory system's contention). Every benchmark but the pair has a FLOP counter (the FLOPs of one
-// call, stargan/flops.hpp: inference 2 x G's multiply-adds per image; the training step pass by pass, the
+// call, stargan/flops.hpp: inference 2 x the multiply-adds G performs per image (frozen_generator's without the first
+// layer's label channels, which it adds as precomputed maps); the training step pass by pass, the
 // gradient penalty's double backward included) and GFLOP/s = FLOP / time.
 // HANDEMO_BENCH_QUICK=1 in the environment runs every benchmark for 0.01 s instead of its minimum time: a check
 // that the program runs end to end, not a measurement.
@@ -69,7 +70,7 @@ void bm_infer(benchmark::State& st)
         else g.infer(x.data(), lab.data(), out.data(), ws);
         benchmark::DoNotOptimize(out.data());
     }
-    flop_counters(st, generator_flops<Config>());
+    flop_counters(st, frozen ? frozen_generator_flops<Config>() : generator_flops<Config>());
 }
 
 /// G inference of a batch of B clips through one packed batch-1 generator (frozen_generator::infer_batch: each
@@ -96,7 +97,7 @@ void bm_infer_batch(benchmark::State& st)
     }
     st.SetItemsProcessed(std::int64_t(st.iterations()) * std::int64_t(B));
     st.counters["batch"] = double(B);
-    flop_counters(st, double(B) * generator_flops<cfg>());
+    flop_counters(st, double(B) * frozen_generator_flops<cfg>());
 }
 
 /// G inference of hand-micro on the microcontroller path (micro::generator: plain loops, no heap), batch 1,
@@ -142,7 +143,7 @@ void bm_transfer(benchmark::State& st, std::size_t batch)
     }
     st.SetItemsProcessed(std::int64_t(st.iterations()) * std::int64_t(clips.size()));
     st.counters["batch"] = double(batch);
-    flop_counters(st, double(clips.size()) * generator_flops<hand_embedded>());
+    flop_counters(st, double(clips.size()) * frozen_generator_flops<hand_embedded>());
 }
 
 /// A trainer of batch N (the library's own, data-parallel over `threads`) on 64 random images with random

@@ -189,6 +189,55 @@ TEST_CASE("stargan: infer equals the tape forward; thread-pool batch split equal
     for (std::size_t i = 0; i < g1.size(); ++i) REQUIRE(g2[i] == doctest::Approx(g1[i]).epsilon(1e-4).scale(1e-3));
 }
 
+TEST_CASE("stargan: the frozen generator's label maps are the first layer's label channels, any label")
+{
+    // frozen_generator convolves the image's 3 channels and adds, per label channel k, the 7x7 convolution of a
+    // plane of ones with the weights of input channel 3 + k (zero padding 3). Checked against a direct sum over
+    // the taps that land inside the image, and end to end against generator::infer (which convolves the tiled
+    // label) with one-hot, blended, all-zero and negative labels.
+    using cfg = with_batch<hand_embedded, 1>;
+    constexpr std::size_t H = 12, W = 24, C = 5, cd = 32, in = 3 + C;
+    generator<float, cfg> g;
+    randomise(g, 7, 0.1);
+    const auto f = g.freeze();
+    const float* w = nullptr;
+    g.for_each_parameter([&](std::string_view name, std::span<float> v, std::span<float>, std::span<const std::size_t>) {
+        if (name == "main.0.weight") w = v.data();
+    });
+    REQUIRE(w != nullptr);
+    const auto maps = f.label_maps();
+    REQUIRE(maps.size() == C * cd * H * W);
+    double worst = 0;
+    for (std::size_t k = 0; k < C; ++k)
+        for (std::size_t o = 0; o < cd; ++o)
+            for (std::size_t i = 0; i < H; ++i)
+                for (std::size_t j = 0; j < W; ++j) {
+                    double want = 0;
+                    for (std::size_t u = 0; u < 7; ++u)
+                        for (std::size_t v = 0; v < 7; ++v) {
+                            const long r = long(i + u) - 3, c = long(j + v) - 3;
+                            if (r >= 0 && r < long(H) && c >= 0 && c < long(W)) want += w[((o * in + 3 + k) * 7 + u) * 7 + v];
+                        }
+                    worst = std::max(worst, std::abs(want - double(maps[((k * cd + o) * H + i) * W + j])));
+                }
+    CHECK(worst < 1e-5);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<float> x(3 * H * W), y_infer(x.size()), y_frozen(x.size());
+    for (auto& v : x) v = u(rng);
+    decltype(g)::workspace ws;
+    frozen_generator<float, cfg>::workspace fws(f);
+    const std::vector<std::vector<float>> labels{{0, 0, 1, 0, 0}, {0.3f, 0, 0, 0.7f, 0}, {0, 0, 0, 0, 0}, {-0.5f, 1, 0, 0, 0.25f}};
+    for (const auto& lab : labels) {
+        g.infer(x.data(), lab.data(), y_infer.data(), ws);
+        f.infer(x.data(), lab.data(), y_frozen.data(), fws);
+        float d = 0;
+        for (std::size_t i = 0; i < x.size(); ++i) d = std::max(d, std::abs(y_infer[i] - y_frozen[i]));
+        CAPTURE(lab[0]);
+        CHECK(d < 1e-5f);
+    }
+}
+
 TEST_CASE("stargan: FLOPs of G and of a training step equal a hand count of the tiny net")
 {
     // Multiply-adds per image of each convolution, by hand (H x W = 4 x 8, 3 domains, conv_dim 2, 1 block):
@@ -200,6 +249,9 @@ TEST_CASE("stargan: FLOPs of G and of a training step equal a hand count of the 
     //    src head conv3 4 -> 1 at 1 x 2: 72; cls head 4 -> 3 with a 1 x 2 kernel: 24.    D = 1120
     constexpr double G = 34624, G0 = 18816, D = 1120, D0 = 768, src = 72, cls = 24, images = 2, per_flop = 2;
     CHECK(generator_flops<tiny>() == G * images * per_flop);
+    // the frozen G convolves the 3 image channels only (the label's 3 channels come from precomputed maps):
+    // conv7 3 -> 2 at 32 pixels 2*32*3*49 = 9408 instead of 18816
+    CHECK(frozen_generator_flops<tiny>() == (G - G0 + 9408) * images * per_flop);
     // D step: D(x) forward, weights, inputs but the first layer's;  G(x, c) forward;
     //         D(fake) forward, weights and inputs without the cls head, no input gradient of the first layer;
     //         D(x_hat) forward; its penalty: d sum(src) / d x_hat (no cls head) and the backward of that graph

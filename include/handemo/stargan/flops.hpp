@@ -55,6 +55,16 @@ double generator_flops() noexcept
     return 2 * layer_macs<Config>::g_all();
 }
 
+/// @brief FLOPs frozen_generator performs for G(x, c) on a batch of Config::batch images: generator_flops()
+/// without the first convolution's multiply-adds on the C tiled label channels, which it adds as maps
+/// computed once (frozen_generator::label_maps(); the add is element-wise and not counted).
+template <stargan_config Config>
+double frozen_generator_flops() noexcept
+{
+    constexpr double C = double(Config::domains);
+    return 2 * (layer_macs<Config>::g_all() - layer_macs<Config>::g_first() * C / (3 + C));
+}
+
 /// @brief FLOPs of one trainer::train_step() of batch Config::batch (n_critic 1), by kind of pass.
 struct train_step_flops_count {
     double forward = 0;          ///< 3 G and 4 D forward passes

@@ -379,7 +379,11 @@ public:
             detail::instance_norm_relu_inplace(v, p_.value(k), p_.value(k + 1), images, ch, m, with_relu);
             k += 2;
         };
-        run_layers(x, label, out, N, ws.buf_, conv, convt, norm, residual_);
+        auto first = [&](const T* xi, const T* li, T* o, std::size_t n, T* tmp) {
+            tile_input(xi, li, tmp, n);
+            conv(0, tmp, o, n);
+        };
+        run_layers(x, label, out, N, ws.buf_, first, conv, convt, norm, residual_);
     }
 
     /// @brief The four activation buffers run_layers() needs, each the size of the largest activation
@@ -390,24 +394,33 @@ public:
         return {aligned_buffer<T>(act), aligned_buffer<T>(act), aligned_buffer<T>(act), aligned_buffer<T>(act)};
     }
 
-    /// @brief The layer sequence of infer() on `n` images with the convolutions and norms given as callables:
-    /// conv(i, in, out, n) and convt(i, in, out, n) for geometries()[i] on n images, norm(v, n, channels,
-    /// pixels, relu), each called in parameter order. buf: four activation buffers of at least n images.
-    template <class Conv, class ConvT, class Norm>
-    static void run_layers(const T* x, const T* label, T* out, std::size_t n_images, std::array<aligned_buffer<T>, 4>& buf,
-                           Conv&& conv, ConvT&& convt, Norm&& norm, bool residual)
+    /// @brief G's input on `n` images: each image's 3 channels followed by its label tiled as C constant
+    /// channels, [n, 3 + C, H, W] into `a`.
+    static void tile_input(const T* x, const T* label, T* a, std::size_t n_images) noexcept
     {
-        T* a = buf[0].data();
-        T* b = buf[1].data();
-        T* c = buf[2].data();
-        T* d = buf[3].data();
         const std::size_t HW = H * W;
         for (std::size_t n = 0; n < n_images; ++n) {
             std::memcpy(a + n * (3 + C) * HW, x + n * 3 * HW, 3 * HW * sizeof(T));
             for (std::size_t k = 0; k < C; ++k)
                 std::fill_n(a + (n * (3 + C) + 3 + k) * HW, HW, label[n * C + k]);
         }
-        conv(0, a, b, n_images);
+    }
+
+    /// @brief The layer sequence of infer() on `n` images with the convolutions and norms given as callables:
+    /// first(x, label, out, n, tmp) writes the first convolution's output on the image and its tiled label
+    /// ([n, cd, H, W]; tmp: an activation buffer it may use), conv(i, in, out, n) and convt(i, in, out, n) for
+    /// geometries()[i] on n images, norm(v, n, channels, pixels, relu), each called in parameter order. buf:
+    /// four activation buffers of at least n images.
+    template <class First, class Conv, class ConvT, class Norm>
+    static void run_layers(const T* x, const T* label, T* out, std::size_t n_images, std::array<aligned_buffer<T>, 4>& buf,
+                           First&& first, Conv&& conv, ConvT&& convt, Norm&& norm, bool residual)
+    {
+        T* a = buf[0].data();
+        T* b = buf[1].data();
+        T* c = buf[2].data();
+        T* d = buf[3].data();
+        const std::size_t HW = H * W;
+        first(x, label, b, n_images, a);
         norm(b, int(n_images), int(cd), int(HW), true);
         conv(1, b, a, n_images);
         norm(a, int(n_images), int(2 * cd), int(HW / 4), true);
@@ -498,7 +511,9 @@ public:
             norms_.emplace_back(std::vector<T>(g.p_.value(k), g.p_.value(k) + n), std::vector<T>(g.p_.value(k + 1), g.p_.value(k + 1) + n));
             k += 2;
         };
-        conv(0, false), norm(), conv(1, false), norm(), conv(2, false), norm();
+        first_layer(g.p_.value(0), g.p_.entry(0).name, storage);
+        ++k;
+        norm(), conv(1, false), norm(), conv(2, false), norm();
         for (std::size_t r = 0; r < R; ++r) conv(3, false), norm(), conv(3, false), norm();
         conv(4, true), norm(), conv(5, true), norm(), conv(6, false);
     }
@@ -541,7 +556,13 @@ public:
     }
 
     /// @brief The packed convolutions in network order (conv7, down1, down2, 2R residual convs, up1, up2, conv7).
+    /// The first is the 7x7 convolution over the image's 3 channels only: the label's C constant channels
+    /// reach its output through label_maps().
     const std::vector<kernels::packed_conv<T>>& convolutions() const noexcept { return convs_; }
+    /// @brief What the first convolution adds for label channel k at value 1, [C, cd, H, W]: the convolution of
+    /// a plane of ones (zero-padded as the image) with that channel's weights. It depends on the pixel only
+    /// near the image's border, where the 7x7 window reaches the padding.
+    std::span<const T> label_maps() const noexcept { return label_maps_; }
     /// @brief The weight storage asked for at construction (every convolution's).
     kernels::weight_storage storage() const noexcept { return convs_.front().storage(); }
     /// @brief Bytes of the convolution weights one inference streams (kernels::packed_conv::weight_bytes).
@@ -553,6 +574,41 @@ public:
     }
 
 private:
+    // The first convolution reads the image and the label tiled as C constant channels: of its (3 + C) 49
+    // multiply-adds per output value, 49 C only add the label's weights over the part of the 7x7 window that
+    // lies inside the image. They are done once here, per label channel, as the convolution of a plane of ones
+    // (label_maps_); an inference convolves the 3 image channels and adds the maps of its label's channels,
+    // the same sums in another order (a hand G: 62% of the first layer's multiply-adds, 7% of the network's).
+    void first_layer(const T* w, const std::string& name, kernels::weight_storage storage)
+    {
+        const auto g0 = generator_type::geometries()[0];
+        constexpr std::size_t taps = 7 * 7, in = 3 + C;
+        std::vector<T> image_w(cd * 3 * taps), channel_w(cd * taps);
+        for (std::size_t o = 0; o < cd; ++o)
+            std::copy_n(w + o * in * taps, 3 * taps, image_w.begin() + std::ptrdiff_t(o * 3 * taps));
+        kernels::conv_geometry gi = g0;
+        gi.in_channels = 3;
+        try {
+            if (storage == kernels::weight_storage::f16)  // every weight, the label's too, must fit binary16
+                (void)kernels::packed_conv<T>::conv2d(g0, w, storage);
+            convs_.push_back(kernels::packed_conv<T>::conv2d(gi, image_w.data(), storage));
+        } catch (const value_error& e) {
+            throw value_error("frozen_generator: parameter " + name + ": " + e.what());
+        }
+        const kernels::conv_geometry gm{1, 1, int(H), int(W), int(cd), 7, 7, 1, 3};
+        std::vector<T> ones(H * W, T(1)), scratch(std::max<std::size_t>(kernels::conv2d_scratch_size<T>(gm), 1));
+        label_maps_.assign(C * cd * H * W, T(0));
+        for (std::size_t k = 0; k < C; ++k) {
+            for (std::size_t o = 0; o < cd; ++o)
+                for (std::size_t t = 0; t < taps; ++t) {
+                    const T v = w[(o * in + 3 + k) * taps + t];
+                    channel_w[o * taps + t] = storage == kernels::weight_storage::f16 ? T(half_to_float(float_to_half(float(v)))) : v;
+                }
+            kernels::conv2d_forward<T>(gm, ones.data(), channel_w.data(), static_cast<const T*>(nullptr),
+                                       label_maps_.data() + k * cd * H * W, scratch.data());
+        }
+    }
+
     void run(const T* x, const T* label, T* out, std::size_t images, workspace& ws) const
     {
         T* s = ws.scratch_.data();
@@ -562,10 +618,23 @@ private:
             const auto& [gamma, beta] = norms_[kn++];
             detail::instance_norm_relu_inplace(v, gamma.data(), beta.data(), n, ch, m, with_relu);
         };
-        generator_type::run_layers(x, label, out, images, ws.buf_, conv, conv, norm, residual_);
+        auto first = [&](const T* xi, const T* li, T* o, std::size_t n, T*) {
+            conv(0, xi, o, n);
+            constexpr std::size_t M = cd * H * W;
+            for (std::size_t i = 0; i < n; ++i)
+                for (std::size_t k = 0; k < C; ++k) {
+                    const T l = li[i * C + k];
+                    if (l == T(0)) continue;
+                    const T* m = label_maps_.data() + k * M;
+                    T* y = o + i * M;
+                    for (std::size_t j = 0; j < M; ++j) y[j] += l * m[j];
+                }
+        };
+        generator_type::run_layers(x, label, out, images, ws.buf_, first, conv, conv, norm, residual_);
     }
 
     bool residual_;
+    std::vector<T> label_maps_;
     std::vector<kernels::packed_conv<T>> convs_;
     std::vector<std::pair<std::vector<T>, std::vector<T>>> norms_;
 };
