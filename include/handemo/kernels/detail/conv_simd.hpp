@@ -187,14 +187,15 @@ inline void micro_dispatch(int nr, int kc, const T* v, std::ptrdiff_t vk, const 
     else micro_dispatch<T, N - 1>(nr, kc, v, vk, s, sj, sk, tile, accumulate);
 }
 
-/// tile[j][0..MR) = sum_{k<kc} v[koff[k] + 0..MR) * s[j*sj + k], j < NR: the V rows of the stride-1
-/// path are shifted windows of one zero-padded image (implicit im2col, nothing packed).
-template <class T, int NR>
+/// tile[j][0..MR) = sum_{k<kc} v[koff[k] + 0..MR) * s[j*sj + k], j < NR, MR = NV lanes: the V rows of the
+/// stride-1 path are shifted windows of one zero-padded image (implicit im2col, nothing packed). Each lane sums
+/// its products in k order whatever NV is, so a wider tile gives the same bits.
+template <class T, int NR, int NV = micro_nv>
 [[gnu::noinline]] inline void micro_kernel_idx(int kc, const T* __restrict v, const int* __restrict koff, const T* __restrict s,
                              std::ptrdiff_t sj, T* __restrict tile) noexcept
 {
     using B = simd_t<T>;
-    constexpr int L = simd_lanes<T>, NV = micro_nv, MR = micro_mr<T>;
+    constexpr int L = simd_lanes<T>, MR = NV * L;
     B acc[NR][NV];
     HANDEMO_UNROLL_TILE
     for (int j = 0; j < NR; ++j)
@@ -221,15 +222,23 @@ template <class T, int NR>
         for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
 }
 
-/// micro_kernel_idx<T, nr> for nr = 1..micro_nr.
-template <class T, int N = micro_nr>
+/// micro_kernel_idx<T, nr, NV> for nr = 1..N.
+template <class T, int N = micro_nr, int NV = micro_nv>
 inline void micro_idx_dispatch(int nr, int kc, const T* v, const int* koff, const T* s, std::ptrdiff_t sj,
                                T* tile) noexcept
 {
-    if constexpr (N <= 1) micro_kernel_idx<T, 1>(kc, v, koff, s, sj, tile);
-    else if (nr >= N) micro_kernel_idx<T, N>(kc, v, koff, s, sj, tile);
-    else micro_idx_dispatch<T, N - 1>(nr, kc, v, koff, s, sj, tile);
+    if constexpr (N <= 1) micro_kernel_idx<T, 1, NV>(kc, v, koff, s, sj, tile);
+    else if (nr >= N) micro_kernel_idx<T, N, NV>(kc, v, koff, s, sj, tile);
+    else micro_idx_dispatch<T, N - 1, NV>(nr, kc, v, koff, s, sj, tile);
 }
+
+/// The stride-1 forward pass of a layer with few output channels (at most stride1_few_channels, G's last conv:
+/// 3) takes tiles of stride1_few_nv vectors along the pixels instead of micro_nv: with 3 channels a 3 x 3 tile
+/// loads 3 unaligned pixel vectors (most of them split across cache lines) and 3 broadcast weights for 9 FMAs
+/// and is bound by the loads; 3 x 6 loads 6 + 3 for 18. It needs 18 accumulators + 6 + 1 registers: only with
+/// the 32 of AVX-512 (elsewhere the two are the same). The same sums per lane, so the same bits.
+inline constexpr int stride1_few_channels = 3;
+inline constexpr int stride1_few_nv = wide_register_file ? 6 : micro_nv;
 
 /// Elements of the zero-padded image (plus read-past slack) of the stride-1 path.
 inline std::size_t padded_image_elements(const conv_geometry& g, int mr) noexcept
@@ -309,6 +318,10 @@ inline std::size_t forward_scratch_elements(const conv_geometry& g) noexcept
     const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
     std::size_t n = std::min<std::size_t>(K, forward_kc) * MR + NR * MR;
     if (g.stride == 1) n = std::max(n, padded_image_elements(g, int(MR)) + NR * MR);
+    if (g.stride == 1 && g.out_channels <= stride1_few_channels) {
+        constexpr std::size_t MRw = std::size_t(stride1_few_nv) * simd_lanes<T>;
+        n = std::max(n, padded_image_elements(g, int(MRw)) + std::size_t(stride1_few_channels) * MRw);
+    }
     if (K % simd_lanes<T> == 0 && K >= 64 && long(g.out_h()) * g.out_w() <= dot_max_pixels)
         n = std::max(n, dot_scratch_elements<T>(g));
     return n;
@@ -479,11 +492,11 @@ inline void store_run(T* y, const T* t, int n, T b, bool add) noexcept
 /// Forward pass for stride 1: per image, x is copied once into a zero-padded [C, H+2p, W+2p] buffer and
 /// the output is computed on the "wide" grid p' = i*(W+2p) + j, where im2col row (c,u,v) is the window
 /// starting at c*(H+2p)*(W+2p) + u*(W+2p) + v; columns j >= out_w are computed and dropped.
-template <class T>
-inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
-                            bool accumulate_out) noexcept
+template <class T, int NV = micro_nv, int NR = micro_nr>
+inline void forward_stride1_tiles(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                                  bool accumulate_out) noexcept
 {
-    constexpr int MR = micro_mr<T>, NR = micro_nr;
+    constexpr int MR = NV * simd_lanes<T>;
     const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
     const int Pw = (oh - 1) * Wp + ow;  // last wide index that is a real output, + 1
@@ -512,7 +525,7 @@ inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, cons
             for (int p0 = 0; p0 < Pw; p0 += MR) {
                 for (int o0 = 0; o0 < Co; o0 += NR) {
                     const int nr = std::min(NR, Co - o0);
-                    micro_idx_dispatch<T>(nr, kc, xp + p0, koff, w + std::ptrdiff_t(o0) * K + k0, K, tile);
+                    micro_idx_dispatch<T, NR, NV>(nr, kc, xp + p0, koff, w + std::ptrdiff_t(o0) * K + k0, K, tile);
                     for (int j = 0; j < nr; ++j) {
                         const T b = (first && bias) ? bias[o0 + j] : T(0);
                         const T* t = tile + j * MR;
@@ -532,6 +545,16 @@ inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, cons
             }
         }
     }
+}
+
+/// Stride-1 forward pass: forward_stride1_tiles with the wide tile for few output channels.
+template <class T>
+inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                            bool accumulate_out) noexcept
+{
+    if (g.out_channels <= stride1_few_channels)
+        return forward_stride1_tiles<T, stride1_few_nv, stride1_few_channels>(g, x, w, bias, y, scratch, accumulate_out);
+    forward_stride1_tiles<T>(g, x, w, bias, y, scratch, accumulate_out);
 }
 
 /// Whether the packing loops gather whole vectors (float, int32 indices: one index vector per float vector) instead
