@@ -115,11 +115,12 @@ struct generator_layout {
     {
         return detail::generator_geometry(int(H), int(W), int(in_ch), int(cd), i);
     }
-    /// Multiply-adds of one inference.
+    /// Multiply-adds of one inference as generator::infer_padded runs it: the first layer on the image's 3
+    /// channels (the tiled label's taps are added as window sums, detail::add_label_taps), the others whole.
     static constexpr double macs() noexcept
     {
-        return geometry(0).macs() + geometry(1).macs() + geometry(2).macs() + 2.0 * R * geometry(3).macs() +
-               geometry(4).macs() + geometry(5).macs() + geometry(6).macs();
+        return geometry(0).macs() * 3.0 / double(in_ch) + geometry(1).macs() + geometry(2).macs() +
+               2.0 * R * geometry(3).macs() + geometry(4).macs() + geometry(5).macs() + geometry(6).macs();
     }
 };
 
@@ -152,15 +153,18 @@ inline void pad_copy(const float* x, float* xp) noexcept
 /// compiler also keeps the inputs a tile shares between kernel columns in registers). hand-micro on a
 /// Cortex-M7, firmware at -O2, under qemu -icount: 6.7 M instructions per inference, against 22.1 M with
 /// the weight-stationary loops (one multiply-add into the output plane per weight and pixel) this replaced.
-template <kernels::conv_geometry G>
+/// LDW: the weights of output channel o start at w + o * LDW (G's first layer reads the image's 3 channels out
+/// of weights laid out for 3 + C).
+template <kernels::conv_geometry G, int LDW = G.in_channels * G.kernel_h * G.kernel_w>
 inline void conv_forward(const float* x, const float* w, float* y, float* xp) noexcept
 {
     constexpr int Cin = G.in_channels, KH = G.kernel_h, KW = G.kernel_w, S = G.stride, P = G.pad;
     constexpr int Hp = G.in_h + 2 * P, Wp = G.in_w + 2 * P, oh = G.out_h(), ow = G.out_w(), NB = row_tile(ow);
     static_assert(G.batch == 1 && G.valid(), "micro::conv_forward: batch-1 geometry");
+    static_assert(LDW >= Cin * KH * KW, "micro::conv_forward: weight stride shorter than a filter");
     pad_copy<Cin, G.in_h, G.in_w, P, P>(x, xp);
     for (int o = 0; o < G.out_channels; ++o) {
-        const float* wo = w + o * Cin * KH * KW;
+        const float* wo = w + o * LDW;
         for (int i = 0; i < oh; ++i)
             for (int j0 = 0; j0 < ow; j0 += NB) {
                 float acc[NB];
@@ -291,16 +295,17 @@ struct tile {
 
 /// detail::conv_forward with MVE tiles (same arguments, same result up to rounding). Out of line: inlined into
 /// generator::infer_padded, GCC 12 spills more and the inference takes 7% more instructions.
-template <kernels::conv_geometry G>
+template <kernels::conv_geometry G, int LDW = G.in_channels * G.kernel_h * G.kernel_w>
 [[gnu::noinline]] inline void conv_forward(const float* x, const float* w, float* y, float* xp) noexcept
 {
     constexpr int Cin = G.in_channels, KH = G.kernel_h, KW = G.kernel_w, S = G.stride, P = G.pad;
     constexpr int Hp = G.in_h + 2 * P, Wp = G.in_w + 2 * P, oh = G.out_h(), ow = G.out_w(), NB = row_tile(ow);
     static_assert(G.batch == 1 && G.valid(), "micro::mve::conv_forward: batch-1 geometry");
+    static_assert(LDW >= Cin * KH * KW, "micro::mve::conv_forward: weight stride shorter than a filter");
     pad_copy<Cin, G.in_h, G.in_w, P, P>(x, xp);
     const uint32x4_t off = lane_offsets<S>();
     for (int o = 0; o < G.out_channels; ++o) {
-        const float* wo = w + o * Cin * KH * KW;
+        const float* wo = w + o * LDW;
         for (int i = 0; i < oh; ++i)
             for (int j0 = 0; j0 < ow; j0 += NB) {
                 tile<NB, S, 1> acc;
@@ -364,6 +369,35 @@ template <kernels::conv_geometry G>
 }  // namespace mve
 #endif
 
+/// y [co][h][w] += what G's first 7x7 convolution (padding 3) adds for a label tiled as C constant channels: per
+/// output channel the label-weighted sum of the C label channels' 7 x 7 weights over the taps that land inside the
+/// image. w: the first layer's weights [co][3 + C][7][7]. A 2-D running sum of the label-weighted kernel makes
+/// every pixel's window sum four reads, so the C x 49 multiply-adds per output value of the tiled label become
+/// C x 49 per output channel.
+template <int co, int C, int h, int w>
+inline void add_label_taps(const float* wt, const float* label, float* y) noexcept
+{
+    constexpr int T = 7, taps = T * T, in = 3 + C;
+    for (int o = 0; o < co; ++o) {
+        float s[T + 1][T + 1];  // s[u][v]: the label-weighted kernel summed over rows < u and columns < v
+        for (int u = 0; u <= T; ++u) s[u][0] = 0.f;
+        for (int v = 0; v <= T; ++v) s[0][v] = 0.f;
+        for (int u = 0; u < T; ++u)
+            for (int v = 0; v < T; ++v) {
+                float k = 0.f;
+                for (int c = 0; c < C; ++c) k += label[c] * wt[(o * in + 3 + c) * taps + u * T + v];
+                s[u + 1][v + 1] = k + s[u][v + 1] + s[u + 1][v] - s[u][v];
+            }
+        for (int i = 0; i < h; ++i) {
+            const int u0 = i < 3 ? 3 - i : 0, u1 = i + 3 < h ? T : h + 3 - i;  // taps u in [u0, u1) land inside
+            for (int j = 0; j < w; ++j) {
+                const int v0 = j < 3 ? 3 - j : 0, v1 = j + 3 < w ? T : w + 3 - j;
+                y[(o * h + i) * w + j] += s[u1][v1] - s[u0][v1] - s[u1][v0] + s[u0][v0];
+            }
+        }
+    }
+}
+
 }  // namespace detail
 
 /// @brief In-place InstanceNorm (affine, biased variance, eps 1e-5) and optional ReLU over [ch, m], two-pass
@@ -417,14 +451,11 @@ public:
         float* b = ws.b;
         float* c = ws.c;
         float* d = ws.d;
-        for (std::size_t i = 0; i < 3 * HW; ++i) a[i] = x[i];
-        for (std::size_t k = 0; k < C; ++k)
-            for (std::size_t i = 0; i < HW; ++i) a[(3 + k) * HW + i] = label[k];
         auto norm = [&](float* v, std::size_t ch, std::size_t m, bool relu) {
             instance_norm_relu(v, p, p + ch, int(ch), int(m), relu);
             p += 2 * ch;
         };
-        conv<0>(a, p, b, ws.pad);
+        first_layer(x, label, p, b, ws.pad);
         norm(b, cd, HW, true);
         conv<1>(b, p, a, ws.pad);
         norm(a, 2 * cd, HW / 4, true);
@@ -469,6 +500,26 @@ public:
     }
 
 private:
+    /// G's first layer on the image x [3, H, W] and the label [C] into o, the weights at p (advanced past them):
+    /// the 7 x 7 convolution of the image's 3 channels, then what the label tiled as C constant channels adds
+    /// (detail::add_label_taps), instead of convolving 3 + C channels. The same sums up to rounding; for
+    /// hand-micro a fifth of G's multiply-adds.
+    static void first_layer(const float* x, const float* label, const float*& p, float* o, float* pad) noexcept
+    {
+        constexpr kernels::conv_geometry g = layout::geometry(0);
+        constexpr kernels::conv_geometry gi{1, 3, g.in_h, g.in_w, g.out_channels, g.kernel_h, g.kernel_w, g.stride, g.pad};
+        static_assert(g.in_channels == int(3 + C) && g.kernel_h == 7 && g.kernel_w == 7 && g.stride == 1 && g.pad == 3,
+                      "micro::generator: the first layer is a 7x7 convolution, padding 3, on the image and the tiled label");
+        constexpr int ldw = g.in_channels * 49;
+#if HANDEMO_MICRO_MVE
+        detail::mve::conv_forward<gi, ldw>(x, p, o, pad);
+#else
+        detail::conv_forward<gi, ldw>(x, p, o, pad);
+#endif
+        detail::add_label_taps<int(cd), int(C), int(H), int(W)>(p, label, o);
+        p += g.w_size();
+    }
+
     /// Layer gi of layout::geometry (a transposed convolution for up1 and up2) on `in` with the weights at p
     /// (advanced past them) into o; `pad` holds the padded input copy (layout::pad_elements).
     template <int gi>
