@@ -165,6 +165,14 @@ TEST_CASE("frozen_generator with binary16 weights: G of the rounded weights, bit
     });
     CHECK_THROWS_WITH_AS(big.freeze(kernels::weight_storage::f16), doctest::Contains("parameter main.3.weight: packed_conv: weight 4 is 100000"),
                          value_error);
+    // the first layer's label-channel weights too (the frozen G keeps them as maps, not as packed weights)
+    stargan::generator<float, emb> big_label;
+    test::seed_generator(big_label, 21);
+    big_label.for_each_parameter([](std::string_view name, std::span<float> v, std::span<float>, auto) {
+        if (name == "main.0.weight") v[3 * 49] = 1e5f;  // output channel 0, input channel 3: the first label channel
+    });
+    CHECK_THROWS_WITH_AS(big_label.freeze(kernels::weight_storage::f16),
+                         doctest::Contains("parameter main.0.weight: packed_conv: weight 147 is 100000"), value_error);
 }
 
 TEST_CASE("the fixture's hand-micro weights as an exported header (HANDEMO_WRITE_MICRO_HEADER=path)")

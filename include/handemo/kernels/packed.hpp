@@ -36,6 +36,22 @@ enum class weight_storage { native, f16 };
 /// @brief "native" or "f16".
 inline const char* weight_storage_name(weight_storage s) noexcept { return s == weight_storage::f16 ? "f16" : "native"; }
 
+/// @brief The n weights at w each rounded to binary16 and back (what weight_storage::f16 computes with).
+/// @throws value_error naming the index of a weight that is not finite or rounds beyond binary16's range.
+template <class T>
+std::vector<T> binary16_rounded(const T* w, std::size_t n)
+{
+    std::vector<T> rounded(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const float r = half_to_float(float_to_half(static_cast<float>(w[i])));
+        if (!std::isfinite(w[i]) || !std::isfinite(r))
+            throw value_error("packed_conv: weight " + std::to_string(i) + " is " + std::to_string(double(w[i])) +
+                              ", which binary16 storage (weight_storage::f16) cannot hold (largest 65504)");
+        rounded[i] = static_cast<T>(r);
+    }
+    return rounded;
+}
+
 /// @brief One convolution with its weights packed for repeated forward passes.
 /// A snapshot: later changes to the weights it was built from do not reach it (build it again).
 template <class T>
@@ -131,14 +147,7 @@ private:
         ws_ = detail::fast_type<T> && phases_ok && co >= detail::simd_lanes<T>;
         std::vector<T> rounded;
         if (storage == weight_storage::f16) {
-            rounded.resize(g.w_size());
-            for (std::size_t i = 0; i < rounded.size(); ++i) {
-                const float r = half_to_float(float_to_half(static_cast<float>(w[i])));
-                if (!std::isfinite(w[i]) || !std::isfinite(r))
-                    throw value_error("packed_conv: weight " + std::to_string(i) + " is " + std::to_string(double(w[i])) +
-                                      ", which binary16 storage (weight_storage::f16) cannot hold (largest 65504)");
-                rounded[i] = static_cast<T>(r);
-            }
+            rounded = binary16_rounded(w, g.w_size());
             w = rounded.data();
         }
         if (!ws_) {

@@ -583,27 +583,27 @@ private:
     {
         const auto g0 = generator_type::geometries()[0];
         constexpr std::size_t taps = 7 * 7, in = 3 + C;
+        std::vector<T> rounded;  // with f16 storage the maps too are made of the weights as stored
+        if (storage == kernels::weight_storage::f16) {
+            try {
+                rounded = kernels::binary16_rounded(w, g0.w_size());
+            } catch (const value_error& e) {
+                throw value_error("frozen_generator: parameter " + name + ": " + e.what());
+            }
+            w = rounded.data();
+        }
         std::vector<T> image_w(cd * 3 * taps), channel_w(cd * taps);
         for (std::size_t o = 0; o < cd; ++o)
             std::copy_n(w + o * in * taps, 3 * taps, image_w.begin() + std::ptrdiff_t(o * 3 * taps));
         kernels::conv_geometry gi = g0;
         gi.in_channels = 3;
-        try {
-            if (storage == kernels::weight_storage::f16)  // every weight, the label's too, must fit binary16
-                (void)kernels::packed_conv<T>::conv2d(g0, w, storage);
-            convs_.push_back(kernels::packed_conv<T>::conv2d(gi, image_w.data(), storage));
-        } catch (const value_error& e) {
-            throw value_error("frozen_generator: parameter " + name + ": " + e.what());
-        }
+        convs_.push_back(kernels::packed_conv<T>::conv2d(gi, image_w.data(), storage));
         const kernels::conv_geometry gm{1, 1, int(H), int(W), int(cd), 7, 7, 1, 3};
         std::vector<T> ones(H * W, T(1)), scratch(std::max<std::size_t>(kernels::conv2d_scratch_size<T>(gm), 1));
         label_maps_.assign(C * cd * H * W, T(0));
         for (std::size_t k = 0; k < C; ++k) {
             for (std::size_t o = 0; o < cd; ++o)
-                for (std::size_t t = 0; t < taps; ++t) {
-                    const T v = w[(o * in + 3 + k) * taps + t];
-                    channel_w[o * taps + t] = storage == kernels::weight_storage::f16 ? T(half_to_float(float_to_half(float(v)))) : v;
-                }
+                std::copy_n(w + (o * in + 3 + k) * taps, taps, channel_w.begin() + std::ptrdiff_t(o * taps));
             kernels::conv2d_forward<T>(gm, ones.data(), channel_w.data(), static_cast<const T*>(nullptr),
                                        label_maps_.data() + k * cd * H * W, scratch.data());
         }
