@@ -269,6 +269,29 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         CHECK(ck3.options.value("tempo_shrink", false));
     }
     o.train.tempo_shrink = false;
+    // nor does the joint lag: the stored models take the lag their training clips give, and the report says so
+    o.train.lag = true;
+    const auto lagged = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(lagged.folds[0].reused_model);
+    for (const auto& f : lagged.folds) {
+        CHECK(f.lag_applied);
+        CHECK(f.lag_check.find("fearful ") != std::string::npos);
+    }
+    {
+        std::vector<labelled_clip> train;
+        for (const auto& c : clips)
+            if (c.content != "patting") train.push_back(c);
+        const auto ck4 = read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second;
+        CHECK(ck4.lag == joint_lag_of<hand_tiny>(train, info, o.train));
+        CHECK(ck4.lag.size() == info.domains);
+        CHECK(ck4.options.value("lag", false));
+        CHECK(read_file(dir / "report.md").find("joint lag by the check on the training contents") != std::string::npos);
+    }
+    o.train.lag = false;
+    const auto unlagged = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second.lag.empty());
+    REQUIRE(unlagged.samples.size() == regated.samples.size());
+    for (std::size_t i = 0; i < regated.samples.size(); ++i) CHECK(unlagged.samples[i].rmse_real == regated.samples[i].rmse_real);
     // ... but not when the options differ
     o.train.iters = 13;
     CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("--reuse-models"), value_error);

@@ -16,6 +16,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 using namespace handemo;
@@ -40,7 +41,8 @@ public:
 
     explicit toy_model(stargan::checkpoint_info info) : emotion_model(std::move(info)) {}
 
-    static std::unique_ptr<toy_model> make()
+    /// with_lag: every joint of every emotion but neutral also lags by its own amount (train_options::lag)
+    static std::unique_ptr<toy_model> make(bool with_lag = false)
     {
         auto info = continuous_shipped_model().info();
         const std::size_t D = info.domains.size(), C = info.range.joints * 3;
@@ -61,6 +63,12 @@ public:
             info.gate_posture[d] = 0.5 + 0.1 * static_cast<double>(d);
             info.gate_motion[d] = 1.0 - 0.1 * static_cast<double>(d);
             info.gate_prior[d] = 0.9;
+        }
+        if (with_lag) {
+            info.lag.assign(D, std::vector<double>(info.range.joints, 0.0));
+            for (std::size_t d = 0; d < D; ++d)
+                for (std::size_t j = 0; j < info.range.joints && info.domains[d] != info.neutral; ++j)
+                    info.lag[d][j] = 0.125 * static_cast<double>((j * (d + 3)) % 13) - 0.5;
         }
         return std::make_unique<toy_model>(std::move(info));
     }
@@ -176,6 +184,55 @@ TEST_CASE("continuous transfer: a toy model with known styles gives, at any poin
         CHECK(max_abs_diff(r.keys.angles, expect.angles) < 1e-3);  // G runs in float
         CHECK(r.tempo == doctest::Approx(tempo / info.tempo[toy->domain("neutral")]).epsilon(1e-12));
         CHECK(r.motion.frames == stargan::emotion_model::output_frames(in.frames, r.tempo));
+    }
+}
+
+TEST_CASE("the joint lag: after G's change and the prior, before the amplitude stage; exact at the labels' points")
+{
+    const auto plain = toy_model::make(false), lagged = toy_model::make(true);
+    const auto& info = lagged->info();
+    const clip in = continuous_neutral(hand_motion::crawling);
+    const clip sad = synthesize(hand_motion::crawling, emotion::sad, 0, 3, 60.0);
+    for (const auto& [input, source] : {std::pair<const clip*, std::string>{&in, "neutral"}, {&sad, "sad"}})
+        for (const auto& t : info.domains) {
+            CAPTURE(t);
+            CAPTURE(source);
+            const std::size_t d = lagged->domain(t), s = lagged->domain(source);
+            const auto pl = plain->parts(*input, t, source), pg = lagged->parts(*input, t, source);
+            REQUIRE(pl.lag.empty());
+            // the lag is the target's minus the source's, per joint
+            std::vector<double> want(info.range.joints);
+            for (std::size_t j = 0; j < want.size(); ++j) want[j] = info.lag[d][j] - info.lag[s][j];
+            if (d == s)
+                CHECK(pg.lag.empty());
+            else
+                CHECK(pg.lag == want);
+            for (const auto& [posture, motion, prior] : {std::tuple{1.0, 1.0, 0.0}, {0.0, 0.0, 1.0}, {0.5, 0.25, 0.75}}) {
+                auto p1 = pl;
+                p1.amplitude = 1.0;
+                auto expect = plain->combine(p1, posture, motion, prior);
+                if (d != s) stargan::shift_joints(expect, want);
+                stargan::scale_keyframe_excursions(expect, pl.amplitude);
+                const auto got = lagged->combine(pg, posture, motion, prior);
+                CHECK(max_abs_diff(got.angles, expect.angles) < 1e-12);
+            }
+            // statistics() is the (0, 0, 1) setting, lag included
+            if (source == "neutral") {
+                const auto st = lagged->statistics(*input, t);
+                const auto fin = lagged->finish(*input, pg, 0, 0, 1);
+                CHECK(max_abs_diff(st.motion.angles, fin.angles) < 1e-9);
+            }
+        }
+    // a lag that moves something: fearful's output differs from the model without lags
+    const auto a = lagged->transfer(in, "fearful"), b = plain->transfer(in, "fearful");
+    CHECK(max_abs_diff(a.motion.angles, b.motion.angles) > 1.0);
+    // the continuous control blends the lagged labels and is still the discrete transfer at each label's point
+    const auto table = continuous_table();
+    const stargan::continuous_control control(*lagged, table);
+    for (const auto& d : info.domains) {
+        CAPTURE(d);
+        const auto& p = table.at(d);
+        CHECK(control.transfer(in, p.valence, p.arousal).motion.angles == lagged->transfer(in, d).motion.angles);
     }
 }
 

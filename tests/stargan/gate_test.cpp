@@ -634,6 +634,16 @@ TEST_CASE("posture prior in transfer: weight w adds w x prior to every keyframe,
     CHECK_THROWS_WITH_AS(read_checkpoint(ck), doctest::Contains("gate prior of domain 'neutral'"), format_error);
     edit_metadata(ck, [&](nlohmann::json& j) { j["gate"].erase("prior_posture"); j["gate"]["prior"] = half; });
     CHECK_THROWS_WITH_AS(read_checkpoint(ck), doctest::Contains("prior_posture has 0 rows"), format_error);
+    // the joint lag: read back, and refused with the wrong shape or an impossible value
+    const std::vector<std::vector<double>> lag(5, std::vector<double>(model->joints(), 0.25));
+    edit_metadata(ck, [&](nlohmann::json& j) { j["gate"]["prior_posture"] = prior; j["lag"] = lag; });
+    CHECK(read_checkpoint(ck).second.lag == lag);
+    edit_metadata(ck, [&](nlohmann::json& j) { j["lag"][3] = std::vector<double>(2, 0.0); });
+    CHECK_THROWS_WITH_AS(read_checkpoint(ck), doctest::Contains("lag of domain 'sad' has 2 joints"), format_error);
+    edit_metadata(ck, [&](nlohmann::json& j) { j["lag"] = lag; j["lag"][0][1] = 1e6; });
+    CHECK_THROWS_WITH_AS(read_checkpoint(ck), doctest::Contains("lag of domain 'angry' at joint 1"), format_error);
+    edit_metadata(ck, [&](nlohmann::json& j) { j["lag"] = std::vector<std::vector<double>>(2, std::vector<double>(model->joints(), 0.0)); });
+    CHECK_THROWS_WITH_AS(read_checkpoint(ck), doctest::Contains("lag has 2 rows for 5 domains"), format_error);
 }
 
 TEST_CASE("refit_gate: a new gate around a trained G, inner models reused, G untouched")

@@ -75,6 +75,20 @@ inline void run_train(train_cli& o)
             out << " (leave-one-content-out on the training clips: RMSE " << tr.data().amplitude_check.second << " deg scaled vs "
                       << tr.data().amplitude_check.first << " unscaled" << (tr.data().amplitude_check.second < tr.data().amplitude_check.first ? ")" : "; not used)") << "\n";
         }
+        if (o.opt.lag) {
+            const auto& lf = tr.data().lag;
+            out << "train: joint lag (keyframe intervals, leave-one-content-out on the training clips: excursion RMSE with / without):";
+            for (std::size_t k = 0; k < info.domains; ++k) {
+                if (info.domain_names[k] == info.neutral) continue;
+                double lo = 0, hi = 0;
+                for (double v : lf.lag[k]) lo = std::min(lo, v), hi = std::max(hi, v);
+                out << " " << info.domain_names[k] << " " << (lf.kept[k] ? "kept" : "not used") << " (" << lf.check[k].second << " / "
+                    << lf.check[k].first << " deg";
+                if (lf.kept[k]) out << ", lags " << lo << " to " << hi;
+                out << ")";
+            }
+            out << "\n";
+        }
         if (!gate.rows.empty()) {
             out << "train: change gate (weight of G's posture / motion change / posture prior per target, chosen on held-out "
                          "training contents; "

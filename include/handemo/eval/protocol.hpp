@@ -495,7 +495,7 @@ struct fold_models {
     }
     model_type model;
     bool has_amp;          ///< the model has a learned amplitude stage
-    model_type g_only;     ///< the model without the amplitude stage: what G alone does (an ablation row)
+    model_type g_only;     ///< the model without the amplitude stage and the joint lag: what G alone does (an ablation row)
     bool gated;            ///< the change gate is not all "G's whole change"
     model_type ungated;    ///< the model with G's whole change: what the change gate buys (an ablation row)
 
@@ -503,6 +503,7 @@ private:
     static stargan::checkpoint_info without_amplitude(stargan::checkpoint_info info, bool has_amp)
     {
         if (has_amp) info.options["amplitude"] = false;
+        info.lag.clear();
         return info;
     }
     static bool has_gate(const stargan::checkpoint_info& info)
@@ -934,6 +935,18 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                 if (stargan::tempo_shrink_grid[w] == tf.shrink_weight) fsum.tempo_shrink_error = tf.shrink_errors[w];
                 if (stargan::tempo_shrink_grid[w] == 0.0) fsum.tempo_unshrunk_error = tf.shrink_errors[w];
             }
+        }
+        {  // the joint lag's check on the training clips, reported whether or not the model applies it
+            std::vector<keyframes<K>> kfs;
+            for (const auto& c : train) kfs.push_back(extract_keyframes<K>(c.motion));
+            const auto amp = models.model.amplitude_stage() ? ckinfo.amplitude : std::vector<double>(info.domains, 1.0);
+            const auto lf = stargan::joint_lags_checked<K>(train, kfs, info.domain_names, info.neutral, amp);
+            for (std::size_t d = 0; d < info.domains; ++d) {
+                if (info.domain_names[d] == info.neutral) continue;
+                fsum.lag_check += (fsum.lag_check.empty() ? "" : ", ") + info.domain_names[d] + (lf.kept[d] ? " kept (" : " not used (") +
+                                  detail::fmt(lf.check[d].second, 3) + " / " + detail::fmt(lf.check[d].first, 3) + ")";
+            }
+            fsum.lag_applied = to.lag;
         }
         const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
         const auto judge = detail::fit_full_rate_judge<K>(split.train_p, info.neutral, opt.judge_inputs, fsum);

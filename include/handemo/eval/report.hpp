@@ -85,6 +85,10 @@ struct fold_summary {
     std::string tempo_estimator;
     double tempo_shrink_weight = std::nan(""), tempo_shrink_error = std::nan(""), tempo_unshrunk_error = std::nan("");
     bool tempo_shrink_applied = false;
+    /// The joint lag's check on the fold's training clips (stargan::joint_lags_checked()), per emotion "name kept|not
+    /// used (with / without deg)", and whether the model applies it (train_options::lag)
+    std::string lag_check;
+    bool lag_applied = false;
     /// the basis of the tempo factors (duration or cadence) and, when train_options::tempo_basis is "auto", the
     /// median disagreement of the training pairs' duration and cadence ratios that chose it (NaN otherwise)
     std::string tempo_basis;
@@ -483,11 +487,11 @@ inline std::string report_introduction(const eval_result& r, const std::vector<m
          "and take pairs, same tempo as stargan); **nearest-neighbour** (the training clip of the target emotion with the "
          "closest keyframes); **real** (the captured target clip itself: the reference)";
     if (has_method(r, "stargan-g"))
-        s += "; **stargan-g** (the same trained G without the learned amplitude stage: what G alone does); "
+        s += "; **stargan-g** (the same trained G and gate without the learned amplitude stage and joint lag: what G alone does); "
              "**amplitude-only** (the input with the learned amplitude and tempo, no G: what the amplitude stage alone does)";
     if (has_method(r, "statistics"))
-        s += "; **statistics** (every learned part of the model but G, at its learned setting: the amplitude stage, the tempo "
-             "and the posture prior at full weight, no G and no detail layer; emotion_model::statistics(): what a user gets "
+        s += "; **statistics** (every learned part of the model but G, at its learned setting: the amplitude stage, the joint "
+             "lag (when the model has one), the tempo and the posture prior at full weight, no G and no detail layer; emotion_model::statistics(): what a user gets "
              "without a network, so StarGAN's margin over it is what G is worth)";
     if (has_method(r, "stargan-ungated"))
         s += "; **stargan-ungated** (the same model with G's whole change, without the change gate chosen on held-out "
@@ -635,6 +639,9 @@ inline std::string report_folds(const eval_result& r, const std::vector<metric_d
                                               " error " + detail::fmt(f.tempo_shrink_error, 3) +
                                               " against " + detail::fmt(f.tempo_unshrunk_error, 3) + " unshrunk), " +
                                               (f.tempo_shrink_applied ? "applied" : "not applied (--tempo-shrink false)")) +
+             (f.lag_check.empty() ? std::string()
+                                  : "; joint lag by the check on the training contents (excursion RMSE with / without): " + f.lag_check + ", " +
+                                        (f.lag_applied ? "applied" : "not applied (--lag false)")) +
              (f.reused_model ? "; model reused from an earlier run" : "") + ". Loss curves: `folds/" +
              f.held_out + "/losses.svg`.\n\n| target | method |";
         for (const auto& m : ms) s += " " + m.title + " |";

@@ -8,7 +8,8 @@
 //     amplitude(p) = sum_l w_l(p) amplitude_l
 //
 // where K_l is the discrete transfer's keyframes to label l before its amplitude stage (the input's keyframes
-// plus G's change gated by l's posture, motion and prior weights, emotion_model::combine()) and A_p scales the
+// plus G's change gated by l's posture, motion and prior weights, shifted by l's joint lag when the model has one,
+// emotion_model::combine()) and A_p scales the
 // excursions by amplitude(p). The weights are exactly one-hot at a label's point, so there the sums reduce to one
 // term multiplied by 1 and the output is the discrete transfer bit for bit. docs/continuous.md gives the design.
 #pragma once

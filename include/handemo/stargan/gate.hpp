@@ -159,13 +159,13 @@ std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>&
 
 namespace detail {
 
-/// The training options without the gate's own (gate_folds, gate_prior, gate_margin, ...) and the tempo's (the
-/// images are time-normalised: the tempo never reaches G): two checkpoints whose options agree on these trained
-/// the same G, whatever gate and tempo were fitted around it.
+/// The training options without the gate's own (gate_folds, gate_prior, gate_margin, ...), the tempo's (the
+/// images are time-normalised: the tempo never reaches G) and the joint lag's (applied after G): two checkpoints
+/// whose options agree on these trained the same G, whatever gate, tempo and lag were fitted around it.
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "tempo_shrink", "tempo_basis"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "tempo_shrink", "tempo_basis", "lag"}) o.erase(k);
     return o;
 }
 
@@ -601,6 +601,8 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         auto ck_info = ck.second;
         // a reused inner model may have been fitted with another tempo option: the tempo training would store now
         ck_info.tempo = tempo_factors(train, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis));
+        // and with or without the joint lag: the lag training would store now (G's options are the same)
+        ck_info.lag = joint_lag_of<Config>(train, info, opt);
         detail::emotion_model_impl<Config> model(ck.first, ck_info);
         if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
         detail::score_gate_group<Config>(model, train, held, info, opt, set, tallies[f]);
@@ -659,6 +661,10 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
                  {"prior_posture", opt.gate_prior && opt.gate_folds > 0 ? posture_prior<Config::keyframes>(clips, info)
                                                                         : std::vector<std::vector<double>>{}}};
     j["tempo"] = tempo_factors(clips, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis));
+    if (const auto lag = joint_lag_of<Config>(clips, info, opt); !lag.empty())
+        j["lag"] = lag;
+    else
+        j.erase("lag");
     j["options"] = opt.to_json();
     f.metadata["handemo"] = j.dump();
     f.metadata["checksum"] = detail::checkpoint_checksum(f);

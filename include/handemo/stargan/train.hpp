@@ -27,6 +27,7 @@
 #include <handemo/nn/safetensors.hpp>
 #include <handemo/stargan/configs.hpp>
 #include <handemo/stargan/dataset.hpp>
+#include <handemo/stargan/lag.hpp>
 #include <handemo/stargan/model.hpp>
 
 #include <nlohmann/json.hpp>
@@ -121,6 +122,11 @@ struct train_options {
     /// "auto" (the cadence when the training pairs' durations and cadences disagree, tempo_basis_check()); like
     /// tempo_shrink it never reaches G, so a stored model takes it by refit_gate()
     std::string tempo_basis = "duration";
+    /// the joint lag (lag.hpp): per target emotion and joint, a time shift of the joint's keyframes learned from the
+    /// training pairs, each emotion's kept only when leave-one-content-out on the training clips says it carries
+    /// over; applied after G's change and before the amplitude stage. Like the tempo it never reaches G, so a
+    /// stored model takes it by refit_gate()
+    bool lag = false;
 
     /// @throws value_error naming the option.
     void validate() const
@@ -157,6 +163,7 @@ struct train_options {
         if (gate_guard >= 0) j["gate_guard"] = gate_guard;
         if (tempo_shrink) j["tempo_shrink"] = true;
         if (tempo_basis != "duration") j["tempo_basis"] = tempo_basis;  // written only when not the duration
+        if (lag) j["lag"] = true;
         return j;
     }
 };
@@ -233,6 +240,8 @@ struct prepared_data {
     /// amplitude_cv() on the training clips: mean RMSE without / with the factors; when scaling does not
     /// beat identity there, `amplitude` is set to all 1 (the data set carries no usable amplitude style)
     std::pair<double, double> amplitude_check{std::nan(""), std::nan("")};
+    /// the joint lag and its check (train_options::lag; lag.hpp); empty lags without the option
+    joint_lag_fit lag;
     std::vector<std::string> joint_names;  ///< skeleton the model is trained for
     skeleton skel;                         ///< that skeleton (the first training clip's: hierarchy, offsets, channels)
     /// [M, C] for every image and domain, the index of the same content and take performed in that domain
@@ -388,6 +397,7 @@ inline void crop_image(const float* src, std::size_t H, std::size_t W, float* ds
 ///        `range` is not given.
 /// @param tempo_shrink the tempo factors shrunk by the checked weight (train_options::tempo_shrink)
 /// @param basis what the tempo factors are ratios of (train_options::tempo_basis)
+/// @param lag fit the joint lag (train_options::lag, joint_lags_checked())
 /// @param amplitude_normalise train in the amplitude-normalised space of the amplitude stage
 ///        (train_options::amplitude): every image's excursions about its per-channel keyframe mean are divided
 ///        by its emotion's amplitude factor, so G learns what the emotions change besides amplitude and
@@ -399,7 +409,7 @@ template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
                            std::optional<angle_range> range = {}, std::string_view range_mode = "global",
                            bool amplitude_normalise = false, bool tempo_shrink = false,
-                           tempo_basis basis = tempo_basis::duration)
+                           tempo_basis basis = tempo_basis::duration, bool lag = false)
 {
     constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
     if (clips.empty()) throw value_error("train: no clips to train on");
@@ -457,6 +467,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
         p.detail = detail_layer::fit_checked(d, info.neutral, K);
     }
     if (!(p.amplitude_check.second < p.amplitude_check.first)) p.amplitude.assign(p.amplitude.size(), 1.0);
+    if (lag) p.lag = joint_lags_checked<K>(clips, kfs, info.domain_names, info.neutral, amplitude_normalise ? p.amplitude : std::vector<double>(p.amplitude.size(), 1.0));
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
         auto kf = kfs[m];
@@ -467,13 +478,30 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     return p;
 }
 
-/// @brief prepare_data() with the range mode, amplitude normalisation and tempo (shrinking, basis) of `opt`.
+/// @brief prepare_data() with the range mode, amplitude normalisation, tempo (shrinking, basis) and joint lag of `opt`.
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
                            std::optional<angle_range> range = {})
 {
     return prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink,
-                                parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"));
+                                parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"), opt.lag);
+}
+
+/// @brief The joint lag prepare_data() fits for `opt` ([C][J], keyframe intervals), without the rest of the data:
+/// empty when opt.lag is off. refit_gate() and the change gate's reused inner models take it this way.
+template <stargan_config Config>
+std::vector<std::vector<double>> joint_lag_of(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt)
+{
+    if (!opt.lag) return {};
+    constexpr std::size_t K = Config::keyframes;
+    std::vector<keyframes<K>> kfs;
+    for (const auto& c : clips) kfs.push_back(extract_keyframes<K>(c.motion));
+    std::vector<double> amp(info.domain_names.size(), 1.0);
+    if (opt.amplitude) {
+        const auto check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
+        if (check.second < check.first) amp = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
+    }
+    return joint_lags_checked<K>(clips, kfs, info.domain_names, info.neutral, amp).lag;
 }
 
 namespace detail {
@@ -528,6 +556,9 @@ struct checkpoint_info {
     /// prior itself in degrees (empty when every weight is 0)
     std::vector<double> gate_prior;
     std::vector<std::vector<double>> prior_posture;
+    /// [C][J] the joint lag per domain and joint in keyframe intervals (train_options::lag, lag.hpp); empty: none
+    /// (checkpoints trained without it)
+    std::vector<std::vector<double>> lag;
     /// the detail layer learned from the training clips (absent in checkpoints written before it existed)
     std::optional<detail_layer> detail;
     std::vector<std::string> joint_names;
@@ -597,6 +628,8 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
                 for (const auto& row : j.at("gate").at("prior_posture")) info.prior_posture.push_back(detail::json_doubles(row));
         }
         if (info.gate_prior.empty()) info.gate_prior.assign(info.tempo.size(), 0.0);
+        if (j.contains("lag"))
+            for (const auto& row : j.at("lag")) info.lag.push_back(detail::json_doubles(row));
         if (j.contains("detail")) info.detail = detail_layer::from_json(j.at("detail"), "checkpoint: " + path.string() + " (metadata 'detail')");
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = static_cast<long>(count("step", std::uint64_t{1} << 53));
@@ -649,6 +682,19 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
                            " channels, expected joints*3 = " + std::to_string(ch));
             for (double v : info.prior_posture[d])
                 if (!(std::abs(v) <= 360)) throw fail("gate prior_posture of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
+        }
+    }
+    if (!info.lag.empty()) {
+        if (info.lag.size() != info.domains.size())
+            throw fail("lag has " + std::to_string(info.lag.size()) + " rows for " + std::to_string(info.domains.size()) + " domains");
+        for (std::size_t d = 0; d < info.domains.size(); ++d) {
+            if (info.lag[d].size() != info.range.joints)
+                throw fail("lag of domain '" + info.domains[d] + "' has " + std::to_string(info.lag[d].size()) + " joints, the model has " +
+                           std::to_string(info.range.joints));
+            for (std::size_t jt = 0; jt < info.lag[d].size(); ++jt)
+                if (!(std::abs(info.lag[d][jt]) <= static_cast<double>(info.range.keyframes)))
+                    throw fail("lag of domain '" + info.domains[d] + "' at joint " + std::to_string(jt) + " is " + std::to_string(info.lag[d][jt]) +
+                               ", outside +-" + std::to_string(info.range.keyframes) + " keyframes");
         }
     }
     if (info.detail) {
@@ -1015,6 +1061,7 @@ public:
                             {"step", step_},
                             {"options", opt_.to_json()}};
         if (data_.detail) j["detail"] = data_.detail->to_json();
+        if (!data_.lag.lag.empty()) j["lag"] = data_.lag.lag;
         f.metadata["format"] = "handemo-checkpoint/1";
         f.metadata["handemo"] = j.dump();
         if (!data_.skel.joints.empty()) f.metadata["skeleton"] = to_bvh_string(clip::make(data_.skel, 1, 30), -1);

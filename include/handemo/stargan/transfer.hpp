@@ -35,6 +35,9 @@ struct transfer_parts {
     std::vector<double> change;         ///< [K*C] G's change in degrees (residual models; empty otherwise)
     std::vector<double> change_mean;    ///< [C] its mean over the keyframes per channel (the posture part)
     std::vector<double> prior;          ///< [C] the target's posture prior in degrees (empty when the model has none)
+    /// [J] the joint lag applied before the amplitude stage, target's minus source's, in keyframe intervals (empty
+    /// when the model has none; lag.hpp)
+    std::vector<double> lag;
     std::size_t target = 0;
     double amplitude = 1, tempo = 1;    ///< the target's excursion scale (applied after the change) and tempo factor
     std::size_t frames = 0;             ///< output frame count
@@ -175,6 +178,20 @@ public:
     }
 
     /// @brief Whether the model was trained with the amplitude stage (train_options::amplitude).
+    /// @brief The joint lag from `source` (default neutral) to target domain `t`, per joint in keyframe intervals,
+    /// into `out` (its storage reused); empty when the model has no lag or the lags are all 0 (lag.hpp).
+    void lag_of(std::size_t t, std::optional<std::string_view> source, std::vector<double>& out) const
+    {
+        out.clear();
+        if (info_.lag.empty()) return;
+        const auto& to = info_.lag[t];
+        const auto& from = info_.lag[domain(source ? *source : std::string_view(info_.neutral))];
+        bool any = false;
+        for (std::size_t j = 0; j < to.size(); ++j) any |= to[j] != from[j];
+        if (!any) return;
+        out.resize(to.size());
+        for (std::size_t j = 0; j < to.size(); ++j) out[j] = to[j] - from[j];
+    }
     bool amplitude_stage() const { return info_.options.is_object() && info_.options.value("amplitude", false); }
 
     /// @brief Whether the model's G is residual (its output is x + change).
@@ -374,6 +391,7 @@ private:
         } else {
             decode_into(r.image, info_.range, kf);
         }
+        lag_of(r.target, source, r.lag);
         // back from the normalised space: the target's excursions (net: amplitude[target] / amplitude[source])
         r.amplitude = amp ? info_.amplitude[r.target] : 1.0;
         r.tempo = tempo(target, source);
@@ -382,8 +400,9 @@ private:
     }
 
 public:
-    /// @brief The output keyframes of `p` with a change gate (posture, motion, prior weights; see set_gate()).
-    /// (1, 1, 0) is G's whole change, (0, 0, 0) the input with the amplitude stage. Not residual: G's output.
+    /// @brief The output keyframes of `p` with a change gate (posture, motion, prior weights; see set_gate()), then
+    /// the joint lag and the amplitude stage. (1, 1, 0) is G's whole change, (0, 0, 0) the input with the lag and the
+    /// amplitude stage. Not residual: G's output.
     handemo::keyframes<dynamic_keyframes> combine(const transfer_parts& p, double posture, double motion, double prior) const
     {
         handemo::keyframes<dynamic_keyframes> out;
@@ -411,6 +430,7 @@ public:
                 for (std::size_t k = 0; k < keyframes(); ++k)
                     for (std::size_t ch = 0; ch < C; ++ch) out.angles[k * C + ch] += prior * p.prior[ch];
         }
+        if (!p.lag.empty()) shift_joints(out, p.lag);
         if (p.amplitude != 1.0) scale_keyframe_excursions(out, p.amplitude);
     }
 
@@ -423,7 +443,7 @@ public:
 
     /// @brief Every learned part of the model but G, each at its learned setting: the input's keyframes with the
     /// amplitude stage (when the model was trained with it), the posture prior at full weight (when the model has
-    /// one) and the target's tempo; no G, no detail layer. For a residual model this is finish(in, parts(in,
+    /// one), the joint lag (when it has one) and the target's tempo; no G, no detail layer. For a residual model this is finish(in, parts(in,
     /// target), 0, 0, 1) (G's change weighted 0, the prior 1) without running G: what a user gets without a
     /// network, the bar G has to clear (the evaluation's `statistics` row).
     /// @throws shape_error when the clip's skeleton is not the model's; value_error for an unknown emotion.
@@ -441,6 +461,9 @@ public:
             for (std::size_t k = 0; k < keyframes(); ++k)
                 for (std::size_t ch = 0; ch < C; ++ch) kf.angles[k * C + ch] += 1.0 * info_.prior_posture[t][ch];
         }
+        std::vector<double> lag;
+        lag_of(t, source, lag);
+        if (!lag.empty()) shift_joints(kf, lag);
         if (amp && info_.amplitude[t] != 1.0) scale_keyframe_excursions(kf, info_.amplitude[t]);
         transfer_result r;
         r.tempo = tempo(target, source);
