@@ -292,6 +292,18 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     CHECK(read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second.lag.empty());
     REQUIRE(unlagged.samples.size() == regated.samples.size());
     for (std::size_t i = 0; i < regated.samples.size(); ++i) CHECK(unlagged.samples[i].rmse_real == regated.samples[i].rmse_real);
+    // the gate's inner models trained for half the steps: trained again (the final G reused), the gates refitted
+    o.train.gate_iters_scale = 0.5;
+    const auto halved = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(halved.folds[0].reused_model);
+    std::size_t inner_models = 0;
+    for (const auto& e : fs::directory_iterator(dir / "inner")) {
+        CHECK(read_checkpoint(e.path() / "checkpoint.safetensors").second.step == 6);
+        ++inner_models;
+    }
+    CHECK(inner_models >= 2);
+    CHECK(read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second.step == 12);
+    o.train.gate_iters_scale = 1.0;
     // ... but not when the options differ
     o.train.iters = 13;
     CHECK_THROWS_WITH_AS(run_eval<hand_tiny>(clips, info, o, dir), doctest::Contains("--reuse-models"), value_error);

@@ -667,6 +667,26 @@ TEST_CASE("refit_gate: a new gate around a trained G, inner models reused, G unt
         CHECK(after.tensors[i].name == before.tensors[i].name);
         CHECK(after.tensors[i].data == before.tensors[i].data);  // every weight, Adam moment and the log, byte for byte
     }
+    // the inner models' share of the steps is the gate's option: G stays, its inner models are trained again with
+    // that share of the steps (not reused: they hold another G), and the gate is fitted around them
+    auto o4 = o2;
+    o4.gate_iters_scale = 0.5;
+    CHECK(inner_gate_options(o4, 5).iters == 15);
+    CHECK(inner_gate_options(o4, 5).checkpoint_every == 15);
+    CHECK(inner_gate_options(o2, 5).iters == 30);
+    const auto g4 = refit_gate<hand_tiny>(clips, tiny_info(), o4, d);
+    CHECK(g4.reused_folds == 0);
+    for (const char* inner : {"inner1", "inner2"}) {
+        const auto ck = read_checkpoint(d / "gate" / inner / "checkpoint.safetensors").second;
+        CHECK(ck.step == 15);
+    }
+    CHECK(read_checkpoint(d / "checkpoint.safetensors").second.options == o4.to_json());
+    CHECK(read_safetensors(d / "checkpoint.safetensors").tensors[0].data == before.tensors[0].data);
+    // ... and with the same share again, reused
+    CHECK(refit_gate<hand_tiny>(clips, tiny_info(), o4, d).reused_folds == 2);
+    auto bad_share = o4;
+    bad_share.gate_iters_scale = 0;
+    CHECK_THROWS_WITH_AS(bad_share.validate(), doctest::Contains("gate_iters_scale"), value_error);
     // a model trained with other options (not only the gate's) is refused
     auto o3 = o2;
     o3.lambda_id = 3;

@@ -20,7 +20,7 @@ struct train_overrides {
         lambda_delta, ema, augment;
     std::optional<int> n_critic, gate_folds;
     std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, tempo_shrink, lag;
-    std::optional<double> gate_margin, gate_guard;
+    std::optional<double> gate_margin, gate_guard, gate_iters_scale;
     std::optional<std::string> range, tempo_basis;
 };
 
@@ -89,6 +89,9 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "Change gate: keep the statistics setting (the posture prior alone, no G) for a target unless the gate's "
                     "choices, checked across its own groups, have an RMSE at least this share lower and recognition at least "
                     "as high; < 0 = off (handemo 0.02)");
+    sub->add_option("--gate-iters-scale", o.gate_iters_scale,
+                    "Change gate: train its inner models for this share of --iters (in (0, 1]); they train on about half "
+                    "of the training contents, so 0.5 gives them as many passes over their clips as the final G (handemo 1)");
     sub->add_option("--tempo-shrink", o.tempo_shrink,
                     "Shrink the learned tempo factors toward keeping the duration by the weight (0, 0.25, .., 1) that best "
                     "predicts left-out training contents' durations (handemo false)");
@@ -133,6 +136,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.gate_posterior = o.gate_posterior.value_or(p.gate_posterior);
     t.gate_auto_margin = o.gate_auto_margin.value_or(p.gate_auto_margin);
     t.gate_guard = o.gate_guard.value_or(p.gate_guard);
+    t.gate_iters_scale = o.gate_iters_scale.value_or(p.gate_iters_scale);
     t.tempo_shrink = o.tempo_shrink.value_or(p.tempo_shrink);
     t.tempo_basis = o.tempo_basis.value_or(p.tempo_basis);
     t.lag = o.lag.value_or(p.lag);

@@ -421,10 +421,20 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
         auto& f = fj[fi];
         if (f.to.gate_folds <= 0) continue;
         const stargan::gate_plan* plan = f.plan ? &*f.plan : nullptr;
-        // a stored gate is refitted by the fold loop only when it was fitted with other groups: its inner models first
-        if (f.stored && stored_gate_groups_match(f.dir, f.train, f.to, plan)) continue;
         // the inner groups fit_change_gate() forms, and the model that scores each: the plan's or the fold's own
         const auto groups = stargan::detail::make_content_groups(f.train, f.to, plan);
+        // a stored gate is refitted by the fold loop; its inner models are trained here first when it was fitted
+        // with other groups or inner models the options no longer train (gate_iters_scale)
+        if (f.stored && stored_gate_groups_match(f.dir, f.train, f.to, plan)) {
+            bool inner_match = true;
+            for (std::size_t g = 0; g < groups.F && inner_match; ++g) {
+                const fs::path ck = groups.dir(g, f.dir / "gate") / "checkpoint.safetensors";
+                inner_match = path_exists(ck) &&
+                              stargan::detail::trained_same_g(stargan::read_checkpoint(ck).second,
+                                                              stargan::inner_gate_options(f.to, groups.seed(g, f.to)));
+            }
+            if (inner_match) continue;
+        }
         for (std::size_t g = 0; g < groups.F; ++g) {
             const fs::path dir = groups.dir(g, f.dir / "gate");
             const auto it = std::find(inner_dirs.begin(), inner_dirs.end(), dir);

@@ -165,7 +165,7 @@ namespace detail {
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "tempo_shrink", "tempo_basis", "lag"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "gate_iters_scale", "tempo_shrink", "tempo_basis", "lag"}) o.erase(k);
     return o;
 }
 
@@ -536,6 +536,7 @@ inline train_options inner_gate_options(const train_options& opt, std::uint64_t 
     auto inner = opt;
     inner.gate_folds = 0;
     inner.seed = seed;
+    inner.iters = std::max(1L, std::lround(static_cast<double>(opt.iters) * opt.gate_iters_scale));
     inner.checkpoint_every = inner.iters;
     inner.stop_at = -1;
     return inner;

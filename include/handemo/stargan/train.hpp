@@ -113,6 +113,10 @@ struct train_options {
     /// unless the rule's choices, checked across the gate's own groups, have a keyframe RMSE at least this share
     /// below the statistics setting's on the same pairs and recognition at least as high (gate.hpp). < 0: off
     double gate_guard = -1.0;
+    /// change gate: the inner models train for this share of `iters` (at least 1 step). They train on about half
+    /// of the training contents, so 0.5 gives them about as many passes over their clips as the final G makes over
+    /// its own; 1: as many steps as the final G. The final G is the same whatever the share
+    double gate_iters_scale = 1.0;
     /// tempo: shrink the learned duration factors toward 1 in log space by the weight in {0, 0.25, ..., 1} that
     /// predicts left-out training contents' durations best (tempo_fit(..., true), tempo_shrink_fit()); G is the
     /// same with or without it (the images are time-normalised), so a stored model takes it by refit_gate()
@@ -148,6 +152,8 @@ struct train_options {
         if (shards > 2) bad("shards " + std::to_string(shards) + " is not 0, 1 or 2");
         if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; <= -1: off)");
         if (!(gate_guard < 1) || std::isnan(gate_guard)) bad("gate_guard " + std::to_string(gate_guard) + " is not below 1 (a share; < 0: off)");
+        if (!(gate_iters_scale > 0 && gate_iters_scale <= 1))
+            bad("gate_iters_scale " + std::to_string(gate_iters_scale) + " is not in (0, 1] (a share of iters)");
         parse_tempo_basis(tempo_basis, "train: tempo_basis");
     }
     nlohmann::json to_json() const
@@ -161,6 +167,7 @@ struct train_options {
         if (gate_posterior) j["gate_posterior"] = true;
         if (gate_auto_margin) j["gate_auto_margin"] = true;  // written only when on: older checkpoints' options stay equal
         if (gate_guard >= 0) j["gate_guard"] = gate_guard;
+        if (gate_iters_scale != 1.0) j["gate_iters_scale"] = gate_iters_scale;  // written only when not 1
         if (tempo_shrink) j["tempo_shrink"] = true;
         if (tempo_basis != "duration") j["tempo_basis"] = tempo_basis;  // written only when not the duration
         if (lag) j["lag"] = true;
