@@ -416,8 +416,20 @@ inline void run_transfer(const transfer_cli& o)
                 weights += b;
             }
     }
+    std::string lag;
+    if (!target.point && !target.curve && !o.emotion.empty()) {  // a discrete target: the joint lag it applies, if any
+        std::vector<double> l;
+        model->lag_of(model->domain(o.emotion), o.from.empty() ? std::optional<std::string_view>() : std::optional<std::string_view>(o.from), l);
+        double most = 0;
+        for (double v : l) most = std::max(most, std::abs(v));
+        if (most > 0) {
+            char b[80];
+            std::snprintf(b, sizeof b, ", joint lag up to %.3g keyframes", most);
+            lag = b;
+        }
+    }
     std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << target.title << " (tempo x" << r.tempo << ", "
-              << cr.motion.frames << " frames" << (o.detail ? ", with detail" : "") << weights << ") -> " << o.out << "\n";
+              << cr.motion.frames << " frames" << (o.detail ? ", with detail" : "") << lag << weights << ") -> " << o.out << "\n";
     if (!o.filmstrip.empty()) write_path_filmstrip(o, target, in, co);
 }
 
