@@ -947,8 +947,8 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
             }
         }
         {  // the joint lag's check on the training clips, reported whether or not the model applies it
-            std::vector<keyframes<K>> kfs;
-            for (const auto& c : train) kfs.push_back(extract_keyframes<K>(c.motion));
+            std::vector<keyframes<K>> kfs;  // the training clips' keyframes, in the order of `train`
+            for (const auto* p : split.train_p) kfs.push_back(p->kf);
             const auto amp = models.model.amplitude_stage() ? ckinfo.amplitude : std::vector<double>(info.domains, 1.0);
             const auto lf = stargan::joint_lags_checked<K>(train, kfs, info.domain_names, info.neutral, amp);
             for (std::size_t d = 0; d < info.domains; ++d) {

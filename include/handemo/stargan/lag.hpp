@@ -38,6 +38,21 @@ inline std::vector<double> joint_lag_grid()
     return g;
 }
 
+namespace detail {
+
+/// A channel's keyframe curve at keyframe position s: v[k * stride] for k < n, linear between keyframes, held at the
+/// first and last (exactly their values there).
+inline double curve_at(const double* v, std::size_t stride, std::size_t n, double s) noexcept
+{
+    if (s <= 0.0) return v[0];
+    if (s >= static_cast<double>(n - 1)) return v[(n - 1) * stride];
+    const auto i = static_cast<std::size_t>(s);
+    const double f = s - static_cast<double>(i);
+    return (1.0 - f) * v[i * stride] + f * v[(i + 1) * stride];
+}
+
+}  // namespace detail
+
 /// @brief Shifts each joint's keyframes by its lag (in place, no allocation): keyframe k takes the value of the
 /// joint's keyframe curve at k - lag[j] (linear between keyframes, clamped to the first and last keyframe).
 /// A positive lag delays the joint, a negative one advances it; 0 leaves it as it is.
@@ -48,7 +63,6 @@ void shift_joints(keyframes<K>& kf, std::span<const double> lag)
     if (lag.size() != kf.joints)
         throw value_error("joint lag: " + std::to_string(lag.size()) + " lags for " + std::to_string(kf.joints) + " joints");
     const std::size_t C = kf.joints * 3, n = kf.count();
-    const double last = static_cast<double>(n - 1);
     for (std::size_t j = 0; j < kf.joints; ++j) {
         const double d = lag[j];
         if (!std::isfinite(d)) throw value_error("joint lag: the lag of joint " + std::to_string(j) + " is not finite");
@@ -56,14 +70,7 @@ void shift_joints(keyframes<K>& kf, std::span<const double> lag)
         for (std::size_t c = 0; c < 3; ++c) {
             double* v = kf.angles.data() + j * 3 + c;
             // in place: a delay reads only keyframes at or before k, so k runs down; an advance runs up
-            const auto value_at = [&](std::size_t k) {
-                const double s = static_cast<double>(k) - d;
-                if (s <= 0.0) return v[0];
-                if (s >= last) return v[(n - 1) * C];
-                const auto i = static_cast<std::size_t>(s);
-                const double f = s - static_cast<double>(i);
-                return (1.0 - f) * v[i * C] + f * v[(i + 1) * C];
-            };
+            const auto value_at = [&](std::size_t k) { return detail::curve_at(v, C, n, static_cast<double>(k) - d); };
             if (d > 0)
                 for (std::size_t k = n; k-- > 0;) v[k * C] = value_at(k);
             else
@@ -92,8 +99,7 @@ struct lag_pair {
     std::size_t emotional, neutral;
 };
 
-template <std::size_t K>
-std::vector<lag_pair> lag_pairs(const std::vector<labelled_clip>& clips, const std::string& emotion, const std::string& neutral,
+inline std::vector<lag_pair> lag_pairs(const std::vector<labelled_clip>& clips, const std::string& emotion, const std::string& neutral,
                                 const std::vector<bool>& use)
 {
     std::vector<lag_pair> r;
@@ -123,12 +129,8 @@ double lag_error(const keyframes<K>& neutral, const keyframes<K>& emotional, std
     for (std::size_t c = 0; c < 3; ++c) {
         const std::size_t ch = j * 3 + c;
         double x[64], mx = 0, my = 0;
-        const double last = static_cast<double>(n - 1);
         for (std::size_t k = 0; k < n; ++k) {
-            const double t = std::clamp(static_cast<double>(k) - d, 0.0, last);
-            const auto i = std::min(static_cast<std::size_t>(t), n - 2);
-            const double f = t - static_cast<double>(i);
-            x[k] = (1.0 - f) * neutral.angles[i * C + ch] + f * neutral.angles[(i + 1) * C + ch];
+            x[k] = curve_at(neutral.angles.data() + ch, C, n, static_cast<double>(k) - d);
             mx += x[k];
             my += emotional.angles[k * C + ch];
         }
@@ -211,9 +213,9 @@ joint_lag_fit joint_lags_checked(const std::vector<labelled_clip>& clips, const 
             for (const auto& held : contents) {
                 std::vector<bool> train(clips.size()), test(clips.size());
                 for (std::size_t m = 0; m < clips.size(); ++m) train[m] = clips[m].content != held, test[m] = !train[m];
-                const auto tp = detail::lag_pairs<K>(clips, domains[d], neutral, test);
+                const auto tp = detail::lag_pairs(clips, domains[d], neutral, test);
                 if (tp.empty()) continue;
-                const auto lag = detail::fit_emotion_lags<K>(kfs, detail::lag_pairs<K>(clips, domains[d], neutral, train), J, a);
+                const auto lag = detail::fit_emotion_lags<K>(kfs, detail::lag_pairs(clips, domains[d], neutral, train), J, a);
                 const std::vector<double> none(J, 0.0);
                 for (const auto& p : tp) {
                     s0 += detail::lag_pair_rmse(kfs[p.neutral], kfs[p.emotional], none, a);
@@ -224,7 +226,7 @@ joint_lag_fit joint_lags_checked(const std::vector<labelled_clip>& clips, const 
             if (n) r.check[d] = {s0 / static_cast<double>(n), s1 / static_cast<double>(n)};
         }
         r.kept[d] = r.check[d].second < r.check[d].first;
-        if (r.kept[d]) r.lag[d] = detail::fit_emotion_lags<K>(kfs, detail::lag_pairs<K>(clips, domains[d], neutral, all), J, a);
+        if (r.kept[d]) r.lag[d] = detail::fit_emotion_lags<K>(kfs, detail::lag_pairs(clips, domains[d], neutral, all), J, a);
     }
     return r;
 }

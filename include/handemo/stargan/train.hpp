@@ -44,6 +44,8 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 namespace handemo::stargan {
@@ -381,6 +383,20 @@ std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, 
     return {s_id / static_cast<double>(n), s_amp / static_cast<double>(n)};
 }
 
+/// @brief The amplitude factors the amplitude stage uses and their check: amplitude_factors(), all 1 when
+/// amplitude_cv() finds that scaling does not beat identity on the training clips (first: the check).
+template <std::size_t K>
+std::pair<std::pair<double, double>, std::vector<double>> checked_amplitude_factors(const std::vector<labelled_clip>& clips,
+                                                                                   const std::vector<keyframes<K>>& kfs,
+                                                                                   const std::vector<std::string>& domains,
+                                                                                   const std::string& neutral)
+{
+    auto factors = amplitude_factors<K>(clips, kfs, domains, neutral);
+    const auto check = amplitude_cv<K>(clips, kfs, domains, neutral);
+    if (!(check.second < check.first)) factors.assign(factors.size(), 1.0);
+    return {check, std::move(factors)};
+}
+
 /// @brief Pads a [3, K, J] network image into [3, H, W] (zeros bottom/right).
 inline void pad_image(const float* src, std::size_t K, std::size_t J, float* dst, std::size_t H, std::size_t W) noexcept
 {
@@ -466,14 +482,12 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
         }
     }
     p.tempo = tempo_factors(clips, info.domain_names, info.neutral, tempo_shrink, basis);
-    p.amplitude = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
-    p.amplitude_check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
+    std::tie(p.amplitude_check, p.amplitude) = checked_amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
     {
         std::vector<detail_layer::sample> d;
         for (const auto& c : clips) d.push_back({&c.motion, c.emotion, c.content, c.take});
         p.detail = detail_layer::fit_checked(d, info.neutral, K);
     }
-    if (!(p.amplitude_check.second < p.amplitude_check.first)) p.amplitude.assign(p.amplitude.size(), 1.0);
     if (lag) p.lag = joint_lags_checked<K>(clips, kfs, info.domain_names, info.neutral, amplitude_normalise ? p.amplitude : std::vector<double>(p.amplitude.size(), 1.0));
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
@@ -503,11 +517,8 @@ std::vector<std::vector<double>> joint_lag_of(const std::vector<labelled_clip>& 
     constexpr std::size_t K = Config::keyframes;
     std::vector<keyframes<K>> kfs;
     for (const auto& c : clips) kfs.push_back(extract_keyframes<K>(c.motion));
-    std::vector<double> amp(info.domain_names.size(), 1.0);
-    if (opt.amplitude) {
-        const auto check = amplitude_cv<K>(clips, kfs, info.domain_names, info.neutral);
-        if (check.second < check.first) amp = amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
-    }
+    const auto amp = opt.amplitude ? checked_amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral).second
+                                   : std::vector<double>(info.domain_names.size(), 1.0);
     return joint_lags_checked<K>(clips, kfs, info.domain_names, info.neutral, amp).lag;
 }
 

@@ -177,7 +177,6 @@ public:
         return from_network(generate(to_network(px), target, ws));
     }
 
-    /// @brief Whether the model was trained with the amplitude stage (train_options::amplitude).
     /// @brief The joint lag from `source` (default neutral) to target domain `t`, per joint in keyframe intervals,
     /// into `out` (its storage reused); empty when the model has no lag or the lags are all 0 (lag.hpp).
     void lag_of(std::size_t t, std::optional<std::string_view> source, std::vector<double>& out) const
@@ -192,6 +191,7 @@ public:
         out.resize(to.size());
         for (std::size_t j = 0; j < to.size(); ++j) out[j] = to[j] - from[j];
     }
+    /// @brief Whether the model was trained with the amplitude stage (train_options::amplitude).
     bool amplitude_stage() const { return info_.options.is_object() && info_.options.value("amplitude", false); }
 
     /// @brief Whether the model's G is residual (its output is x + change).
