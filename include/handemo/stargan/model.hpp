@@ -616,7 +616,8 @@ private:
         auto conv = [&](std::size_t, const T* in, T* o, std::size_t n) { convs_[kc++].forward(in, nullptr, o, s, n); };
         auto norm = [&](T* v, int n, int ch, int m, bool with_relu) {
             const auto& [gamma, beta] = norms_[kn++];
-            detail::instance_norm_relu_inplace(v, gamma.data(), beta.data(), n, ch, m, with_relu);
+            for (int b = 0; b < n; ++b)
+                kernels::instance_norm_channels(v + std::ptrdiff_t(b) * ch * m, gamma.data(), beta.data(), ch, m, with_relu, T(1e-5));
         };
         auto first = [&](const T* xi, const T* li, T* o, std::size_t n, T*) {
             conv(0, xi, o, n);
