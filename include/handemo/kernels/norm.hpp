@@ -108,6 +108,14 @@ inline xsimd::batch<double> tail_as_double(const float* p, int n, double fill) n
 }
 #else
 inline constexpr bool grouped_norm = false;
+/// The n < lanes floats at p as doubles, the other lanes `fill` (declared for instance_norm_channels()'s
+/// grouped branch, which is compiled out where grouped_norm is false).
+inline xsimd::batch<double> tail_as_double(const float* p, int n, double fill) noexcept
+{
+    alignas(64) double t[xsimd::batch<double>::size];
+    for (int i = 0; i < int(xsimd::batch<double>::size); ++i) t[i] = i < n ? double(p[i]) : fill;
+    return xsimd::batch<double>::load_aligned(t);
+}
 #endif
 
 }  // namespace detail
