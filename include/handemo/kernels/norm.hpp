@@ -87,6 +87,21 @@ void scale_shift(const T* v, int M, T k, T mu, T b, bool relu, T* out) noexcept
     }
 }
 
+/// @brief Instance normalisation of C channels of M values each, in place, one channel after another:
+/// v = gamma_c (v - mean_c) / sqrt(var_c + eps) + beta_c, then max(v, 0) when relu, the mean and biased variance
+/// from channel_moments() (two passes, in double, as the tape's instance_norm). M > 0.
+template <class T>
+void instance_norm_per_channel(T* x, const T* gamma, const T* beta, int C, int M, bool relu, T eps) noexcept
+{
+    for (int c = 0; c < C; ++c) {
+        T* v = x + std::ptrdiff_t(c) * M;
+        double mu = 0, var = 0;
+        channel_moments(v, M, mu, var);
+        const double kd = gamma[c] / std::sqrt(var + double(eps));
+        scale_shift(v, M, T(kd), T(mu), beta[c], relu, v);
+    }
+}
+
 namespace detail {
 
 #if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
@@ -129,7 +144,7 @@ inline xsimd::batch<double> tail_as_double(const float* p, int n, double fill) n
 /// loop's fixed costs (two horizontal reductions, a scalar tail, a square root and a division in sequence)
 /// were most of its time on the generator's small inner layers (18 values per channel). The sums are the same
 /// in another order: the result can differ from channel_moments()'s in the last bit of the mean or variance.
-/// Elsewhere, and for double, it is the per-channel loop. M > 0.
+/// Elsewhere, and for double, it is instance_norm_per_channel(). M > 0.
 template <class T>
 void instance_norm_channels(T* x, const T* gamma, const T* beta, int C, int M, bool relu, T eps) noexcept
 {
@@ -188,13 +203,7 @@ void instance_norm_channels(T* x, const T* gamma, const T* beta, int C, int M, b
             }
         }
     } else {
-        for (int c = 0; c < C; ++c) {
-            T* v = x + std::ptrdiff_t(c) * M;
-            double mu = 0, var = 0;
-            channel_moments(v, M, mu, var);
-            const double kd = gamma[c] / std::sqrt(var + double(eps));
-            scale_shift(v, M, T(kd), T(mu), beta[c], relu, v);
-        }
+        instance_norm_per_channel(x, gamma, beta, C, M, relu, eps);
     }
 }
 

@@ -225,14 +225,7 @@ template <class T>
 void instance_norm_relu_inplace(T* x, const T* gamma, const T* beta, int N, int C, int M, bool relu,
                                 T eps = T(1e-5)) noexcept
 {
-    for (int b = 0; b < N; ++b)
-        for (int c = 0; c < C; ++c) {
-            T* v = x + (std::size_t(b) * C + c) * M;
-            double mu = 0, var = 0;  // two-pass statistics accumulated in double, as instance_norm on the tape
-            kernels::channel_moments(v, M, mu, var);
-            const double kd = gamma[c] / std::sqrt(var + double(eps));
-            kernels::scale_shift(v, M, T(kd), T(mu), beta[c], relu, v);
-        }
+    for (int b = 0; b < N; ++b) kernels::instance_norm_per_channel(x + std::size_t(b) * C * M, gamma, beta, C, M, relu, eps);
 }
 
 }  // namespace detail
