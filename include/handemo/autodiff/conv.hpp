@@ -43,7 +43,7 @@ void for_batch_chunks(tape<T>& t, const conv_geometry& g, F&& f)
 {
     const int P = chunks(t, g);
     const std::size_t ss = ck::conv2d_scratch_size<T>(g);
-    T* scratch = ss ? t.alloc(ss * P) : nullptr;
+    T* scratch = ss ? t.scratch(ss * P) : nullptr;
     auto run = [&](int c) {
         const int n0 = int(long(g.batch) * c / P), n1 = int(long(g.batch) * (c + 1) / P);
         conv_geometry gc = g;

@@ -169,6 +169,15 @@ public:
             blocks_.emplace_back(std::max(block_elems_, n));
         }
     }
+    /// @brief `n` elements of 64-byte aligned memory (uninitialised) for the kernels of one operation while it runs:
+    /// the same region at every call (grown when a call asks for more, then kept across reset()), so the
+    /// convolutions' packed weights and padded images stay in cache from one call to the next instead of
+    /// spreading over the arena. Valid until the next scratch() call: nothing an operation keeps lives there.
+    T* scratch(std::size_t n)
+    {
+        if (scratch_.size() < n) scratch_ = aligned_buffer<T>(n);
+        return scratch_.data();
+    }
     /// @brief Zeroed arena memory.
     T* alloc_zero(std::size_t n)
     {
@@ -354,6 +363,7 @@ public:
 
 private:
     std::vector<aligned_buffer<T>> blocks_;
+    aligned_buffer<T> scratch_;
     std::size_t block_ = 0, used_ = 0, block_elems_;
     std::vector<node<T>> nodes_;
     thread_pool* pool_ = nullptr;

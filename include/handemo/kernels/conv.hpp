@@ -7,10 +7,12 @@
 // accumulate into theirs (g +=). The plain-loop versions in kernels::reference define the results.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <type_traits>
 
 #include <handemo/kernels/detail/conv_simd.hpp>
+#include <handemo/kernels/detail/packed_conv.hpp>
 #include <handemo/kernels/reference.hpp>
 
 namespace handemo::kernels {
@@ -20,6 +22,49 @@ namespace detail {
 /// or a target without SIMD, the reference loops.
 template <class T>
 inline constexpr bool fast_type = has_simd && (std::is_same_v<T, float> || std::is_same_v<T, double>);
+
+/// Whether a forward pass of geometry g takes the weight-stationary kernel with its weights packed at the call
+/// (detail::forward_ws, kernels/detail/packed_conv.hpp): where its panels fill the vectors (at least one vector of
+/// output channels) and conv_simd.hpp would take its packed or stride-1 path, whose sums it gives bit for bit.
+/// The dot path (few pixels) sums in another order and keeps its layers. Measured per layer in bench_conv
+/// (`cd32/...` rows: the residual conv's forward at batch 16 from 57% to 80-85% of the FMA peak).
+/// Fewest output pixels per image for forward_ws: its panels stream once per image, so an image of a few pixels
+/// (the discriminator's 1 x 3 layer: 91 against 117 GFLOP/s) reuses each weight too little.
+inline constexpr int ws_min_pixels = 16;
+
+template <class T>
+inline bool use_forward_ws(const conv_geometry& g) noexcept
+{
+    return fast_type<T> && g.out_channels >= simd_lanes<T> && g.out_h() * g.out_w() >= ws_min_pixels && !use_dot_forward<T>(g);
+}
+
+/// y (+)= conv(x, w) + bias: forward_ws where use_forward_ws, else conv_simd.hpp's forward.
+template <class T>
+inline void forward_any(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                        bool accumulate_out) noexcept
+{
+    if (use_forward_ws<T>(g)) {
+        const int K = g.in_channels * g.kernel_h * g.kernel_w;
+        return forward_ws<T>(g, x, [&](T* panels) { ws_pack_rows<T>(g.out_channels, K, w, panels); }, bias, y, scratch,
+                             accumulate_out);
+    }
+    forward(g, x, w, bias, y, scratch, accumulate_out);
+}
+
+/// gx += dL/dx: a stride-1 backward-data whose flipped forward pass takes forward_ws packs the flipped kernel
+/// straight into its panels; everything else is conv_simd.hpp's backward_data.
+template <class T>
+inline void backward_data_any(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
+{
+    if (backward_data_by_forward(g) && use_forward_ws<T>(flipped_geometry(g))) {
+        return forward_ws<T>(flipped_geometry(g), gy,
+                             [&](T* panels) {
+                                 ws_pack_flipped<T>(g.out_channels, g.in_channels, g.kernel_h * g.kernel_w, w, panels);
+                             },
+                             static_cast<const T*>(nullptr), gx, scratch, true);
+    }
+    backward_data(g, gy, w, gx, scratch);
+}
 }  // namespace detail
 
 /// @brief Elements of T the kernels of this file need as `scratch` for geometry g (the maximum over all
@@ -28,7 +73,10 @@ inline constexpr bool fast_type = has_simd && (std::is_same_v<T, float> || std::
 template <class T>
 std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
 {
-    if constexpr (detail::fast_type<T>) return detail::scratch_elements<T>(g);
+    if constexpr (detail::fast_type<T>)
+        return std::max({detail::scratch_elements<T>(g), detail::forward_ws_scratch_elements<T>(g),
+                         detail::backward_data_by_forward(g) ? detail::forward_ws_scratch_elements<T>(detail::flipped_geometry(g))
+                                                            : std::size_t(0)});
     else return reference::conv2d_scratch_size<T>(g);
 }
 
@@ -43,7 +91,7 @@ std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
 template <class T>
 void conv2d_forward(const conv_geometry& g, const T* x, const T* w, const T* bias_or_null, T* y, T* scratch) noexcept
 {
-    if constexpr (detail::fast_type<T>) detail::forward(g, x, w, bias_or_null, y, scratch, false);
+    if constexpr (detail::fast_type<T>) detail::forward_any(g, x, w, bias_or_null, y, scratch, false);
     else reference::conv2d_forward(g, x, w, bias_or_null, y, scratch);
 }
 
@@ -53,7 +101,7 @@ void conv2d_forward(const conv_geometry& g, const T* x, const T* w, const T* bia
 template <class T>
 void conv2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
 {
-    if constexpr (detail::fast_type<T>) detail::backward_data(g, gy, w, gx, scratch);
+    if constexpr (detail::fast_type<T>) detail::backward_data_any(g, gy, w, gx, scratch);
     else reference::conv2d_backward_data(g, gy, w, gx, scratch);
 }
 
@@ -88,7 +136,7 @@ void conv_transpose2d_forward(const conv_geometry& g, const T* x, const T* w, T*
     if constexpr (detail::fast_type<T>) {
         const std::size_t ny = g.x_size();
         for (std::size_t k = 0; k < ny; ++k) y[k] = T(0);
-        detail::backward_data(g, x, w, y, scratch);
+        detail::backward_data_any(g, x, w, y, scratch);
     } else {
         reference::conv_transpose2d_forward(g, x, w, y, scratch);
     }
@@ -100,7 +148,7 @@ void conv_transpose2d_forward(const conv_geometry& g, const T* x, const T* w, T*
 template <class T>
 void conv_transpose2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
 {
-    if constexpr (detail::fast_type<T>) detail::forward(g, gy, w, static_cast<const T*>(nullptr), gx, scratch, true);
+    if constexpr (detail::fast_type<T>) detail::forward_any(g, gy, w, static_cast<const T*>(nullptr), gx, scratch, true);
     else reference::conv_transpose2d_backward_data(g, gy, w, gx, scratch);
 }
 

@@ -276,4 +276,242 @@ inline std::size_t ws_packed_elements(int co, int K) noexcept
     return (std::size_t(co) + MR - 1) / MR * MR * std::size_t(K);
 }
 
+
+// ------------------------------------------------------------------------- convolutions whose weights change
+// Training calls the convolutions with new weights every step, so frozen panels do not apply; but packing
+// costs O(weights) against O(weights x pixels x images) multiply-adds, so kernels/conv.hpp packs them at each
+// call (forward_ws) and runs the weight-stationary micro-kernel over the images of the batch one after the
+// other. The sums are those of conv_simd.hpp's packed and stride-1 forward paths, bit for bit, so a model
+// trains to the same bits on either: each output's products are summed in k = (c, u, v) order in chains of
+// forward_kc products, each chain starting from zero (the kernel's reduction blocks never cross a chain's
+// end), and the chains are added to the output as those paths add them: ((y or 0) + chain) + bias for the
+// first, (y + chain) + 0 for each later one.
+
+/// Images forward_ws runs together: each block of panel weights is loaded into L1 once for all of them (one image
+/// at a time streamed the paper G's 2 MB panels from L3 once per image, for 18 output pixels each), as many as
+/// fit ws_group_elements elements of padded input and tiles, at least 1 and at most 16.
+inline constexpr int ws_group_max = 16;
+inline constexpr std::size_t ws_group_elements = std::size_t(1) << 20;
+
+/// The parts of forward_ws's scratch (elements of T, each part 64-byte aligned) for geometry g.
+template <class T>
+struct ws_scratch_layout {
+    std::size_t panels, tiles, padded;  // per call; per image; per image
+    int group;                          // images per group
+    std::size_t total;
+    explicit ws_scratch_layout(const conv_geometry& g) noexcept
+    {
+        constexpr std::size_t a = 64 / sizeof(T);
+        auto up = [](std::size_t n) { return (n + a - 1) / a * a; };
+        panels = up(ws_packed_elements<T>(g.out_channels, g.in_channels * g.kernel_h * g.kernel_w));
+        tiles = up(ws_acc_elements<T>(g.out_channels, g.out_h(), g.out_w()));
+        padded = up(std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad));
+        const std::size_t per_image = 2 * tiles + padded;
+        group = int(std::clamp<std::size_t>(ws_group_elements / per_image, 1, ws_group_max));
+        total = a + panels + std::size_t(group) * per_image;
+    }
+};
+
+/// Elements (of T) of forward_ws's scratch for geometry g: the panels and, per image of a group, two sets of
+/// pixel tiles (the chain and the running sums) and the zero-padded image. It does not depend on g.batch.
+template <class T>
+inline std::size_t forward_ws_scratch_elements(const conv_geometry& g) noexcept
+{
+    return ws_scratch_layout<T>(g).total;
+}
+
+/// y (+)= conv(x, w) + bias on the `images` images of a group (g.batch is ignored): padded inputs at
+/// src + n * src_image, outputs at y + n * y_image, tiles at acc / sum + n * tile_image. The sums in chains of
+/// forward_kc (see above); every block of panel rows serves all the group's images before the next is read.
+template <class T, int NV, int NR, int SJ>
+inline void ws_run_chains(const conv_geometry& g, int Hp, int Wp, const T* wp, int images, const T* src,
+                          std::size_t src_image, const T* bias, T* y, std::size_t y_image, T* acc, T* sum,
+                          std::size_t tile_image, bool accumulate_out) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>, MR = NV * L;
+    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, co = g.out_channels;
+    const int rows = g.out_h(), cols = g.out_w(), sj = g.stride;
+    const std::ptrdiff_t src_row = std::ptrdiff_t(g.stride) * Wp, y_chan = std::ptrdiff_t(rows) * cols;
+    // reduction blocks within a chain: each is cut at its chain's end (kc below)
+    const int kc_max = ws_kc<T>(NV);
+    const int panels = (co + MR - 1) / MR, tiles_per_row = (cols + NR - 1) / NR;
+    const std::size_t n_acc = std::size_t(rows) * tiles_per_row * NR * MR;
+    int koff[forward_kc];
+    alignas(64) T bv[MR];
+    for (int pn = 0; pn < panels; ++pn) {
+        const T* wpanel = wp + std::ptrdiff_t(pn) * K * MR;
+        const int o0 = pn * MR, no = std::min(MR, co - o0);
+        if (accumulate_out)
+            for (int n = 0; n < images; ++n) {
+                T* t = sum + n * tile_image;
+                const T* yn = y + n * y_image;
+                for (int r = 0; r < rows; ++r)
+                    for (int q0 = 0; q0 < cols; q0 += NR, t += NR * MR)
+                        for (int q = 0; q < NR; ++q)
+                            for (int i = 0; i < MR; ++i)
+                                t[q * MR + i] = (i < no && q0 + q < cols) ? yn[std::ptrdiff_t(o0 + i) * y_chan + r * cols + q0 + q] : T(0);
+            }
+        for (int s0 = 0; s0 < K; s0 += forward_kc) {
+            const int s1 = std::min(K, s0 + forward_kc);
+            for (int k = s0, c = k / (kh * kw), u = (k / kw) % kh, v = k % kw; k < s1; ++k) {
+                koff[k - s0] = (c * Hp + u) * Wp + v;
+                if (++v == kw) {
+                    v = 0;
+                    if (++u == kh) u = 0, ++c;
+                }
+            }
+            for (int k0 = s0; k0 < s1; k0 += kc_max) {
+                const int kc = std::min(kc_max, s1 - k0);
+                for (int n = 0; n < images; ++n) {
+                    T* tile = acc + n * tile_image;
+                    const T* sn = src + n * src_image;
+                    for (int r = 0; r < rows; ++r) {
+                        const T* srow = sn + r * src_row;
+                        for (int q0 = 0; q0 < cols; q0 += NR, tile += NR * MR)
+                            micro_ws_dispatch<T, T, NV, NR, SJ>(std::min(NR, cols - q0), kc, wpanel + std::ptrdiff_t(k0) * MR,
+                                                                koff + (k0 - s0), srow + std::ptrdiff_t(q0) * (SJ > 0 ? SJ : sj), sj,
+                                                                tile, k0 > s0);
+                    }
+                }
+            }
+            // the chain into the running sums: (sum + chain) + bias (the first chain) or + 0
+            for (int i = 0; i < MR; ++i) bv[i] = (s0 == 0 && bias && i < no) ? bias[o0 + i] : T(0);
+            B b[NV];
+            for (int q = 0; q < NV; ++q) b[q] = B::load_aligned(bv + q * L);
+            const bool from_zero = s0 == 0 && !accumulate_out;  // (0 + chain) + bias, without reading sum
+            for (int n = 0; n < images; ++n) {
+                T* sn = sum + n * tile_image;
+                const T* an = acc + n * tile_image;
+                for (std::size_t e = 0; e < n_acc; e += MR)
+                    for (int q = 0; q < NV; ++q) {
+                        const B before = from_zero ? B(T(0)) : B::load_aligned(sn + e + q * L);
+                        ((before + B::load_aligned(an + e + q * L)) + b[q]).store_aligned(sn + e + q * L);
+                    }
+            }
+        }
+        for (int n = 0; n < images; ++n) {
+            const T* t = sum + n * tile_image;
+            T* yn = y + n * y_image;
+            for (int r = 0; r < rows; ++r)
+                for (int q0 = 0; q0 < cols; q0 += NR, t += NR * MR) {
+                    const int nr = std::min(NR, cols - q0);
+                    for (int i = 0; i < no; ++i) {
+                        T* yo = yn + std::ptrdiff_t(o0 + i) * y_chan + r * cols + q0;
+                        for (int q = 0; q < nr; ++q) yo[q] = t[q * MR + i];
+                    }
+                }
+        }
+    }
+}
+
+/// Lanes [0, valid) of one vector of panel weights: p[lane * stride] (the other lanes 0). One gather where the
+/// target has it for T (conv_simd.hpp's vector_gather_type), else lane by lane.
+template <class T>
+inline simd_t<T> ws_strided(const T* p, std::int32_t stride, int valid) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+#if (defined(__AVX512F__) || defined(__AVX2__)) && (defined(__x86_64__) || defined(__i386__))
+    if constexpr (vector_gather_type<T>) {
+        using I = xsimd::batch<std::int32_t>;
+        const auto idx = static_cast<typename I::register_type>(I(stride) * I(xsimd::detail::make_sequence_as_batch<I>()));
+#if defined(__AVX512F__)
+        const __mmask16 m = valid >= L ? __mmask16(0xffff) : __mmask16((1u << valid) - 1u);
+        return simd_t<T>(_mm512_mask_i32gather_ps(_mm512_setzero_ps(), m, idx, p, int(sizeof(float))));
+#else
+        const __m256 m = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(valid), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7)));
+        return simd_t<T>(_mm256_mask_i32gather_ps(_mm256_setzero_ps(), p, idx, m, int(sizeof(float))));
+#endif
+    }
+#endif
+    alignas(64) T v[L];
+    for (int i = 0; i < L; ++i) v[i] = i < valid ? p[std::ptrdiff_t(i) * stride] : T(0);
+    return simd_t<T>::load_aligned(v);
+}
+
+/// ws_pack of a weight matrix w [co, K] (row o at w + o K): value(o, k) = w[o K + k], each panel row one vector
+/// of channels at a time (a strided gather of K apart).
+template <class T>
+inline void ws_pack_rows(int co, int K, const T* w, T* dst) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    const int NV = ws_tile_for<T>(co).nv, MR = NV * L, panels = (co + MR - 1) / MR;
+    for (int pn = 0; pn < panels; ++pn)
+        for (int q = 0; q < NV; ++q) {
+            const int o = pn * MR + q * L;
+            T* d = dst + std::ptrdiff_t(pn) * K * MR + q * L;
+            if (o >= co) {
+                for (int k = 0; k < K; ++k) simd_t<T>(T(0)).store_aligned(d + std::ptrdiff_t(k) * MR);
+                continue;
+            }
+            const T* src = w + std::ptrdiff_t(o) * K;
+            for (int k = 0; k < K; ++k) ws_strided<T>(src + k, K, co - o).store_aligned(d + std::ptrdiff_t(k) * MR);
+        }
+}
+
+/// ws_pack of the flipped, channel-swapped kernel whose stride-1 forward pass is the backward-data of a
+/// convolution with weights w [co, ci, kk taps] (conv_simd.hpp's backward_data_stride1): a convolution with ci
+/// output channels and K = co kk, value(c, (o, t)) = w[(o ci + c) kk + kk - 1 - t].
+template <class T>
+inline void ws_pack_flipped(int co, int ci, int kk, const T* w, T* dst) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    const int K = co * kk, NV = ws_tile_for<T>(ci).nv, MR = NV * L, panels = (ci + MR - 1) / MR;
+    for (int pn = 0; pn < panels; ++pn)
+        for (int q = 0; q < NV; ++q) {
+            const int c = pn * MR + q * L;
+            T* d = dst + std::ptrdiff_t(pn) * K * MR + q * L;
+            if (c >= ci) {
+                for (int k = 0; k < K; ++k) simd_t<T>(T(0)).store_aligned(d + std::ptrdiff_t(k) * MR);
+                continue;
+            }
+            for (int o = 0; o < co; ++o) {
+                const T* src = w + (std::ptrdiff_t(o) * ci + c) * kk + kk - 1;
+                for (int t = 0; t < kk; ++t)
+                    ws_strided<T>(src - t, kk, ci - c).store_aligned(d + (std::ptrdiff_t(o) * kk + t) * MR);
+            }
+        }
+}
+
+/// y (+)= conv(x, W) + bias for a convolution of geometry g with at least simd_lanes<T> output channels, the
+/// weights given by pack(panels), which writes them as ws_pack does (value(o, k) of w [out, in, kh, kw]: w[o K + k]).
+/// scratch: forward_ws_scratch_elements<T>(g) elements (any alignment). The same bits as conv_simd.hpp's
+/// packed and stride-1 forward paths (not its dot path).
+template <class T, class Pack>
+inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T* bias, T* y, T* scratch,
+                       bool accumulate_out) noexcept
+{
+    const ws_scratch_layout<T> lay(g);
+    const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad;
+    T* wp = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(scratch) + 63) / 64 * 64);
+    T* acc = wp + lay.panels;
+    T* sum = acc + std::size_t(lay.group) * lay.tiles;
+    T* xp = sum + std::size_t(lay.group) * lay.tiles;
+    pack(wp);
+    const std::size_t x_per = std::size_t(g.in_channels) * g.in_h * g.in_w, y_per = std::size_t(g.out_channels) * g.out_h() * g.out_w();
+    // the padding of each image's buffer is written once; the interiors at every group
+    std::memset(xp, 0, std::size_t(std::min(lay.group, g.batch)) * lay.padded * sizeof(T));
+    constexpr int L = simd_lanes<T>;
+    auto go = [&]<int CO>() {
+        constexpr ws_tile t = ws_tile_for<T>(CO);
+        for (int n0 = 0; n0 < g.batch; n0 += lay.group) {
+            const int images = std::min(lay.group, g.batch - n0);
+            for (int n = 0; n < images; ++n)
+                copy_into_padded(xp + n * lay.padded, Hp, Wp, g.pad, g.pad, x + (n0 + n) * x_per, g.in_channels, g.in_h, g.in_w);
+            T* yn = y + n0 * y_per;
+            if (g.stride == 1)
+                ws_run_chains<T, t.nv, t.nr, 1>(g, Hp, Wp, wp, images, xp, lay.padded, bias, yn, y_per, acc, sum, lay.tiles, accumulate_out);
+            else if (g.stride == 2)
+                ws_run_chains<T, t.nv, t.nr, 2>(g, Hp, Wp, wp, images, xp, lay.padded, bias, yn, y_per, acc, sum, lay.tiles, accumulate_out);
+            else
+                ws_run_chains<T, t.nv, t.nr, 0>(g, Hp, Wp, wp, images, xp, lay.padded, bias, yn, y_per, acc, sum, lay.tiles, accumulate_out);
+        }
+    };
+    switch (ws_tile_for<T>(g.out_channels).nv) {
+    case 4: go.template operator()<4 * L>(); break;
+    case 2: go.template operator()<2 * L>(); break;
+    default: go.template operator()<L>(); break;
+    }
+}
+
 }  // namespace handemo::kernels::detail
