@@ -15,23 +15,11 @@
 #include "random_values.hpp"
 
 namespace hk = handemo::kernels;
+using kernel_test::cast;
+using kernel_test::describe;
 using kernel_test::random_values;
 
 namespace {
-
-std::string describe(const hk::conv_geometry& g)
-{
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "b%d %dx%dx%d -> %d k%dx%d s%d p%d", g.batch, g.in_channels, g.in_h, g.in_w,
-                  g.out_channels, g.kernel_h, g.kernel_w, g.stride, g.pad);
-    return buf;
-}
-
-template <class T>
-std::vector<T> cast(const std::vector<double>& v)
-{
-    return std::vector<T>(v.begin(), v.end());
-}
 
 constexpr int guard = 17;  // trailing elements that must stay untouched
 

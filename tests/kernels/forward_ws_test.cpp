@@ -21,21 +21,9 @@ namespace hkd = handemo::kernels::detail;
 
 namespace forward_ws_test {
 
+using kernel_test::describe;
 using kernel_test::random_values;
-
-std::string describe(const hk::conv_geometry& g)
-{
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "b%d %dx%dx%d -> %d k%dx%d s%d p%d", g.batch, g.in_channels, g.in_h, g.in_w,
-                  g.out_channels, g.kernel_h, g.kernel_w, g.stride, g.pad);
-    return buf;
-}
-
-template <class T>
-std::vector<T> as(const std::vector<double>& v)
-{
-    return std::vector<T>(v.begin(), v.end());
-}
+using kernel_test::cast;
 
 constexpr std::size_t guard = 64;
 constexpr double guard_value = 12345.0;
@@ -62,9 +50,9 @@ int check_same_bits(const hk::conv_geometry& g, unsigned seed)
 {
     INFO(describe(g), (sizeof(T) == 4 ? " float" : " double"));
     std::mt19937 rng(seed);
-    const auto x = as<T>(random_values(g.x_size(), rng)), w = as<T>(random_values(g.w_size(), rng));
-    const auto b = as<T>(random_values(std::size_t(g.out_channels), rng));
-    const auto y0 = as<T>(random_values(g.y_size(), rng)), gx0 = as<T>(random_values(g.x_size(), rng));
+    const auto x = cast<T>(random_values(g.x_size(), rng)), w = cast<T>(random_values(g.w_size(), rng));
+    const auto b = cast<T>(random_values(std::size_t(g.out_channels), rng));
+    const auto y0 = cast<T>(random_values(g.y_size(), rng)), gx0 = cast<T>(random_values(g.x_size(), rng));
     int took = 0;
     for (const bool accumulate : {false, true})
         for (const bool with_bias : {false, true}) {
@@ -160,7 +148,7 @@ TEST_CASE("forward_ws: the panel packers write what ws_pack writes")
     for (const int co : {8, 16, 17, 40, 64, 70, 128})
         for (const int ci : {3, 16, 33}) {
             const int kk = 9, K = ci * kk;
-            const auto w = forward_ws_test::as<float>(random_values(std::size_t(co) * K, rng));
+            const auto w = kernel_test::cast<float>(random_values(std::size_t(co) * K, rng));
             std::vector<float> a(hkd::ws_packed_elements<float>(co, K) + 64), b(a.size());
             auto* pa = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(a.data()) + 63) / 64 * 64);
             auto* pb = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(b.data()) + 63) / 64 * 64);

@@ -429,10 +429,10 @@ inline simd_t<T> ws_strided(const T* p, std::int32_t stride, int valid) noexcept
     return simd_t<T>::load_aligned(v);
 }
 
-/// ws_pack of a weight matrix w [co, K] (row o at w + o K): value(o, k) = w[o K + k], each panel row one vector
-/// of channels at a time (a strided gather of K apart).
-template <class T>
-inline void ws_pack_rows(int co, int K, const T* w, T* dst) noexcept
+/// Panels as ws_pack writes them, one vector of channels at a time: vec(o, k, n) gives channels o .. o + n - 1 of
+/// row k (n <= simd_lanes<T>, the other lanes 0).
+template <class T, class Vec>
+inline void ws_pack_vectors(int co, int K, T* dst, Vec&& vec) noexcept
 {
     constexpr int L = simd_lanes<T>;
     const int NV = ws_tile_for<T>(co).nv, MR = NV * L, panels = (co + MR - 1) / MR;
@@ -444,33 +444,28 @@ inline void ws_pack_rows(int co, int K, const T* w, T* dst) noexcept
                 for (int k = 0; k < K; ++k) simd_t<T>(T(0)).store_aligned(d + std::ptrdiff_t(k) * MR);
                 continue;
             }
-            const T* src = w + std::ptrdiff_t(o) * K;
-            for (int k = 0; k < K; ++k) ws_strided<T>(src + k, K, co - o).store_aligned(d + std::ptrdiff_t(k) * MR);
+            const int n = std::min(L, co - o);
+            for (int k = 0; k < K; ++k) vec(o, k, n).store_aligned(d + std::ptrdiff_t(k) * MR);
         }
+}
+
+/// ws_pack of a weight matrix w [co, K] (row o at w + o K): value(o, k) = w[o K + k], gathered K apart.
+template <class T>
+inline void ws_pack_rows(int co, int K, const T* w, T* dst) noexcept
+{
+    ws_pack_vectors<T>(co, K, dst, [&](int o, int k, int n) { return ws_strided<T>(w + std::ptrdiff_t(o) * K + k, K, n); });
 }
 
 /// ws_pack of the flipped, channel-swapped kernel whose stride-1 forward pass is the backward-data of a
 /// convolution with weights w [co, ci, kk taps] (conv_simd.hpp's backward_data_stride1): a convolution with ci
-/// output channels and K = co kk, value(c, (o, t)) = w[(o ci + c) kk + kk - 1 - t].
+/// output channels and K = co kk, value(c, (o, t)) = w[(o ci + c) kk + kk - 1 - t], gathered kk apart.
 template <class T>
 inline void ws_pack_flipped(int co, int ci, int kk, const T* w, T* dst) noexcept
 {
-    constexpr int L = simd_lanes<T>;
-    const int K = co * kk, NV = ws_tile_for<T>(ci).nv, MR = NV * L, panels = (ci + MR - 1) / MR;
-    for (int pn = 0; pn < panels; ++pn)
-        for (int q = 0; q < NV; ++q) {
-            const int c = pn * MR + q * L;
-            T* d = dst + std::ptrdiff_t(pn) * K * MR + q * L;
-            if (c >= ci) {
-                for (int k = 0; k < K; ++k) simd_t<T>(T(0)).store_aligned(d + std::ptrdiff_t(k) * MR);
-                continue;
-            }
-            for (int o = 0; o < co; ++o) {
-                const T* src = w + (std::ptrdiff_t(o) * ci + c) * kk + kk - 1;
-                for (int t = 0; t < kk; ++t)
-                    ws_strided<T>(src - t, kk, ci - c).store_aligned(d + (std::ptrdiff_t(o) * kk + t) * MR);
-            }
-        }
+    ws_pack_vectors<T>(ci, co * kk, dst, [&](int c, int k, int n) {
+        const int o = k / kk, t = k % kk;
+        return ws_strided<T>(w + (std::ptrdiff_t(o) * ci + c) * kk + kk - 1 - t, kk, n);
+    });
 }
 
 /// y (+)= conv(x, W) + bias for a convolution of geometry g with at least simd_lanes<T> output channels, the
