@@ -16,7 +16,8 @@
 # Usage: bench/compare.sh [--out[=FILE]] [--dry-run] [--quick] [build-dir]   (default build-dir: <repo>/build-bench)
 #   --out       also writes the table to bench/results/<YYYY-MM-DD>-<cpu-model>.md (FILE: there instead)
 #               under a header giving the commit, the CPU model, the compiler, the load average at the start
-#               and the number of rounds; an existing file of that name is kept (-2, -3, ... is added)
+#               and the number of rounds; an existing file of that name is kept (-2, -3, ... is added), one
+#               written by another run while this one measured too
 #   --dry-run   checks that the reference and the peak program are there and whether Python has torch,
 #               prints what a run would build, run and write (with --out, the file's name and header), and
 #               builds and measures nothing
@@ -81,7 +82,9 @@ results_header() {  # $1: the load average when the rounds started
   echo "- rounds: $rounds (HANDEMO_COMPARE_ROUNDS): every time is the median over the rounds, its range in parentheses"
   echo
 }
+auto_name=0
 if [ "$write_out" = 1 ] && [ -z "$results" ]; then
+  auto_name=1
   slug=$(cpu_model | tr '[:upper:]' '[:lower:]' | sed 's/([^)]*)//g; s/[^a-z0-9]\{1,\}/-/g; s/^-//; s/-$//')
   results="$root/bench/results/$(date +%F)-${slug:-unknown-cpu}.md"
   base=${results%.md} n=2
@@ -258,6 +261,12 @@ list() { local f=$1 acc="" r; for r in $(seq 1 "$rounds"); do acc="$acc${acc:+,}
 status=${PIPESTATUS[0]}
 
 if [ "$write_out" = 1 ]; then
+  # a file of the chosen name written while the rounds ran (another run of the same day) is kept too
+  if [ "$auto_name" = 1 ] && [ -e "$results" ]; then
+    taken=$results
+    while [ -e "$results" ]; do results="$base-$n.md"; n=$((n + 1)); done
+    echo "== $taken appeared during the run; writing $results instead"
+  fi
   # the lines before the first table (peaks and bounds) in a code block, as docs/performance.md shows them; a
   # blank line between a table and the text line above it, so that Markdown renders it as a table
   if mkdir -p "$(dirname "$results")" && {
