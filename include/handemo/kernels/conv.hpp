@@ -23,15 +23,16 @@ namespace detail {
 template <class T>
 inline constexpr bool fast_type = has_simd && (std::is_same_v<T, float> || std::is_same_v<T, double>);
 
-/// Whether a forward pass of geometry g takes the weight-stationary kernel with its weights packed at the call
-/// (detail::forward_ws, kernels/detail/packed_conv.hpp): where its panels fill the vectors (at least one vector of
-/// output channels) and conv_simd.hpp would take its packed or stride-1 path, whose sums it gives bit for bit.
-/// The dot path (few pixels) sums in another order and keeps its layers. Measured per layer in bench_conv
-/// (`cd32/...` rows: the residual conv's forward at batch 16 from 57% to 80-85% of the FMA peak).
-/// Fewest output pixels per image for forward_ws: its panels stream once per image, so an image of a few pixels
-/// (the discriminator's 1 x 3 layer: 91 against 117 GFLOP/s) reuses each weight too little.
+/// Fewest output pixels per image for forward_ws: an image of a few pixels reuses each loaded weight too little
+/// (the discriminator's 1 x 3 layer ran at 91 against 117 GFLOP/s on the weight-stationary kernel).
 inline constexpr int ws_min_pixels = 16;
 
+/// Whether a forward pass of geometry g takes the weight-stationary kernel with its weights packed at the call
+/// (detail::forward_ws, kernels/detail/packed_conv.hpp): where its panels fill the vectors (at least one vector of
+/// output channels), its images have ws_min_pixels, and conv_simd.hpp would take its packed or stride-1 path,
+/// whose sums it gives bit for bit. The dot path (few pixels) sums in another order and keeps its layers.
+/// Measured per layer in bench_conv (`cd32/...` rows: the embedded G's residual conv at batch 16 from 65% to 80%
+/// of the FMA peak, its first conv and first down-sampling conv at 0.66x the time).
 template <class T>
 inline bool use_forward_ws(const conv_geometry& g) noexcept
 {
