@@ -489,6 +489,19 @@ inline void store_run(T* y, const T* t, int n, T b, bool add) noexcept
     for (; i < n; ++i) y[i] = ((add ? y[i] : T(0)) + t[i]) + b;
 }
 
+/// koff[i] = (c Hp + u) Wp + v for the reduction indices k = k0 .. k0 + n - 1, k = (c, u, v) of a kh x kw kernel:
+/// where tap k's window starts in a zero-padded [C, Hp, Wp] image.
+inline void padded_window_offsets(int k0, int n, int kh, int kw, int Hp, int Wp, int* koff) noexcept
+{
+    for (int i = 0, c = k0 / (kh * kw), u = (k0 / kw) % kh, v = k0 % kw; i < n; ++i) {
+        koff[i] = (c * Hp + u) * Wp + v;
+        if (++v == kw) {
+            v = 0;
+            if (++u == kh) u = 0, ++c;
+        }
+    }
+}
+
 /// Forward pass for stride 1: per image, x is copied once into a zero-padded [C, H+2p, W+2p] buffer and
 /// the output is computed on the "wide" grid p' = i*(W+2p) + j, where im2col row (c,u,v) is the window
 /// starting at c*(H+2p)*(W+2p) + u*(W+2p) + v; columns j >= out_w are computed and dropped.
@@ -511,16 +524,7 @@ inline void forward_stride1_tiles(const conv_geometry& g, const T* x, const T* w
         T* yn = y + std::ptrdiff_t(n) * Co * P;
         for (int k0 = 0; k0 < K; k0 += forward_kc) {
             const int kc = std::min(forward_kc, K - k0);
-            {
-                int c = k0 / (kh * kw), u = (k0 / kw) % kh, v = k0 % kw;
-                for (int k = 0; k < kc; ++k) {
-                    koff[k] = (c * Hp + u) * Wp + v;
-                    if (++v == kw) {
-                        v = 0;
-                        if (++u == kh) u = 0, ++c;
-                    }
-                }
-            }
+            padded_window_offsets(k0, kc, kh, kw, Hp, Wp, koff);
             const bool first = k0 == 0, add = !first || accumulate_out;
             for (int p0 = 0; p0 < Pw; p0 += MR) {
                 for (int o0 = 0; o0 < Co; o0 += NR) {

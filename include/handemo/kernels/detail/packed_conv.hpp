@@ -233,24 +233,31 @@ inline void ws_run_tiled(const ws_job& j, const W* wp, const T* src, const T* bi
     }
 }
 
+/// Calls f.template operator()<NV, NR, SJ>() with the tile ws_tile_for<T>(co) and the pixel step sj fixed at
+/// compile time when it is 1 or 2 (SJ = 0: read at run time). The instantiations follow that one table.
+template <class T, class F>
+inline void ws_with_tile(int co, int sj, F&& f)
+{
+    constexpr int L = simd_lanes<T>;
+    auto with_step = [&]<int CO>() {
+        constexpr ws_tile t = ws_tile_for<T>(CO);
+        if (sj == 1) f.template operator()<t.nv, t.nr, 1>();
+        else if (sj == 2) f.template operator()<t.nv, t.nr, 2>();
+        else f.template operator()<t.nv, t.nr, 0>();
+    };
+    switch (ws_tile_for<T>(co).nv) {
+    case 4: with_step.template operator()<4 * L>(); break;
+    case 2: with_step.template operator()<2 * L>(); break;
+    default: with_step.template operator()<L>(); break;
+    }
+}
+
 /// Runs a job (y = result + bias, overwritten) with the tile ws_tile_for<T>(co) and the compile-time pixel
 /// stride when it is 1 or 2. W: the stored weight type (T, or std::uint16_t binary16 when ws_f16_native<T>).
 template <class T, class W>
 inline void ws_run(const ws_job& j, const W* wp, const T* src, const T* bias, T* y, T* acc) noexcept
 {
-    constexpr int L = simd_lanes<T>;
-    // the tile of a panel of CO channels, as ws_tile_for gives it (the instantiations follow that one table)
-    auto go = [&]<int CO>() {
-        constexpr ws_tile t = ws_tile_for<T>(CO);
-        if (j.sj == 1) ws_run_tiled<T, W, t.nv, t.nr, 1>(j, wp, src, bias, y, acc);
-        else if (j.sj == 2) ws_run_tiled<T, W, t.nv, t.nr, 2>(j, wp, src, bias, y, acc);
-        else ws_run_tiled<T, W, t.nv, t.nr, 0>(j, wp, src, bias, y, acc);
-    };
-    switch (ws_tile_for<T>(j.co).nv) {
-    case 4: go.template operator()<4 * L>(); break;
-    case 2: go.template operator()<2 * L>(); break;
-    default: go.template operator()<L>(); break;
-    }
+    ws_with_tile<T>(j.co, j.sj, [&]<int NV, int NR, int SJ>() { ws_run_tiled<T, W, NV, NR, SJ>(j, wp, src, bias, y, acc); });
 }
 
 /// Packs weights into panels: dst[(pn*K + k)*MR + i] = value(o = pn*MR + i, k), 0 for o >= co.
@@ -280,8 +287,8 @@ inline std::size_t ws_packed_elements(int co, int K) noexcept
 // ------------------------------------------------------------------------- convolutions whose weights change
 // Training calls the convolutions with new weights every step, so frozen panels do not apply; but packing
 // costs O(weights) against O(weights x pixels x images) multiply-adds, so kernels/conv.hpp packs them at each
-// call (forward_ws) and runs the weight-stationary micro-kernel over the images of the batch one after the
-// other. The sums are those of conv_simd.hpp's packed and stride-1 forward paths, bit for bit, so a model
+// call (forward_ws) and runs the weight-stationary micro-kernel over the images of the batch in groups that
+// share each block of panel rows. The sums are those of conv_simd.hpp's packed and stride-1 forward paths, bit for bit, so a model
 // trains to the same bits on either: each output's products are summed in k = (c, u, v) order in chains of
 // forward_kc products, each chain starting from zero (the kernel's reduction blocks never cross a chain's
 // end), and the chains are added to the output as those paths add them: ((y or 0) + chain) + bias for the
@@ -354,13 +361,7 @@ inline void ws_run_chains(const conv_geometry& g, int Hp, int Wp, const T* wp, i
             }
         for (int s0 = 0; s0 < K; s0 += forward_kc) {
             const int s1 = std::min(K, s0 + forward_kc);
-            for (int k = s0, c = k / (kh * kw), u = (k / kw) % kh, v = k % kw; k < s1; ++k) {
-                koff[k - s0] = (c * Hp + u) * Wp + v;
-                if (++v == kw) {
-                    v = 0;
-                    if (++u == kh) u = 0, ++c;
-                }
-            }
+            padded_window_offsets(s0, s1 - s0, kh, kw, Hp, Wp, koff);
             for (int k0 = s0; k0 < s1; k0 += kc_max) {
                 const int kc = std::min(kc_max, s1 - k0);
                 for (int n = 0; n < images; ++n) {
@@ -486,27 +487,15 @@ inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T*
     const std::size_t x_per = std::size_t(g.in_channels) * g.in_h * g.in_w, y_per = std::size_t(g.out_channels) * g.out_h() * g.out_w();
     // the padding of each image's buffer is written once; the interiors at every group
     std::memset(xp, 0, std::size_t(std::min(lay.group, g.batch)) * lay.padded * sizeof(T));
-    constexpr int L = simd_lanes<T>;
-    auto go = [&]<int CO>() {
-        constexpr ws_tile t = ws_tile_for<T>(CO);
+    ws_with_tile<T>(g.out_channels, g.stride, [&]<int NV, int NR, int SJ>() {
         for (int n0 = 0; n0 < g.batch; n0 += lay.group) {
             const int images = std::min(lay.group, g.batch - n0);
             for (int n = 0; n < images; ++n)
                 copy_into_padded(xp + n * lay.padded, Hp, Wp, g.pad, g.pad, x + (n0 + n) * x_per, g.in_channels, g.in_h, g.in_w);
-            T* yn = y + n0 * y_per;
-            if (g.stride == 1)
-                ws_run_chains<T, t.nv, t.nr, 1>(g, Hp, Wp, wp, images, xp, lay.padded, bias, yn, y_per, acc, sum, lay.tiles, accumulate_out);
-            else if (g.stride == 2)
-                ws_run_chains<T, t.nv, t.nr, 2>(g, Hp, Wp, wp, images, xp, lay.padded, bias, yn, y_per, acc, sum, lay.tiles, accumulate_out);
-            else
-                ws_run_chains<T, t.nv, t.nr, 0>(g, Hp, Wp, wp, images, xp, lay.padded, bias, yn, y_per, acc, sum, lay.tiles, accumulate_out);
+            ws_run_chains<T, NV, NR, SJ>(g, Hp, Wp, wp, images, xp, lay.padded, bias, y + n0 * y_per, y_per, acc, sum,
+                                         lay.tiles, accumulate_out);
         }
-    };
-    switch (ws_tile_for<T>(g.out_channels).nv) {
-    case 4: go.template operator()<4 * L>(); break;
-    case 2: go.template operator()<2 * L>(); break;
-    default: go.template operator()<L>(); break;
-    }
+    });
 }
 
 }  // namespace handemo::kernels::detail
