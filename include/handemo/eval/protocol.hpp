@@ -1060,9 +1060,11 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
 
 /// @brief Loads a data folder, runs the evaluation for the configuration called `config` and writes the
 /// report into `out_dir` (report.md, results.csv, summary.csv, summary.svg, folds/<content>/...).
-/// Instantiates every configuration: call it from one translation unit.
+/// Instantiates every configuration where it is called: call it from one translation unit (a template only so that it
+/// is compiled where it is called, see stargan::with_config()).
 /// @throws value_error for an unknown configuration, plus the errors of load_folder() and run_eval().
-inline eval_result run_eval_named(const std::filesystem::path& data, const std::string& config, eval_options opt,
+template <class = void>
+eval_result run_eval_named(const std::filesystem::path& data, const std::string& config, eval_options opt,
                                   const std::filesystem::path& out_dir)
 {
     const auto clips = stargan::load_folder(data);

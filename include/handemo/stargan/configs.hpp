@@ -58,6 +58,12 @@ inline std::vector<std::string> config_names() { return {"hand-embedded", "hand-
 inline constexpr unsigned compiled_configs = HANDEMO_CONFIG_MASK;
 static_assert(compiled_configs != 0 && compiled_configs < 32, "HANDEMO_CONFIG_MASK: a non-empty subset of the 5 configuration bits");
 
+/// The functions that choose a configuration by name at run time (stargan::load_model(), export_generator_header(),
+/// eval::run_eval_named()) are templates on an unused, defaulted parameter, called as plain functions. A
+/// non-template inline function would instantiate with_config()'s every branch (training, transfer and evaluation
+/// for every configuration) in each translation unit that includes its header, whether it calls it or not; a
+/// template is instantiated only where it is called.
+
 /// @brief Calls `f.template operator()<Config>(info)` for the configuration called `name`.
 /// @throws value_error listing the known names when `name` is unknown, and naming HANDEMO_CONFIG_MASK when it is
 ///         a configuration this program was compiled without.

@@ -139,7 +139,9 @@ std::string generator_header(generator<float, Config>& g, const checkpoint_info&
 /// @brief Reads a model folder (or checkpoint file) written by `handemo train` and returns the header text
 /// of its generator (the EMA weights when it was trained with them, as transfer uses).
 /// @throws io_error, format_error (unreadable checkpoint), value_error (unknown configuration).
-inline std::string export_generator_header(const std::filesystem::path& model, header_export_options o)
+/// A template only so that it is compiled where it is called (see with_config()).
+template <class = void>
+std::string export_generator_header(const std::filesystem::path& model, header_export_options o)
 {
     const auto file = checkpoint_file(model);
     // not a structured binding: clang 14 cannot capture one in the lambda below (C++20 allows it, clang 16 does)

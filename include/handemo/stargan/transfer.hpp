@@ -686,7 +686,9 @@ private:
 /// @throws format_error when a field does not fit the configuration (domain or joint count, image size,
 ///         missing or misshapen tensors), value_error (unknown configuration; with f16, a weight binary16
 ///         cannot hold).
-inline std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info,
+/// A template only so that it is compiled where it is called (see with_config()).
+template <class = void>
+std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info,
                                                  kernels::weight_storage storage = kernels::weight_storage::native)
 {
     return with_config(info.config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
@@ -696,7 +698,9 @@ inline std::unique_ptr<emotion_model> load_model(const safetensors_file& f, cons
 
 /// @brief Loads a model from a checkpoint file, or from a training output folder holding one.
 /// @throws io_error, format_error (corrupted, truncated, foreign file), value_error (unknown configuration).
-inline std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path,
+/// A template only so that it is compiled where it is called (see with_config()).
+template <class = void>
+std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path,
                                                  kernels::weight_storage storage = kernels::weight_storage::native)
 {
     const auto file = checkpoint_file(path);
