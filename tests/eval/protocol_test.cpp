@@ -288,7 +288,31 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         CHECK(read_file(dir / "report.md").find("joint lag by the check on the training contents") != std::string::npos);
     }
     o.train.lag = false;
+    // nor do the tempo neighbours: the stored models take the table their training clips give (or none, when the
+    // check keeps the learned factors), the report gives every fold's check, and the option off removes the table
+    o.train.tempo_neighbours = true;
+    const auto neighboured = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(neighboured.folds[0].reused_model);
+    for (const auto& f : neighboured.folds) {
+        CHECK(f.tempo_neighbours_applied);
+        CHECK(f.tempo_neighbours_check.find("learned ") == 0);
+        CHECK(f.tempo_neighbours_check.find(", 1: ") != std::string::npos);
+    }
+    {
+        std::vector<labelled_clip> train;
+        for (const auto& c : clips)
+            if (c.content != "patting") train.push_back(c);
+        const auto ck5 = read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second;
+        const auto want_table = tempo_table_of(train, info, o.train);
+        CHECK(ck5.tempo_table.k == want_table.k);
+        CHECK(ck5.tempo_table.contents == want_table.contents);
+        CHECK(ck5.options.value("tempo_neighbours", false));
+        CHECK(read_file(dir / "report.md").find("tempo neighbours by the check on the training contents (left-out error learned ") !=
+              std::string::npos);
+    }
+    o.train.tempo_neighbours = false;
     const auto unlagged = run_eval<hand_tiny>(clips, info, o, dir);
+    CHECK(read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second.tempo_table.empty());
     CHECK(read_checkpoint(dir / "folds" / "patting" / "checkpoint.safetensors").second.lag.empty());
     REQUIRE(unlagged.samples.size() == regated.samples.size());
     for (std::size_t i = 0; i < regated.samples.size(); ++i) CHECK(unlagged.samples[i].rmse_real == regated.samples[i].rmse_real);

@@ -19,7 +19,7 @@ struct train_overrides {
     std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
         lambda_delta, ema, augment;
     std::optional<int> n_critic, gate_folds;
-    std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, tempo_shrink, lag;
+    std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, tempo_shrink, tempo_neighbours, lag;
     std::optional<double> gate_margin, gate_guard, gate_iters_scale;
     std::optional<std::string> range, tempo_basis;
 };
@@ -100,6 +100,10 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "clip moves through its own range, whatever the number of cycles it holds) or 'auto' (the cadence when the "
                     "training pairs' durations and cadences disagree by more than a quarter in the median pair) (handemo duration)")
         ->check(CLI::IsMember({"duration", "cadence", "auto"}));
+    sub->add_option("--tempo-neighbours", o.tempo_neighbours,
+                    "Give each input the mean tempo of the 1-3 training contents whose neutral clips are most like it (speed, "
+                    "acceleration, duration, tremor, joint lags), when leave-one-content-out on the training clips finds that "
+                    "closer to the left-out contents' durations than the learned factors (handemo false)");
     sub->add_option("--lag", o.lag,
                     "Learn a time shift per target emotion and joint (a fearful hand's fingers trailing its wrist) from the "
                     "training pairs, applied after G's change and before the amplitude stage; each emotion keeps its lags only "
@@ -139,6 +143,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.gate_iters_scale = o.gate_iters_scale.value_or(p.gate_iters_scale);
     t.tempo_shrink = o.tempo_shrink.value_or(p.tempo_shrink);
     t.tempo_basis = o.tempo_basis.value_or(p.tempo_basis);
+    t.tempo_neighbours = o.tempo_neighbours.value_or(p.tempo_neighbours);
     t.lag = o.lag.value_or(p.lag);
     t.validate();
 }

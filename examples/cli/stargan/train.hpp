@@ -99,6 +99,17 @@ inline void run_train(train_cli& o)
         out << "train: tempo factors (duration relative to " << info.neutral << "):";
         for (std::size_t k = 0; k < info.domains; ++k) out << " " << info.domain_names[k] << " " << tr.data().tempo[k];
         out << "\n";
+        if (o.opt.tempo_neighbours) {
+            const auto& tn = tr.data().tempo_table;
+            out << "train: tempo neighbours: "
+                << (tn.empty() ? std::string("the learned factors kept") : "each input takes its " + std::to_string(tn.k) + " nearest training contents'");
+            if (!tn.errors.empty() && std::isfinite(tn.errors.front())) {
+                out << " (left-out error: learned " << tn.errors.front();
+                for (std::size_t i = 0; i < stargan::tempo_neighbour_grid.size(); ++i) out << ", " << stargan::tempo_neighbour_grid[i] << ": " << tn.errors[i + 1];
+                out << ")";
+            }
+            out << "\n";
+        }
     });
 }
 

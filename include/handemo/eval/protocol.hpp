@@ -946,6 +946,16 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                 if (stargan::tempo_shrink_grid[w] == 0.0) fsum.tempo_unshrunk_error = tf.shrink_errors[w];
             }
         }
+        {  // the tempo neighbours' check on the training clips, reported whether or not the model applies them
+            const auto tn = stargan::tempo_neighbours_fit(train, info.domain_names, info.neutral, to.tempo_shrink, stargan::parse_tempo_basis(to.tempo_basis));
+            if (std::isfinite(tn.errors.front())) {
+                fsum.tempo_neighbours_check = "learned " + detail::fmt(tn.errors.front(), 3);
+                for (std::size_t i = 0; i < stargan::tempo_neighbour_grid.size(); ++i)
+                    fsum.tempo_neighbours_check += ", " + std::to_string(stargan::tempo_neighbour_grid[i]) + ": " + detail::fmt(tn.errors[i + 1], 3);
+            }
+            fsum.tempo_neighbours_k = tn.k;
+            fsum.tempo_neighbours_applied = to.tempo_neighbours;
+        }
         {  // the joint lag's check on the training clips, reported whether or not the model applies it
             std::vector<keyframes<K>> kfs;  // the training clips' keyframes, in the order of `train`
             for (const auto* p : split.train_p) kfs.push_back(p->kf);

@@ -89,6 +89,12 @@ struct fold_summary {
     /// used (with / without deg)", and whether the model applies it (train_options::lag)
     std::string lag_check;
     bool lag_applied = false;
+    /// The tempo neighbours' check on the fold's training clips (stargan::tempo_neighbours_fit()): each candidate's
+    /// mean left-out error ("learned 0.799, 3: 0.620, ..."), the count it chose (0: the learned factors) and whether
+    /// the model applies it (train_options::tempo_neighbours)
+    std::string tempo_neighbours_check;
+    std::size_t tempo_neighbours_k = 0;
+    bool tempo_neighbours_applied = false;
     /// the basis of the tempo factors (duration or cadence) and, when train_options::tempo_basis is "auto", the
     /// median disagreement of the training pairs' duration and cadence ratios that chose it (NaN otherwise)
     std::string tempo_basis;
@@ -642,6 +648,11 @@ inline std::string report_folds(const eval_result& r, const std::vector<metric_d
              (f.lag_check.empty() ? std::string()
                                   : "; joint lag by the check on the training contents (excursion RMSE with / without): " + f.lag_check + ", " +
                                         (f.lag_applied ? "applied" : "not applied (--lag false)")) +
+             (f.tempo_neighbours_check.empty()
+                  ? std::string()
+                  : "; tempo neighbours by the check on the training contents (left-out error " + f.tempo_neighbours_check + "): " +
+                        (f.tempo_neighbours_k ? std::to_string(f.tempo_neighbours_k) + " nearest contents" : std::string("the learned factors")) + ", " +
+                        (f.tempo_neighbours_applied ? "applied" : "not applied (--tempo-neighbours false)")) +
              (f.reused_model ? "; model reused from an earlier run" : "") + ". Loss curves: `folds/" +
              f.held_out + "/losses.svg`.\n\n| target | method |";
         for (const auto& m : ms) s += " " + m.title + " |";

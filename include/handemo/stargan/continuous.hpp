@@ -38,6 +38,7 @@ struct label_keyframes {
     std::vector<bool> computed;                               ///< [domains]
     std::size_t source = 0;                                   ///< the input's domain
     std::size_t clamped_values = 0;                           ///< input keyframe angles Eq. 3 clamped
+    std::vector<double> tempo;  ///< [domains] the input's tempo factors (emotion_model::input_tempo())
 };
 
 /// @brief A continuous transfer: the output and the weights it used.
@@ -78,6 +79,7 @@ public:
         out.keys.resize(D);
         out.computed.assign(D, false);
         out.source = model_->domain(source ? *source : std::string_view(info.neutral));
+        out.tempo = model_->input_tempo(in);
         transfer_parts p;
         for (std::size_t d = 0; d < D; ++d) {
             if (!needed.empty() && needed[d] == 0) continue;
@@ -98,14 +100,15 @@ public:
         return out;
     }
 
-    /// @brief The duration factor of weights `w` from the source domain: sum_l w_l tempo_l / tempo_source.
-    double tempo(const std::vector<double>& w, std::size_t source) const
+    /// @brief The duration factor of weights `w` for prepared label keyframes: sum_l w_l tempo_l / tempo_source, the
+    /// input's tempo factors (emotion_model::input_tempo(): the learned ones, or its nearest training contents').
+    double tempo(const label_keyframes& lk, const std::vector<double>& w) const
     {
-        const auto& info = model_->info();
+        const auto& f = lk.tempo.empty() ? model_->info().tempo : lk.tempo;
         double t = 0;
         for (std::size_t d = 0; d < w.size(); ++d)
-            if (w[d] != 0) t += w[d] * info.tempo[d];
-        return t / info.tempo[source];
+            if (w[d] != 0) t += w[d] * f[d];
+        return t / f[lk.source];
     }
 
     /// @brief The excursion factor of weights `w`: sum_l w_l amplitude_l (1 unless the model has the amplitude stage).
@@ -214,7 +217,7 @@ public:
         for (std::size_t i = 0; i < N; ++i) {
             const auto [v, a] = curve.at(static_cast<double>(i) * dt);
             interp_.weights_into(v, a, w);
-            const double tau = tempo(w, lk.source);
+            const double tau = tempo(lk, w);
             if (i > 0) T[i] = T[i - 1] + 0.5 * (prev + tau);
             prev = tau;
         }
@@ -268,7 +271,7 @@ private:
     {
         continuous_result r;
         r.keys = blend(lk, w);
-        r.tempo = tempo(w, lk.source);
+        r.tempo = tempo(lk, w);
         r.amplitude = amplitude(w) / (model_->amplitude_stage() ? model_->info().amplitude[lk.source] : 1.0);
         const std::size_t frames = emotion_model::output_frames(in.frames, r.tempo);
         reconstruct_into(r.keys, in.skel, frames, in.fps, r.motion);

@@ -165,7 +165,7 @@ namespace detail {
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "gate_iters_scale", "tempo_shrink", "tempo_basis", "lag"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "gate_iters_scale", "tempo_shrink", "tempo_basis", "tempo_neighbours", "lag"}) o.erase(k);
     return o;
 }
 
@@ -602,6 +602,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         auto ck_info = ck.second;
         // a reused inner model may have been fitted with another tempo option: the tempo training would store now
         ck_info.tempo = tempo_factors(train, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis));
+        ck_info.tempo_table = tempo_table_of(train, info, opt);
         // and with or without the joint lag: the lag training would store now (G's options are the same)
         ck_info.lag = joint_lag_of<Config>(train, info, opt);
         detail::emotion_model_impl<Config> model(ck.first, ck_info);
@@ -640,7 +641,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
 
 /// @brief Fits the change gate again around a model already trained into `out_dir` (its inner models reused
 /// when they match, see fit_change_gate()) and rewrites the checkpoint's gate, prior, tempo factors
-/// (train_options::tempo_shrink, tempo_basis) and options in place (atomically, new checksum); G's weights are untouched. `handemo eval --reuse-models` uses it when only
+/// (train_options::tempo_shrink, tempo_basis, tempo_neighbours), joint lag and options in place (atomically, new checksum); G's weights are untouched. `handemo eval --reuse-models` uses it when only
 /// the gate options changed since the model was trained.
 /// @throws value_error when the checkpoint was trained with other options (the gate's aside) or steps.
 template <stargan_config Config>
@@ -666,6 +667,10 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
         j["lag"] = lag;
     else
         j.erase("lag");
+    if (const auto table = tempo_table_of(clips, info, opt); !table.empty())
+        j["tempo_neighbours"] = detail::tempo_neighbours_json(table);
+    else
+        j.erase("tempo_neighbours");
     j["options"] = opt.to_json();
     f.metadata["handemo"] = j.dump();
     f.metadata["checksum"] = detail::checkpoint_checksum(f);

@@ -29,6 +29,7 @@
 #include <handemo/stargan/dataset.hpp>
 #include <handemo/stargan/lag.hpp>
 #include <handemo/stargan/model.hpp>
+#include <handemo/stargan/tempo_neighbours.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -128,6 +129,11 @@ struct train_options {
     /// "auto" (the cadence when the training pairs' durations and cadences disagree, tempo_basis_check()); like
     /// tempo_shrink it never reaches G, so a stored model takes it by refit_gate()
     std::string tempo_basis = "duration";
+    /// tempo: give each input the mean tempo of the K training contents whose neutral clips are most like it
+    /// (tempo_neighbours.hpp), K in {3, 2, 1} or the learned factors as they are, whichever leave-one-content-out on
+    /// the training clips finds closest to the left-out contents' durations; like tempo_shrink it never reaches G,
+    /// so a stored model takes it by refit_gate()
+    bool tempo_neighbours = false;
     /// the joint lag (lag.hpp): per target emotion and joint, a time shift of the joint's keyframes learned from the
     /// training pairs, each emotion's kept only when leave-one-content-out on the training clips says it carries
     /// over; applied after G's change and before the amplitude stage. Like the tempo it never reaches G, so a
@@ -172,6 +178,7 @@ struct train_options {
         if (gate_iters_scale != 1.0) j["gate_iters_scale"] = gate_iters_scale;  // written only when not 1
         if (tempo_shrink) j["tempo_shrink"] = true;
         if (tempo_basis != "duration") j["tempo_basis"] = tempo_basis;  // written only when not the duration
+        if (tempo_neighbours) j["tempo_neighbours"] = true;
         if (lag) j["lag"] = true;
         return j;
     }
@@ -245,6 +252,7 @@ struct prepared_data {
     std::vector<std::string> sources;      ///< [M] file names, for messages
     angle_range range;                     ///< p_min/p_max of Eq. 3
     std::vector<double> tempo;             ///< [C] tempo factor per domain
+    tempo_neighbours tempo_table;          ///< the tempo neighbours (train_options::tempo_neighbours); empty without
     std::vector<double> amplitude;         ///< [C] amplitude factor per domain (amplitude_factors())
     /// amplitude_cv() on the training clips: mean RMSE without / with the factors; when scaling does not
     /// beat identity there, `amplitude` is set to all 1 (the data set carries no usable amplitude style)
@@ -499,13 +507,24 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     return p;
 }
 
-/// @brief prepare_data() with the range mode, amplitude normalisation, tempo (shrinking, basis) and joint lag of `opt`.
+/// @brief The tempo neighbours training stores for `opt` (tempo_neighbours_fit() on `clips`): empty when
+/// opt.tempo_neighbours is off or the check keeps the learned factors. refit_gate() and the change gate take it this way.
+inline tempo_neighbours tempo_table_of(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt)
+{
+    if (!opt.tempo_neighbours) return {};
+    return tempo_neighbours_fit(clips, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"));
+}
+
+/// @brief prepare_data() with the range mode, amplitude normalisation, tempo (shrinking, basis, neighbours) and joint
+/// lag of `opt`.
 template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt,
                            std::optional<angle_range> range = {})
 {
-    return prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink,
-                                parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"), opt.lag);
+    auto p = prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink,
+                                  parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"), opt.lag);
+    p.tempo_table = tempo_table_of(clips, info, opt);
+    return p;
 }
 
 /// @brief The joint lag prepare_data() fits for `opt` ([C][J], keyframe intervals), without the rest of the data:
@@ -556,6 +575,70 @@ inline std::vector<double> json_doubles(const nlohmann::json& j)
     return v;
 }
 
+/// The tempo neighbours as the checkpoint stores them (metadata 'handemo', field 'tempo_neighbours'); a domain a
+/// content has no pair of is null.
+inline nlohmann::json tempo_neighbours_json(const tempo_neighbours& t)
+{
+    nlohmann::json ratios = nlohmann::json::array();
+    for (const auto& row : t.log_ratios) {
+        nlohmann::json r = nlohmann::json::array();
+        for (double v : row) r.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
+        ratios.push_back(std::move(r));
+    }
+    return {{"k", t.k}, {"contents", t.contents}, {"descriptors", t.descriptors}, {"log_ratios", ratios}, {"mean", t.mean}, {"scale", t.scale}};
+}
+
+/// The tempo neighbours of a checkpoint's field, checked: k in 1..N, N contents each with a finite descriptor of
+/// the standardisation's length and C log ratios (null or |r| < log 100, at least one per content), finite means
+/// and non-negative finite scales. `fail` makes the error naming the file.
+template <class Fail>
+tempo_neighbours parse_tempo_neighbours(const nlohmann::json& j, std::size_t C, Fail&& fail)
+{
+    const auto bad = [&](const std::string& what) { return fail("metadata field 'tempo_neighbours' " + what); };
+    if (!j.is_object()) throw bad("is not an object");
+    tempo_neighbours t;
+    const auto& k = j.at("k");
+    if (!k.is_number_unsigned() || k.get<std::uint64_t>() < 1 || k.get<std::uint64_t>() > tempo_neighbour_grid.front())
+        throw bad("k is " + k.dump() + ", expected an integer in 1.." + std::to_string(tempo_neighbour_grid.front()));
+    t.k = k.get<std::size_t>();
+    t.contents = j.at("contents").get<std::vector<std::string>>();
+    for (const auto& row : j.at("descriptors")) t.descriptors.push_back(json_doubles(row));
+    t.mean = json_doubles(j.at("mean"));
+    t.scale = json_doubles(j.at("scale"));
+    for (const auto& row : j.at("log_ratios")) {
+        std::vector<double> r;
+        for (const auto& v : row) r.push_back(v.is_null() ? std::nan("") : v.get<double>());
+        t.log_ratios.push_back(std::move(r));
+    }
+    const std::size_t N = t.contents.size(), F = t.mean.size();
+    if (N < t.k) throw bad("has " + std::to_string(N) + " contents for k " + std::to_string(t.k));
+    if (t.descriptors.size() != N || t.log_ratios.size() != N)
+        throw bad("has " + std::to_string(t.descriptors.size()) + " descriptors and " + std::to_string(t.log_ratios.size()) +
+                  " rows of log ratios for " + std::to_string(N) + " contents");
+    if (F != tempo_descriptor_size || t.scale.size() != F)
+        throw bad("has a standardisation of " + std::to_string(F) + " means and " + std::to_string(t.scale.size()) + " scales, expected " +
+                  std::to_string(tempo_descriptor_size));
+    for (std::size_t f = 0; f < F; ++f)
+        if (!std::isfinite(t.mean[f]) || !std::isfinite(t.scale[f]) || t.scale[f] < 0)
+            throw bad("has a mean or scale of feature " + std::to_string(f) + " that is not finite (or a negative scale)");
+    for (std::size_t i = 0; i < N; ++i) {
+        if (t.descriptors[i].size() != F) throw bad("descriptor of content '" + t.contents[i] + "' has " + std::to_string(t.descriptors[i].size()) + " values");
+        for (double v : t.descriptors[i])
+            if (!std::isfinite(v)) throw bad("descriptor of content '" + t.contents[i] + "' has a value that is not finite");
+        if (t.log_ratios[i].size() != C)
+            throw bad("log ratios of content '" + t.contents[i] + "' have " + std::to_string(t.log_ratios[i].size()) + " entries for " +
+                      std::to_string(C) + " domains");
+        bool any = false;
+        for (double v : t.log_ratios[i]) {
+            if (std::isnan(v)) continue;
+            if (!(std::abs(v) < std::log(100.0))) throw bad("log ratios of content '" + t.contents[i] + "' hold " + std::to_string(v) + ", outside +-log(100)");
+            any = true;
+        }
+        if (!any) throw bad("log ratios of content '" + t.contents[i] + "' are all null");
+    }
+    return t;
+}
+
 }  // namespace detail
 
 /// @brief The run-time description stored in a checkpoint.
@@ -566,6 +649,9 @@ struct checkpoint_info {
     std::string neutral;
     angle_range range;
     std::vector<double> tempo;
+    /// the tempo neighbours (train_options::tempo_neighbours, tempo_neighbours.hpp); empty (k 0) for models trained
+    /// without them
+    tempo_neighbours tempo_table;
     std::vector<double> amplitude;  ///< [C] (all 1 for checkpoints written before it existed)
     /// [C] change gate per target domain (prepared_data::gate_posture/gate_motion; all 1 for checkpoints
     /// written before it existed or trained without it)
@@ -648,6 +734,7 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
         if (info.gate_prior.empty()) info.gate_prior.assign(info.tempo.size(), 0.0);
         if (j.contains("lag"))
             for (const auto& row : j.at("lag")) info.lag.push_back(detail::json_doubles(row));
+        if (j.contains("tempo_neighbours")) info.tempo_table = detail::parse_tempo_neighbours(j.at("tempo_neighbours"), info.domains.size(), fail);
         if (j.contains("detail")) info.detail = detail_layer::from_json(j.at("detail"), "checkpoint: " + path.string() + " (metadata 'detail')");
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = static_cast<long>(count("step", std::uint64_t{1} << 53));
@@ -1080,6 +1167,7 @@ public:
                             {"options", opt_.to_json()}};
         if (data_.detail) j["detail"] = data_.detail->to_json();
         if (!data_.lag.lag.empty()) j["lag"] = data_.lag.lag;
+        if (!data_.tempo_table.empty()) j["tempo_neighbours"] = detail::tempo_neighbours_json(data_.tempo_table);
         f.metadata["format"] = "handemo-checkpoint/1";
         f.metadata["handemo"] = j.dump();
         if (!data_.skel.joints.empty()) f.metadata["skeleton"] = to_bvh_string(clip::make(data_.skel, 1, 30), -1);

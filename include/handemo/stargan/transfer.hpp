@@ -2,7 +2,8 @@
 // Eq. 3 image -> G(image, target) -> image -> Eq. 6 keyframes -> full-rate motion by interpolation.
 // Tempo: the output lasts the input's duration times tempo[target] / tempo[source] (duration ratios
 // to neutral learned from the training data by tempo_fit(), see dataset.hpp), because time-normalised keyframes cannot carry
-// Table 1's "fast" and "slow". Position channels (a body's root translation) are kept from the input and
+// Table 1's "fast" and "slow"; with tempo neighbours (train_options::tempo_neighbours, tempo_neighbours.hpp) the
+// factors are those of the training contents nearest the input. Position channels (a body's root translation) are kept from the input and
 // stretched in time to the new length.
 // A residual model (train_options::residual) changes the input rather than redraw it: its output image is
 // x + change, and transfer adds the change to the input's own keyframe angles (change x half the channel's
@@ -139,6 +140,23 @@ public:
     double tempo(std::string_view target, std::optional<std::string_view> source = {}) const
     {
         return info_.tempo[domain(target)] / info_.tempo[domain(source ? *source : std::string_view(info_.neutral))];
+    }
+
+    /// @brief The tempo factors [C] of an input: the learned ones (info().tempo), or with tempo neighbours
+    /// (train_options::tempo_neighbours, tempo_neighbours.hpp) those of the training contents nearest the input.
+    std::vector<double> input_tempo(const clip& in) const
+    {
+        if (info_.tempo_table.empty()) return info_.tempo;
+        return info_.tempo_table.factors(tempo_descriptor(in), info_.tempo);
+    }
+
+    /// @brief Duration factor of a transfer of `in` from `source` (default: neutral) to `target`: the factors'
+    /// ratio (input_tempo()), equal to tempo(target, source) for a model without tempo neighbours.
+    double tempo(const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
+    {
+        if (info_.tempo_table.empty()) return tempo(target, source);
+        const auto f = input_tempo(in);
+        return f[domain(target)] / f[domain(source ? *source : std::string_view(info_.neutral))];
     }
 
     /// @brief Amplitude factor of a transfer from `source` (default: neutral) to `target`: amplitude[target] /
@@ -394,7 +412,7 @@ private:
         lag_of(r.target, source, r.lag);
         // back from the normalised space: the target's excursions (net: amplitude[target] / amplitude[source])
         r.amplitude = amp ? info_.amplitude[r.target] : 1.0;
-        r.tempo = tempo(target, source);
+        r.tempo = tempo(in, target, source);
         r.frames = output_frames(in.frames, r.tempo);
         r.fps = in.fps;
     }
@@ -466,7 +484,7 @@ public:
         if (!lag.empty()) shift_joints(kf, lag);
         if (amp && info_.amplitude[t] != 1.0) scale_keyframe_excursions(kf, info_.amplitude[t]);
         transfer_result r;
-        r.tempo = tempo(target, source);
+        r.tempo = tempo(in, target, source);
         r.amplitude = amp ? amplitude(target, source) : 1.0;
         const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(kf, in.skel, frames, in.fps);
