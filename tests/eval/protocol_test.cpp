@@ -203,9 +203,10 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
         CHECK(f.judge_cv_acc <= 1.0);
         const auto& grid = handemo::metrics::full_rate_classifier::lambda_grid;
         CHECK(std::find(grid.begin(), grid.end(), f.judge_lambda) != grid.end());
-        CHECK((f.judge_inputs == "pooled" || f.judge_inputs == "joints"));
+        CHECK((f.judge_inputs == "pooled" || f.judge_inputs == "joints" || f.judge_inputs == "absolute"));
         CHECK(f.judge_candidates.find("pooled ") == 0);
         CHECK(f.judge_candidates.find(", joints ") != std::string::npos);
+        CHECK(f.judge_candidates.find(", absolute ") != std::string::npos);
         CHECK(md.find(", inputs " + f.judge_inputs + " of " + f.judge_candidates + ")") != std::string::npos);
     }
     CHECK(md.find("**vs statistics**") != std::string::npos);

@@ -278,6 +278,14 @@ TEST_CASE("full-rate judge: the per-joint input set appends every joint's wrappe
     for (double v : full_rate_change(turned, fn, full_rate_inputs::joints)) CHECK(v == doctest::Approx(0.0).scale(1.0));
     CHECK(std::string(to_string(full_rate_inputs::joints)) == "joints");
     CHECK(parse_full_rate_inputs("pooled") == full_rate_inputs::pooled);
+    // the absolute set: the joints set, then the clip's own features as they are
+    const auto absolute = full_rate_change(fa, fn, full_rate_inputs::absolute);
+    REQUIRE(absolute.size() == full_rate_change_count(J, full_rate_inputs::absolute));
+    CHECK(absolute.size() == 12 * J + 19);
+    for (std::size_t i = 0; i < joints.size(); ++i) CHECK(absolute[i] == joints[i]);
+    for (std::size_t i = 0; i < fa.size(); ++i) CHECK(absolute[joints.size() + i] == fa[i]);
+    CHECK(std::string(to_string(full_rate_inputs::absolute)) == "absolute");
+    CHECK(parse_full_rate_inputs("absolute") == full_rate_inputs::absolute);
     CHECK_THROWS_WITH_AS((void)parse_full_rate_inputs("all"), doctest::Contains("'all'"), value_error);
 }
 
@@ -286,27 +294,33 @@ namespace {
 // Feature vectors of 2 joints (6J + 8 = 20 values) whose emotion shows only in the posture of the two joints: "bow" turns
 // joint 0 by 15 deg, "lift" joint 1 by as much. Pooled over the joints the two are the same change; per joint they
 // are not. `speed_cue` adds a second cue the pooled set sees: bow raises the log mean speed (clip feature 6J + 1),
-// lift the log mean acceleration (6J + 2).
+// lift the log mean acceleration (6J + 2). `level_cue` replaces the posture cue by a level of the root speed (6J + 3)
+// that each emotion sets whatever the content's.
 struct posture_toy {
     std::vector<std::vector<double>> f, r;
     std::vector<std::string> y, g;
 };
-posture_toy posture_set(bool speed_cue, std::size_t salt)
+posture_toy posture_set(bool speed_cue, std::size_t salt, bool level_cue = false)
 {
     posture_toy t;
     const std::size_t J = 2, D = full_rate_feature_count(J);
     const char* names[] = {"neutral", "bow", "lift"};
     std::size_t k = salt;
     for (int content = 0; content < 5; ++content)
-        for (int take = 0; take < 3; ++take) {
+        for (int take = 0; take < (level_cue ? 10 : 3); ++take) {  // the level toy: more samples than its 43 inputs
             std::vector<double> ref(D);
-            for (std::size_t i = 0; i < D; ++i) ref[i] = 10 * noise2(++k) + 30.0 * content;
+            // (with level_cue only the root speed's level depends on the content: the other features' offsets would
+            // leave every held-out content outside the training contents' range of the clip's own features)
+            for (std::size_t i = 0; i < D; ++i) ref[i] = 10 * noise2(++k) + (level_cue && i != 6 * J + 3 ? 0.0 : 30.0 * content);
             for (int e = 0; e < 3; ++e) {
                 auto f = ref;
                 for (std::size_t i = 0; i < D; ++i) f[i] += 0.5 * noise2(++k);
-                if (e == 1) f[J + 0] += 15.0;  // joint 0's x angle
-                if (e == 2) f[J + 3] += 15.0;  // joint 1's x angle
+                if (e == 1 && !level_cue) f[J + 0] += 15.0;  // joint 0's x angle
+                if (e == 2 && !level_cue) f[J + 3] += 15.0;  // joint 1's x angle
                 if (speed_cue && e > 0) f[6 * J + static_cast<std::size_t>(e)] += 3.0;
+                // the emotion sets the root speed's level whatever the content's (its neutral clip's) level: read against
+                // the neutral clip it changes by a different amount on every content
+                if (level_cue) f[6 * J + 3] = 4.0 * e + 0.1 * noise2(++k);
                 t.f.push_back(f), t.r.push_back(ref), t.y.push_back(names[e]), t.g.push_back("c" + std::to_string(content));
             }
         }
@@ -320,10 +334,11 @@ TEST_CASE("full-rate judge: keeps the per-joint set where only it recognises, th
     const auto train = posture_set(false, 0), test = posture_set(false, 5000);
     full_rate_judge judge;
     judge.fit(train.f, train.r, train.y, train.g);
-    REQUIRE(judge.candidates().size() == 2);
-    REQUIRE(judge.candidate_cv_accuracy().size() == 2);
+    REQUIRE(judge.candidates().size() == 3);
+    REQUIRE(judge.candidate_cv_accuracy().size() == 3);
     MESSAGE("posture toy: cross-validated pooled " << judge.candidate_cv_accuracy()[0] << ", joints " << judge.candidate_cv_accuracy()[1]);
     CHECK(judge.candidate_cv_accuracy()[1] > judge.candidate_cv_accuracy()[0] + 0.2);
+    CHECK(judge.candidate_cv_accuracy()[1] >= judge.candidate_cv_accuracy()[2]);
     CHECK(judge.inputs() == full_rate_inputs::joints);
     CHECK(judge.classifier().cv_accuracy_chosen() == judge.candidate_cv_accuracy()[1]);
     std::size_t ok = 0;
@@ -335,7 +350,19 @@ TEST_CASE("full-rate judge: keeps the per-joint set where only it recognises, th
     tie.fit(easy.f, easy.r, easy.y, easy.g);
     CHECK(tie.candidate_cv_accuracy()[0] == 1.0);
     CHECK(tie.candidate_cv_accuracy()[1] == 1.0);
+    CHECK(tie.candidate_cv_accuracy()[2] == 1.0);
     CHECK(tie.inputs() == full_rate_inputs::pooled);
+    // an emotion that sets a level whatever the content's: only the clip's own features carry it over
+    const auto level = posture_set(false, 0, true), level_test = posture_set(false, 5000, true);
+    full_rate_judge own;
+    own.fit(level.f, level.r, level.y, level.g);
+    MESSAGE("level toy: cross-validated pooled " << own.candidate_cv_accuracy()[0] << ", joints " << own.candidate_cv_accuracy()[1]
+                                                  << ", absolute " << own.candidate_cv_accuracy()[2]);
+    CHECK(own.candidate_cv_accuracy()[2] > own.candidate_cv_accuracy()[1]);
+    CHECK(own.inputs() == full_rate_inputs::absolute);
+    std::size_t own_ok = 0;
+    for (std::size_t i = 0; i < level_test.f.size(); ++i) own_ok += own.predict(level_test.f[i], level_test.r[i]) == level_test.y[i];
+    CHECK(own_ok >= level_test.f.size() * 9 / 10);
     // one candidate: no choice
     full_rate_judge only;
     only.fit(train.f, train.r, train.y, train.g, {full_rate_inputs::pooled});

@@ -124,14 +124,15 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
     sub->add_option_function<std::string>(
            "--judge-inputs",
            [o](const std::string& v) {
-               if (v != "auto" && v != "pooled" && v != "joints")
-                   throw handemo::value_error("eval: --judge-inputs '" + v + "': expected auto, pooled or joints");
+               if (v != "auto" && v != "pooled" && v != "joints" && v != "absolute")
+                   throw handemo::value_error("eval: --judge-inputs '" + v + "': expected auto, pooled, joints or absolute");
                o->opt.judge_inputs = v == "auto" ? handemo::metrics::all_full_rate_inputs()
                                                  : std::vector{handemo::metrics::parse_full_rate_inputs(v)};
            },
            "The full-rate judge's input set: pooled (the posture pooled over the joints, the judge of earlier reports), joints "
-           "(every joint's posture besides) or auto (each fold keeps the one its leave-one-content-out check on the training "
-           "clips recognises best; docs/evaluation.md); default auto");
+           "(every joint's posture besides), absolute (and the clip's own features, not read against the neutral clip) or auto "
+           "(each fold keeps the one its leave-one-content-out check on the training clips recognises best; docs/evaluation.md); "
+           "default auto");
     sub->add_option("--shrinkage", o->opt.shrinkage, "Covariance shrinkage of the emotion classifier, in [0, 1]")->capture_default_str();
     sub->add_flag("--continuous", o->continuous,
                   "Also measure the continuous control on every fold (equality at the labels' points, monotone paths from neutral, "

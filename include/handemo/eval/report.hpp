@@ -515,7 +515,7 @@ inline std::string report_introduction(const eval_result& r, const std::vector<m
          "nearest-centroid classifier (shrunk pooled within-class covariance) on keyframe features, trained only on the "
          "real training clips of the fold, never on the discriminator; recognised, full-rate judge: a second, independent "
          "classifier (metrics::full_rate_judge: the change of full-rate features (per joint range, speed and tremor, "
-         "the posture pooled over the joints or also per joint, duration, acceleration, tremor frequency, joint lags) "
+         "the posture pooled over the joints or also per joint, with or without the clip's own features, duration, acceleration, tremor frequency, joint lags) "
          "against the neutral input, an L2 logistic regression whose weight and input set are chosen by leave-one-content-out "
          "cross-validation inside the fold's real training clips); content kept: the nearest `" + r.neutral +
          "` clip (keyframe RMSE, over every content, held-out included) is of the input's content; ROM and speed ratios: "

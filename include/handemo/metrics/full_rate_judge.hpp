@@ -11,9 +11,10 @@
 //   L(W) = -(1/N) sum_n log softmax(W x_n)_{y_n} + (lambda / 2) sum_{c, i > 0} W_ci^2,
 // minimised by L-BFGS; lambda is chosen from a fixed grid by leave-one-group-out cross-validation on the
 // training samples (the groups are contents, so the weight that recognises emotions on unseen contents wins).
-// The judge (full_rate_judge) reads the change in one of two input sets (full_rate_inputs): the posture pooled
-// per axis over the joints, or the posture of every joint besides; with both candidates it keeps the one whose
-// leave-one-content-out accuracy on its training clips is higher (a tie keeps the pooled, the smaller set).
+// The judge (full_rate_judge) reads the change in one of three input sets (full_rate_inputs): the posture pooled
+// per axis over the joints, the posture of every joint besides, or that and the clip's own features (not read
+// against the neutral clip) besides; it keeps the candidate whose leave-one-content-out accuracy on its training
+// clips is highest (a tie keeps the smaller set).
 #pragma once
 
 #include <handemo/core/error.hpp>
@@ -171,33 +172,43 @@ inline std::vector<double> full_rate_features(const clip& c, const full_rate_fea
 
 /// @brief The input sets the full-rate judge can read a change in (full_rate_change()).
 enum class full_rate_inputs {
-    pooled,  ///< per joint range, speed and tremor; the posture pooled per axis over the joints; the clip features (3J + 11)
-    joints,  ///< the pooled set and every joint's posture change besides (6J + 11): a head bowed, a chest lifted
+    pooled,    ///< per joint range, speed and tremor; the posture pooled per axis over the joints; the clip features (3J + 11)
+    joints,    ///< the pooled set and every joint's posture change besides (6J + 11): a head bowed, a chest lifted
+    absolute,  ///< the joints set and the clip's own features besides, not read against the neutral clip (12J + 19)
 };
 
 /// @brief Every input set, in the order the judge prefers them on a tie (the smaller first): what it chooses from by default.
 inline const std::vector<full_rate_inputs>& all_full_rate_inputs()
 {
-    static const std::vector<full_rate_inputs> all{full_rate_inputs::pooled, full_rate_inputs::joints};
+    static const std::vector<full_rate_inputs> all{full_rate_inputs::pooled, full_rate_inputs::joints, full_rate_inputs::absolute};
     return all;
 }
 
-/// @brief "pooled" or "joints".
-inline const char* to_string(full_rate_inputs i) noexcept { return i == full_rate_inputs::joints ? "joints" : "pooled"; }
+/// @brief "pooled", "joints" or "absolute".
+inline const char* to_string(full_rate_inputs i) noexcept
+{
+    return i == full_rate_inputs::joints ? "joints" : i == full_rate_inputs::absolute ? "absolute" : "pooled";
+}
 
-/// @brief Parses "pooled" or "joints".
+/// @brief Parses "pooled", "joints" or "absolute".
 /// @throws value_error naming the value otherwise.
 inline full_rate_inputs parse_full_rate_inputs(std::string_view v)
 {
     if (v == "pooled") return full_rate_inputs::pooled;
     if (v == "joints") return full_rate_inputs::joints;
-    throw value_error("full-rate judge inputs '" + std::string(v) + "': expected pooled or joints");
+    if (v == "absolute") return full_rate_inputs::absolute;
+    throw value_error("full-rate judge inputs '" + std::string(v) + "': expected pooled, joints or absolute");
 }
 
-/// @brief The number of values full_rate_change() gives for J joints: 3J + 11 (pooled), 6J + 11 (joints).
+/// @brief The number of values full_rate_change() gives for J joints: 3J + 11 (pooled), 6J + 11 (joints), 12J + 19
+/// (absolute).
 constexpr std::size_t full_rate_change_count(std::size_t joints, full_rate_inputs inputs = full_rate_inputs::pooled) noexcept
 {
-    return (inputs == full_rate_inputs::joints ? 6 : 3) * joints + 11;
+    switch (inputs) {
+    case full_rate_inputs::joints: return 6 * joints + 11;
+    case full_rate_inputs::absolute: return 12 * joints + 19;
+    default: return 3 * joints + 11;
+    }
 }
 
 /// @brief What the full-rate judge reads: a clip's features (full_rate_features()) against those of a neutral clip
@@ -205,7 +216,8 @@ constexpr std::size_t full_rate_change_count(std::size_t joints, full_rate_input
 /// speeds and posture) cancels and what the emotion changes stays. 3J + 11 values: per joint the differences of
 /// log range, log speed and log tremor energy; per axis the mean over joints of the posture difference (wrapped
 /// into (-180, 180]); the differences of the 8 clip features. With full_rate_inputs::joints, 3J values follow:
-/// each joint's posture difference per axis (wrapped, degrees), joint by joint.
+/// each joint's posture difference per axis (wrapped, degrees), joint by joint; with full_rate_inputs::absolute,
+/// those 3J and then the clip's own 6J + 8 features as they are.
 /// @throws shape_error when the two vectors differ in length or are not 6J + 8 long.
 inline std::vector<double> full_rate_change(const std::vector<double>& clip_features, const std::vector<double>& neutral_features,
                                             full_rate_inputs inputs = full_rate_inputs::pooled)
@@ -223,10 +235,11 @@ inline std::vector<double> full_rate_change(const std::vector<double>& clip_feat
         for (std::size_t a = 0; a < 3; ++a) {
             const double d = wrap_angle_deg(clip_features[J + 3 * j + a] - neutral_features[J + 3 * j + a]);
             out[3 * J + a] += d / static_cast<double>(J);
-            if (inputs == full_rate_inputs::joints) out[3 * J + 11 + 3 * j + a] = d;
+            if (inputs != full_rate_inputs::pooled) out[3 * J + 11 + 3 * j + a] = d;
         }
     }
     for (std::size_t i = 0; i < 8; ++i) out[3 * J + 3 + i] = clip_features[6 * J + i] - neutral_features[6 * J + i];
+    if (inputs == full_rate_inputs::absolute) std::copy(clip_features.begin(), clip_features.end(), out.begin() + static_cast<std::ptrdiff_t>(6 * J + 11));
     return out;
 }
 
