@@ -507,9 +507,10 @@ inline tempo_basis_choice tempo_basis_check(const std::vector<const labelled_cli
     return r;
 }
 
-/// The leave-one-content-out check tempo_fit() and tempo_shrink_fit() score their candidates by: for each content of
-/// `scored` (in order), `fit(train)` on the clips of the other contents gives one factor vector per candidate; a
-/// candidate's score is the mean over the contents of the mean |log(factor / real ratio)| over that content's pairs.
+/// The leave-one-content-out check tempo_fit(), tempo_shrink_fit() and tempo_neighbours_fit() score their candidates
+/// by: for each content of `scored` (in order), `fit(train, held)` on the clips of the other contents gives one factor
+/// vector per candidate for the left-out content `held`; a candidate's score is the mean over the contents of the mean
+/// |log(factor / real ratio)| over that content's pairs.
 template <class Fit>
 std::vector<double> tempo_loo_scores(const std::vector<const labelled_clip*>& all, const std::vector<tempo_pair>& pairs,
                                      const std::set<std::string>& scored, std::size_t candidates, Fit&& fit)
@@ -519,7 +520,7 @@ std::vector<double> tempo_loo_scores(const std::vector<const labelled_clip*>& al
         std::vector<const labelled_clip*> train;
         for (const auto* c : all)
             if (c->content != held) train.push_back(c);
-        const std::vector<std::vector<double>> factors = fit(train);
+        const std::vector<std::vector<double>> factors = fit(train, held);
         for (std::size_t i = 0; i < candidates; ++i) {
             const auto& f = factors[i];
             double err = 0;
@@ -543,7 +544,7 @@ inline tempo_shrink_check tempo_shrink_fit(const std::vector<const labelled_clip
     r.errors.assign(tempo_shrink_grid.size(), std::nan(""));
     if (scored.size() < 2) return r;
     r.contents = scored.size();
-    r.errors = tempo_loo_scores(all, pairs, scored, tempo_shrink_grid.size(), [&](const std::vector<const labelled_clip*>& train) {
+    r.errors = tempo_loo_scores(all, pairs, scored, tempo_shrink_grid.size(), [&](const std::vector<const labelled_clip*>& train, const std::string&) {
         const auto fitted = tempo_estimate(e, train, domains, neutral, values);
         std::vector<std::vector<double>> f;
         for (double w : tempo_shrink_grid) f.push_back(shrink_tempo(fitted, w));
@@ -574,23 +575,12 @@ inline tempo_basis_choice tempo_basis_check(const std::vector<labelled_clip>& d,
     return detail::tempo_basis_check(all, domains, neutral, detail::make_tempo_values(all, tempo_basis::cadence));
 }
 
-/// @brief Fits the tempo factors of the transfer step: every tempo_estimator is scored by leave-one-content-out
-/// cross-validation inside `d` (for each content holding (emotion, neutral) pairs: fit on the other contents,
-/// error = mean over that content's pairs of |log(predicted factor / real ratio)|; the score is the mean of these
-/// errors over the contents) and the estimator with the lowest score wins, ties going to the simpler (earlier in
-/// tempo_estimator). The ratios are of durations or cadences (`basis`; tempo_basis::automatic decides by
-/// tempo_basis_check() on `d`). Only the given clips are used: pass the training set, never held-out data. With
-/// fewer than two contents holding pairs there is no cross-validation: `weighted` is used and every cv_error is NaN.
-/// With `shrink` the chosen factors are then shrunk toward 1 by the weight tempo_shrink_fit() chooses for the
-/// chosen estimator (train_options::tempo_shrink).
-/// @param domains domain names in label order; @param neutral name of the neutral domain
-/// @return the chosen factors ([C], 1 for the neutral domain and domains without data), the estimator, every
-///         candidate's factors and score, and the basis.
-inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
-                                  const std::string& neutral, bool shrink = false, tempo_basis basis = tempo_basis::duration)
+namespace detail {
+
+/// tempo_fit() of the clips `all` points to.
+inline tempo_fit_result tempo_fit(const std::vector<const labelled_clip*>& all, const std::vector<std::string>& domains,
+                                  const std::string& neutral, bool shrink, tempo_basis basis)
 {
-    std::vector<const labelled_clip*> all;
-    for (const auto& c : d) all.push_back(&c);
     tempo_fit_result r;
     auto values = detail::make_tempo_values(all, basis == tempo_basis::duration ? tempo_basis::duration : tempo_basis::cadence);
     if (basis == tempo_basis::automatic) {
@@ -614,7 +604,7 @@ inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std
         r.factors = r.candidates[static_cast<std::size_t>(r.estimator)].factors;
         return r;
     }
-    const auto scores = detail::tempo_loo_scores(all, pairs, scored, tempo_estimator_count, [&](const std::vector<const labelled_clip*>& train) {
+    const auto scores = detail::tempo_loo_scores(all, pairs, scored, tempo_estimator_count, [&](const std::vector<const labelled_clip*>& train, const std::string&) {
         std::vector<std::vector<double>> f;
         for (std::size_t i = 0; i < tempo_estimator_count; ++i)
             f.push_back(detail::tempo_estimate(static_cast<tempo_estimator>(i), train, domains, neutral, values));
@@ -634,6 +624,28 @@ inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std
         r.factors = shrink_tempo(std::move(r.factors), check.weight);
     }
     return r;
+}
+
+}  // namespace detail
+
+/// @brief Fits the tempo factors of the transfer step: every tempo_estimator is scored by leave-one-content-out
+/// cross-validation inside `d` (for each content holding (emotion, neutral) pairs: fit on the other contents,
+/// error = mean over that content's pairs of |log(predicted factor / real ratio)|; the score is the mean of these
+/// errors over the contents) and the estimator with the lowest score wins, ties going to the simpler (earlier in
+/// tempo_estimator). The ratios are of durations or cadences (`basis`; tempo_basis::automatic decides by
+/// tempo_basis_check() on `d`). Only the given clips are used: pass the training set, never held-out data. With
+/// fewer than two contents holding pairs there is no cross-validation: `weighted` is used and every cv_error is NaN.
+/// With `shrink` the chosen factors are then shrunk toward 1 by the weight tempo_shrink_fit() chooses for the
+/// chosen estimator (train_options::tempo_shrink).
+/// @param domains domain names in label order; @param neutral name of the neutral domain
+/// @return the chosen factors ([C], 1 for the neutral domain and domains without data), the estimator, every
+///         candidate's factors and score, and the basis.
+inline tempo_fit_result tempo_fit(const std::vector<labelled_clip>& d, const std::vector<std::string>& domains,
+                                  const std::string& neutral, bool shrink = false, tempo_basis basis = tempo_basis::duration)
+{
+    std::vector<const labelled_clip*> all;
+    for (const auto& c : d) all.push_back(&c);
+    return detail::tempo_fit(all, domains, neutral, shrink, basis);
 }
 
 /// @brief The shrink weight of one estimator's factors, chosen inside `d` by leave-one-content-out: for each weight

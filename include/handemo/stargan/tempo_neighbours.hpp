@@ -182,8 +182,8 @@ inline tempo_neighbours tempo_neighbours_fit(const std::vector<labelled_clip>& d
 {
     std::vector<const labelled_clip*> all;
     for (const auto& c : d) all.push_back(&c);
-    const auto fit = tempo_fit(d, domains, neutral, shrink, basis);
-    const auto values = detail::make_tempo_values(all, fit.basis.basis);
+    const auto chosen = detail::tempo_fit(all, domains, neutral, shrink, basis).basis.basis;
+    const auto values = detail::make_tempo_values(all, chosen);
     std::map<const labelled_clip*, std::vector<double>> described;
     for (const auto* c : all)
         if (c->emotion == neutral) described[c] = tempo_descriptor(c->motion);
@@ -191,29 +191,19 @@ inline tempo_neighbours tempo_neighbours_fit(const std::vector<labelled_clip>& d
     tempo_neighbours out;
     out.errors.assign(1 + tempo_neighbour_grid.size(), std::nan(""));
     if (table.contents.size() < 2) return out;
-    const auto pairs = detail::tempo_pairs(all, domains, neutral, values);
-    std::vector<double> total(out.errors.size(), 0.0);
-    for (std::size_t h = 0; h < table.contents.size(); ++h) {
-        const std::string& held = table.contents[h];
-        std::vector<labelled_clip> train;
-        for (const auto& c : d)
-            if (c.content != held) train.push_back(c);
-        std::vector<std::vector<double>> predicted{tempo_fit(train, domains, neutral, shrink, fit.basis.basis).factors};
-        for (std::size_t k : tempo_neighbour_grid)
-            predicted.push_back(detail::tempo_table_without(table, h, k).factors(table.descriptors[h], predicted.front()));
-        for (std::size_t i = 0; i < predicted.size(); ++i) {
-            double err = 0;
-            std::size_t n = 0;
-            for (const auto& p : pairs)
-                if (p.content == held) err += std::abs(std::log(predicted[i][p.domain] / p.ratio())), ++n;
-            total[i] += err / static_cast<double>(n);
-        }
-    }
+    const std::set<std::string> scored(table.contents.begin(), table.contents.end());
+    out.errors = detail::tempo_loo_scores(all, detail::tempo_pairs(all, domains, neutral, values), scored, out.errors.size(),
+                                          [&](const std::vector<const labelled_clip*>& train, const std::string& held) {
+                                              const std::size_t h = static_cast<std::size_t>(
+                                                  std::find(table.contents.begin(), table.contents.end(), held) - table.contents.begin());
+                                              std::vector<std::vector<double>> f{detail::tempo_fit(train, domains, neutral, shrink, chosen).factors};
+                                              for (std::size_t k : tempo_neighbour_grid)
+                                                  f.push_back(detail::tempo_table_without(table, h, k).factors(table.descriptors[h], f.front()));
+                                              return f;
+                                          });
     std::size_t best = 0;
-    for (std::size_t i = 0; i < total.size(); ++i) {
-        out.errors[i] = total[i] / static_cast<double>(table.contents.size());
+    for (std::size_t i = 0; i < out.errors.size(); ++i)
         if (out.errors[i] < out.errors[best] - 1e-12) best = i;
-    }
     if (best == 0) return out;
     auto errors = std::move(out.errors);
     out = detail::tempo_table_without(table, std::numeric_limits<std::size_t>::max(), tempo_neighbour_grid[best - 1]);
