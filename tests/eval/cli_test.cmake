@@ -61,10 +61,22 @@ foreach(s "### held out: patting" "### held out: gripping" "Where StarGAN beats 
 endforeach()
 
 # the continuous control's section (--continuous): both folds, every label's point the discrete transfer bit for bit
-foreach(s "## Continuous control" "| patting | 1 | 5 / 5 |" "| gripping | 1 | 5 / 5 |" "| all | 2 | 10 / 10 | ")
+foreach(s "## Continuous control" "| patting | 1 | 5 / 5 |" "| gripping | 1 | 5 / 5 |" "| all | 2 | 10 / 10 | "
+          "tempo and amplitude factors blended linearly (`--rate-blend linear`)")
   string(FIND "${md}" "${s}" at)
   if(at EQUAL -1)
     message(FATAL_ERROR "report.md lacks '${s}'")
+  endif()
+endforeach()
+# the same models rescored with the rates blended geometrically: the labels' points still the discrete transfer
+file(COPY ${WORK_DIR}/report/ DESTINATION ${WORK_DIR}/report_geo)
+run_ok(eval_geometric eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/report_geo --iters 8 --threads 1
+       --folds patting,gripping --seed 3 --synth-seed 2 --no-rcm --continuous --rate-blend geometric --reuse-models)
+file(READ ${WORK_DIR}/report_geo/report.md md_geo)
+foreach(s "| all | 2 | 10 / 10 | " "blended geometrically (`--rate-blend geometric`)" "model reused from an earlier run")
+  string(FIND "${md_geo}" "${s}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "the geometric blend's report.md lacks '${s}'")
   endif()
 endforeach()
 file(WRITE ${WORK_DIR}/no_fearful.json "{\"format\": \"handemo-rcm-circumplex\", \"version\": 1, \"source\": \"a test\", \"labels\": {\"neutral\": {\"valence\": 0.1, \"arousal\": -0.4}, \"sad\": {\"valence\": -0.7, \"arousal\": -0.4}}}")
@@ -72,6 +84,8 @@ run_fail(eval_continuous_table eval --data ${WORK_DIR}/data --config hand-tiny -
          --circumplex ${WORK_DIR}/no_fearful.json)
 expect_error_matches("label '[a-z]+' has no circumplex coordinates in .*no_fearful.json")
 
+run_fail(eval_rate_blend eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --rate-blend geometric)
+expect_error_matches("--rate-blend is how the continuous control blends the labels' rates: give --continuous too")
 run_fail(eval_config eval --data ${WORK_DIR}/data --config hand-huge --report ${WORK_DIR}/bad)
 expect_error_matches("unknown configuration 'hand-huge'")
 run_fail(eval_synth_seed eval --data ${WORK_DIR}/data --config hand-tiny --report ${WORK_DIR}/bad --synth-seed 5)

@@ -176,6 +176,24 @@ run_fail(va_image transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --
 expect_error_matches("must be .bvh files")
 run_fail(va_detail transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --valence 0 --arousal 0 --detail --out ${WORK_DIR}/x.bvh)
 expect_error_matches("--detail is per emotion")
+# --rate-blend: at sad's point the same bytes under the geometric blend; between labels another duration; named errors
+run_ok(transfer_va_geometric transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --valence -0.725 --arousal -0.3775 --rate-blend geometric
+       --out ${WORK_DIR}/sad_va_geo.bvh)
+file(READ ${WORK_DIR}/sad_va_geo.bvh sad_va_geo)
+if(NOT sad_va_geo STREQUAL plain)
+  message(FATAL_ERROR "transfer --rate-blend geometric at sad's circumplex point wrote another motion than --emotion sad")
+endif()
+run_ok(transfer_between_geometric transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --valence -0.3 --arousal -0.38 --rate-blend geometric
+       --out ${WORK_DIR}/between_geo.bvh)
+file(READ ${WORK_DIR}/between.bvh between_lin)
+file(READ ${WORK_DIR}/between_geo.bvh between_geo)
+if(between_geo STREQUAL between_lin)
+  message(FATAL_ERROR "transfer --rate-blend geometric between neutral and sad wrote the linear blend's motion")
+endif()
+run_fail(rate_blend_unknown transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --valence 0 --arousal 0 --rate-blend log --out ${WORK_DIR}/x.bvh)
+expect_error_matches("--rate-blend: unknown rate blend 'log', expected linear or geometric")
+run_fail(rate_blend_emotion transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion sad --rate-blend geometric --out ${WORK_DIR}/x.bvh)
+expect_error_matches("--rate-blend blends the labels' rates between their points: it needs a continuous target")
 
 # bad input
 run_fail(unknown_emotion transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion bored --out ${WORK_DIR}/x.bvh)

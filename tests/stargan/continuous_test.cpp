@@ -111,7 +111,9 @@ TEST_CASE("continuous transfer: at each label's point the output is the discrete
 {
     const auto& model = continuous_shipped_model();
     const auto table = continuous_table();
-    const stargan::continuous_control control(model, table);
+    for (const auto rates : {stargan::rate_blend::linear, stargan::rate_blend::geometric}) {
+    CAPTURE(stargan::rate_blend_name(rates));
+    const stargan::continuous_control control(model, table, rates);
     for (hand_motion m : {hand_motion::pointing, hand_motion::crawling}) {
         const clip in = continuous_neutral(m);
         for (const auto& d : model.info().domains) {
@@ -141,6 +143,7 @@ TEST_CASE("continuous transfer: at each label's point the output is the discrete
     const auto rc = stargan::transfer_capture(model, cap, "angry");
     CHECK(cc.motion.angles == rc.motion.angles);
     CHECK(cc.retargeted);
+    }
 }
 
 TEST_CASE("continuous transfer: a toy model with known styles gives, at any point, the style the weights make")
@@ -148,7 +151,10 @@ TEST_CASE("continuous transfer: a toy model with known styles gives, at any poin
     const auto toy = toy_model::make();
     const auto& info = toy->info();
     const auto table = continuous_table();
-    const stargan::continuous_control control(*toy, table);
+    for (const auto rates : {stargan::rate_blend::linear, stargan::rate_blend::geometric}) {
+    CAPTURE(stargan::rate_blend_name(rates));
+    const bool geometric = rates == stargan::rate_blend::geometric;
+    const stargan::continuous_control control(*toy, table, rates);
     const clip in = continuous_neutral(hand_motion::gripping);
     const std::size_t K = toy->keyframes(), C = toy->joints() * 3, D = info.domains.size();
     std::mt19937 rng(5);
@@ -167,8 +173,9 @@ TEST_CASE("continuous transfer: a toy model with known styles gives, at any poin
         auto expect = kf;
         double amp = 0, tempo = 0;
         for (std::size_t d = 0; d < D; ++d) {
-            amp += w[d] * info.amplitude[d];
-            tempo += w[d] * info.tempo[d];
+            // linear: the weighted factors; geometric: the weighted logs of the factors
+            amp += w[d] * (geometric ? std::log(info.amplitude[d]) : info.amplitude[d]);
+            tempo += w[d] * (geometric ? std::log(info.tempo[d]) : info.tempo[d]);
             double mean_change = 0;
             for (std::size_t k = 0; k < K; ++k) mean_change += toy_model::toy_bend(d) * std::sin(3.14159265358979 * double(k) / double(K - 1)) / double(K);
             for (std::size_t k = 0; k < K; ++k)
@@ -180,11 +187,52 @@ TEST_CASE("continuous transfer: a toy model with known styles gives, at any poin
                         w[d] * (info.gate_posture[d] * mean + info.gate_motion[d] * (change - mean) + info.gate_prior[d] * info.prior_posture[d][ch]);
                 }
         }
+        if (geometric) amp = std::exp(amp), tempo = std::exp(tempo);
         stargan::scale_keyframe_excursions(expect, amp);
         CHECK(max_abs_diff(r.keys.angles, expect.angles) < 1e-3);  // G runs in float
         CHECK(r.tempo == doctest::Approx(tempo / info.tempo[toy->domain("neutral")]).epsilon(1e-12));
         CHECK(r.motion.frames == stargan::emotion_model::output_frames(in.frames, r.tempo));
     }
+    // halfway from neutral to sad: the geometric blend's duration factor is the geometric mean of the two labels'
+    // (relative to the neutral input), the linear blend's the arithmetic mean
+    const auto [hv, ha] = toward(table, "sad", 0.5);
+    const double fs = info.tempo[toy->domain("sad")], fn = info.tempo[toy->domain("neutral")];
+    REQUIRE(fs / fn > 1.5);  // far enough apart that the two means differ
+    CHECK(control.transfer(in, hv, ha).tempo == doctest::Approx(geometric ? std::sqrt(fs / fn) : 0.5 * (fs + fn) / fn).epsilon(1e-12));
+    }
+}
+
+TEST_CASE("rate blends: linear and geometric, exact at one-hot weights, non-positive factors refused by the geometric blend")
+{
+    using stargan::rate_blend;
+    const std::vector<double> f{1.0, 4.0, 0.5};
+    CHECK(stargan::blend_rates(f, {0.5, 0.5, 0.0}, rate_blend::linear, "tempo") == doctest::Approx(2.5).epsilon(1e-15));
+    CHECK(stargan::blend_rates(f, {0.5, 0.5, 0.0}, rate_blend::geometric, "tempo") == doctest::Approx(2.0).epsilon(1e-15));
+    CHECK(stargan::blend_rates(f, {0.0, 0.5, 0.5}, rate_blend::geometric, "tempo") == doctest::Approx(std::sqrt(2.0)).epsilon(1e-15));
+    CHECK(stargan::blend_rates(f, {0.25, 0.25, 0.5}, rate_blend::geometric, "tempo") == doctest::Approx(1.0).epsilon(1e-15));
+    // a weight of exactly 1 gives the factor itself, also where exp(log(f)) is not f (so the labels' points stay exact)
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.2, 5.0);
+    std::size_t inexact = 0;
+    for (int n = 0; n < 2000; ++n) {
+        const double x = u(rng);
+        inexact += std::exp(std::log(x)) != x;
+        for (const auto b : {rate_blend::linear, rate_blend::geometric}) {
+            CHECK(stargan::blend_rates({1.0, x, 2.0}, {0.0, 1.0, 0.0}, b, "tempo") == x);
+        }
+    }
+    REQUIRE(inexact > 0);  // the round trip through log and exp does lose bits on some of these factors
+    // the geometric blend needs positive, finite factors; the linear one takes any
+    CHECK_THROWS_WITH_AS(stargan::blend_rates({1.0, 0.0}, {0.5, 0.5}, rate_blend::geometric, "amplitude"),
+                         doctest::Contains("the amplitude factor of label 1 is 0.000000, which a geometric blend cannot take"), value_error);
+    CHECK_THROWS_AS(stargan::blend_rates({1.0, std::nan("")}, {0.5, 0.5}, rate_blend::geometric, "tempo"), value_error);
+    CHECK(stargan::blend_rates({1.0, 0.0}, {0.5, 0.5}, rate_blend::linear, "amplitude") == 0.5);
+    // names
+    CHECK(stargan::parse_rate_blend("geometric") == rate_blend::geometric);
+    CHECK(stargan::parse_rate_blend("linear") == rate_blend::linear);
+    CHECK(std::string(stargan::rate_blend_name(rate_blend::geometric)) == "geometric");
+    CHECK_THROWS_WITH_AS(stargan::parse_rate_blend("log", "transfer: --rate-blend"),
+                         doctest::Contains("transfer: --rate-blend: unknown rate blend 'log', expected linear or geometric"), value_error);
 }
 
 TEST_CASE("the joint lag: after G's change and the prior, before the amplitude stage; exact at the labels' points")

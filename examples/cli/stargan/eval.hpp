@@ -30,6 +30,7 @@ struct eval_cli {
     std::string command;
     bool continuous = false;  ///< measure the continuous control (eval_options::continuous) with the --circumplex table
     std::string circumplex;
+    std::string rate_blend;  ///< --rate-blend (eval_options::continuous_rates), with --continuous only
     bool mpi = false;  ///< --mpi: the trainings dealt over the MPI processes (eval_options::group, cmd_mpi.cpp)
 };
 
@@ -41,6 +42,10 @@ void run_eval_cli(eval_cli& o)
     o.opt.commit = handemo::cli::build_commit();  // printed in the report: the code that made it
     if (o.has_synth_seed) o.opt.synth_seed = o.synth_seed;
     if (o.continuous) o.opt.continuous = o.circumplex.empty() ? transfer_cmd::default_circumplex().string() : o.circumplex;
+    if (!o.rate_blend.empty()) {
+        if (!o.continuous) throw value_error("eval: --rate-blend is how the continuous control blends the labels' rates: give --continuous too");
+        o.opt.continuous_rates = stargan::parse_rate_blend(o.rate_blend, "eval: --rate-blend");
+    }
     if (o.mpi) {
         o.opt.group = handemo::cli::mpi().group();  // one process: as without --mpi
     } else {  // started by a launcher as one of several processes: each would run the whole evaluation into one folder
@@ -138,6 +143,9 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
                   "Also measure the continuous control on every fold (equality at the labels' points, monotone paths from neutral, "
                   "the Lipschitz bound, halfway points, and with --rcm the Spearman correlation of targets and analysis; docs/continuous.md)");
     sub->add_option("--circumplex", o->circumplex, "The labels' circumplex coordinates for --continuous (default: the shipped data/rcm/circumplex.json)");
+    sub->add_option("--rate-blend", o->rate_blend,
+                    "With --continuous: how the labels' tempo and amplitude factors are blended between their points, linear or "
+                    "geometric (in log space; docs/continuous.md); default linear");
     // methods from other translation units (cmd_rcm.cpp: --rcm, the circumplex method of Aristidou et al. 2017)
     for (const auto& e : handemo::cli::eval_extensions()) e.add_options(sub);
     if (!sub->get_option_no_throw("--rcm")) {  // built without it: --no-rcm is accepted, --rcm says why it is absent

@@ -76,6 +76,7 @@ struct transfer_cli {
     // the continuous target: a point, a path over a duration, or a curve file
     std::optional<double> valence, arousal, duration;
     std::string path, curve, circumplex;
+    std::string rate_blend;  ///< how the labels' tempo and amplitude factors are blended (stargan::rate_blend); empty: the default
     // a filmstrip along the --path: one column per point (--steps per segment), a small circumplex above each
     std::string filmstrip;
     std::size_t steps = 4, rows = 5;
@@ -102,7 +103,10 @@ inline transfer_target target_of(const transfer_cli& o, const stargan::emotion_m
     if (o.grid) va_grid(o.grid);  // a grid size out of range stops here
     if (o.duration && o.path.empty()) throw value_error("transfer: --duration is the time of a --path");
     transfer_target t;
+    const stargan::rate_blend rates = o.rate_blend.empty() ? stargan::default_rate_blend : stargan::parse_rate_blend(o.rate_blend, "transfer: --rate-blend");
     if (!o.emotion.empty()) {
+        if (!o.rate_blend.empty())
+            throw value_error("transfer: --rate-blend blends the labels' rates between their points: it needs a continuous target, not --emotion");
         model.domain(o.emotion);  // an unknown emotion stops here, before any file is read
         t.title = o.emotion;
         return t;
@@ -110,7 +114,7 @@ inline transfer_target target_of(const transfer_cli& o, const stargan::emotion_m
     if (o.detail) throw value_error("transfer: --detail is per emotion: it is not available with a continuous target");
     const std::filesystem::path table_path = o.circumplex.empty() ? default_circumplex() : std::filesystem::path(o.circumplex);
     const circumplex_table table = load_circumplex(table_path);
-    t.control.emplace(model, table, table_path.string());
+    t.control.emplace(model, table, rates, table_path.string());
     char b[96];
     if (o.valence || o.arousal) {
         if (!o.valence || !o.arousal) throw value_error("transfer: --valence and --arousal go together (a point of the circumplex)");
@@ -459,6 +463,9 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     sub->add_option("--steps", o->steps, "Columns of the --filmstrip per path segment (each waypoint is a column)")->capture_default_str();
     sub->add_option("--rows", o->rows, "Frames per column of the --filmstrip")->capture_default_str();
     sub->add_option("--circumplex", o->circumplex, "The labels' circumplex coordinates (default: the shipped data/rcm/circumplex.json)");
+    sub->add_option("--rate-blend", o->rate_blend,
+                    "With a continuous target: how the labels' tempo and amplitude factors are blended between their points, linear "
+                    "or geometric (in log space: halfway to a label twice as slow is sqrt(2) times as slow); default linear");
     sub->add_option("--out", o->out,
                     "Output: .bvh (full-rate motion), .bmp/.png (motion image), a folder for a folder --in, or .html for --grid")->required();
     sub->add_option("--threads", o->threads, "Threads for a folder --in, sharing the one loaded model (default: the machine's cores)");

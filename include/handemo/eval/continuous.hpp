@@ -176,13 +176,17 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
 }
 
 /// @brief The report's section on the continuous control: one row per fold and the total.
-inline report_section continuous_section(const std::vector<continuous_fold>& folds, std::size_t steps = 10)
+/// `rates`: how the control blended the labels' tempo and amplitude factors (named in the text).
+inline report_section continuous_section(const std::vector<continuous_fold>& folds, std::size_t steps = 10,
+                                         stargan::rate_blend rates = stargan::default_rate_blend)
 {
     report_section sec;
     sec.title = "Continuous control (circumplex points through the StarGAN transfer)";
     std::string& m = sec.markdown;
     m += "Each held-out neutral take goes to every label's circumplex point and along the straight path from neutral's point to each "
-         "label in " + std::to_string(steps) + " steps (docs/continuous.md). *Equal*: outputs at the labels' points equal to the discrete "
+         "label in " + std::to_string(steps) + " steps (docs/continuous.md), the labels' tempo and amplitude factors blended " +
+         (rates == stargan::rate_blend::geometric ? "geometrically (`--rate-blend geometric`)" : "linearly (`--rate-blend linear`)") +
+         ". *Equal*: outputs at the labels' points equal to the discrete "
          "transfer bit for bit. *Monotone*: paths along which the fold's classifier's posterior for the label never falls; *peak "
          "first*: of the others, those whose posterior at the label's point is below its maximum on the way (the discrete transfer "
          "is recognised less surely than a blend short of it; the rest dip and recover). *Lipschitz*: "

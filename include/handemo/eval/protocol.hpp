@@ -81,6 +81,8 @@ struct eval_options {
     /// (eval/continuous.hpp: equality at the labels' points, monotone paths, the Lipschitz bound, halfway points)
     /// and report it. Empty: not measured.
     std::string continuous;
+    /// How the continuous control blends the labels' tempo and amplitude factors between their points.
+    stargan::rate_blend continuous_rates = stargan::default_rate_blend;
     /// How the change gate's inner groups are formed (schedule.hpp): shared (N + 1 inner trainings for N folds) or
     /// per fold (2 N, as `handemo train` forms them). Shared needs gate_folds 2 (the default); other gate_folds
     /// form per-fold groups.
@@ -1032,7 +1034,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
         if (fsum.test_inputs == 0)
             throw value_error("eval: data set " + opt.data + ": fold '" + held + "' has no '" + info.neutral + "' clip to transfer");
         if (continuous_table) {  // the continuous control of the fold's model on its held-out clips
-            const stargan::continuous_control control(models.model, *continuous_table, opt.continuous);
+            const stargan::continuous_control control(models.model, *continuous_table, opt.continuous_rates, opt.continuous);
             std::vector<const clip*> inputs;
             std::vector<std::pair<const clip*, std::string>> reals;
             for (const auto* p : split.test_p) {
@@ -1063,7 +1065,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
     }
     res.seconds = std::chrono::duration<double>(clock::now() - t_start).count();
     if (auto sec = gate_check_section(res, out_dir); !sec.title.empty()) res.sections.push_back(std::move(sec));
-    if (continuous_table) res.sections.push_back(continuous_section(continuous_folds));
+    if (continuous_table) res.sections.push_back(continuous_section(continuous_folds, 10, opt.continuous_rates));
     if (auto sec = detail::detail_section(detail_curves, folds.front(), detail_take, res.folds); !sec.title.empty()) res.sections.push_back(std::move(sec));
     return res;
 }

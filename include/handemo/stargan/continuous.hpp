@@ -7,6 +7,8 @@
 //     keyframes(p) = A_p( sum_l w_l(p) K_l ),  tempo(p) = sum_l w_l(p) tempo_l / tempo_source,
 //     amplitude(p) = sum_l w_l(p) amplitude_l
 //
+// (the rates linearly, rate_blend::linear; rate_blend::geometric blends them as exp(sum_l w_l(p) log f_l))
+//
 // where K_l is the discrete transfer's keyframes to label l before its amplitude stage (the input's keyframes
 // plus G's change gated by l's posture, motion and prior weights, shifted by l's joint lag when the model has one,
 // emotion_model::combine()) and A_p scales the
@@ -30,6 +32,48 @@
 #include <vector>
 
 namespace handemo::stargan {
+
+/// @brief How the continuous control blends the labels' rates (the tempo and amplitude factors) between their points.
+enum class rate_blend {
+    linear,     ///< sum_l w_l f_l
+    geometric,  ///< exp(sum_l w_l log f_l): the log of the rate moves linearly with the weights
+};
+
+/// The blend continuous_control uses when none is given.
+inline constexpr rate_blend default_rate_blend = rate_blend::linear;
+
+/// @brief "linear" or "geometric".
+inline const char* rate_blend_name(rate_blend b) noexcept { return b == rate_blend::geometric ? "geometric" : "linear"; }
+
+/// @brief The blend called `name` ("linear" or "geometric"). @throws value_error naming `what` and the known names.
+inline rate_blend parse_rate_blend(std::string_view name, const std::string& what = "rate blend")
+{
+    if (name == "linear") return rate_blend::linear;
+    if (name == "geometric") return rate_blend::geometric;
+    throw value_error(what + ": unknown rate blend '" + std::string(name) + "', expected linear or geometric");
+}
+
+/// @brief The blend of per-label rates `f` (one per domain, each positive) with weights `w`: sum_l w_l f_l, or
+/// exp(sum_l w_l log f_l). A weight of exactly 1 gives that label's rate itself under both blends (the labels'
+/// points reproduce the discrete transfer bit for bit). `what` names the rates in errors.
+/// @throws value_error for a rate that is not positive and finite under the geometric blend.
+inline double blend_rates(const std::vector<double>& f, const std::vector<double>& w, rate_blend b, const char* what)
+{
+    double s = 0;
+    for (std::size_t d = 0; d < w.size(); ++d) {
+        if (w[d] == 0) continue;
+        if (b == rate_blend::linear) {
+            s += w[d] * f[d];
+            continue;
+        }
+        if (!(f[d] > 0) || !std::isfinite(f[d]))
+            throw value_error(std::string("continuous transfer: the ") + what + " factor of label " + std::to_string(d) + " is " +
+                              std::to_string(f[d]) + ", which a geometric blend cannot take (expected positive and finite)");
+        if (w[d] == 1.0) return f[d];
+        s += w[d] * std::log(f[d]);
+    }
+    return b == rate_blend::linear ? s : std::exp(s);
+}
 
 /// @brief The discrete transfers of one input to the labels a continuous target needs, before their amplitude
 /// stage (emotion_model::combine() with the amplitude left at 1): what every point blends.
@@ -58,11 +102,18 @@ public:
     /// @throws value_error naming a domain the table has no point for, or a table whose points the interpolation
     /// refuses (a label on neutral's point, two on one ray from it).
     continuous_control(const emotion_model& model, const circumplex_table& table, const std::string& what = "circumplex table")
-        : model_(&model), interp_(points_of(model, table, what), model.domain(model.info().neutral))
+        : continuous_control(model, table, default_rate_blend, what)
+    {
+    }
+
+    /// @brief The control with the rates (tempo and amplitude factors) blended by `rates`.
+    continuous_control(const emotion_model& model, const circumplex_table& table, rate_blend rates, const std::string& what = "circumplex table")
+        : model_(&model), interp_(points_of(model, table, what), model.domain(model.info().neutral)), rates_(rates)
     {
     }
 
     const emotion_model& model() const noexcept { return *model_; }
+    rate_blend rates() const noexcept { return rates_; }
     const circumplex_interpolation& interpolation() const noexcept { return interp_; }
 
     /// @brief The weights of a point, one per domain. @throws value_error outside the unit circle.
@@ -100,26 +151,20 @@ public:
         return out;
     }
 
-    /// @brief The duration factor of weights `w` for prepared label keyframes: sum_l w_l tempo_l / tempo_source, the
-    /// input's tempo factors (emotion_model::input_tempo(): the learned ones, or its nearest training contents').
+    /// @brief The duration factor of weights `w` for prepared label keyframes: the blend (rates()) of the input's tempo
+    /// factors (emotion_model::input_tempo(): the learned ones, or its nearest training contents') over tempo_source.
     double tempo(const label_keyframes& lk, const std::vector<double>& w) const
     {
         const auto& f = lk.tempo.empty() ? model_->info().tempo : lk.tempo;
-        double t = 0;
-        for (std::size_t d = 0; d < w.size(); ++d)
-            if (w[d] != 0) t += w[d] * f[d];
-        return t / f[lk.source];
+        return blend_rates(f, w, rates_, "tempo") / f[lk.source];
     }
 
-    /// @brief The excursion factor of weights `w`: sum_l w_l amplitude_l (1 unless the model has the amplitude stage).
+    /// @brief The excursion factor of weights `w`: the blend (rates()) of the labels' amplitude factors (1 unless
+    /// the model has the amplitude stage).
     double amplitude(const std::vector<double>& w) const
     {
         if (!model_->amplitude_stage()) return 1.0;
-        const auto& info = model_->info();
-        double a = 0;
-        for (std::size_t d = 0; d < w.size(); ++d)
-            if (w[d] != 0) a += w[d] * info.amplitude[d];
-        return a;
+        return blend_rates(model_->info().amplitude, w, rates_, "amplitude");
     }
 
     /// @brief The output keyframes of a point with weights `w` from prepared label keyframes: the weighted sum,
@@ -283,6 +328,7 @@ private:
 
     const emotion_model* model_;
     circumplex_interpolation interp_;
+    rate_blend rates_ = default_rate_blend;
 };
 
 /// @brief A continuous transfer of a capture of any skeleton (transfer_capture() with a point or a curve
