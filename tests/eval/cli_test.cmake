@@ -62,7 +62,7 @@ endforeach()
 
 # the continuous control's section (--continuous): both folds, every label's point the discrete transfer bit for bit
 foreach(s "## Continuous control" "| patting | 1 | 5 / 5 |" "| gripping | 1 | 5 / 5 |" "| all | 2 | 10 / 10 | "
-          "tempo and amplitude factors blended linearly (`--rate-blend linear`)")
+          "tempo and amplitude factors blended linearly (`--rate-blend linear`)" "read by the full-rate judge")
   string(FIND "${md}" "${s}" at)
   if(at EQUAL -1)
     message(FATAL_ERROR "report.md lacks '${s}'")

@@ -6,7 +6,9 @@
 #include "helpers.hpp"
 #include "../retarget/rigs.hpp"
 
+#include <handemo/eval/continuous.hpp>
 #include <handemo/metrics/classifier.hpp>
+#include <handemo/metrics/full_rate_judge.hpp>
 #include <handemo/stargan/continuous.hpp>
 
 #include <doctest/doctest.h>
@@ -335,6 +337,98 @@ TEST_CASE("continuous transfer: along straight paths from neutral the classifier
     }
     CHECK(paths == 28);
     CHECK(monotone == paths);
+}
+
+TEST_CASE("measure_continuous: the full-rate judge reads every path, halfway point and real clip against its neutral reference")
+{
+    const auto toy = toy_model::make();
+    const auto table = continuous_table();
+    const stargan::continuous_control control(*toy, table);
+    const auto& domains = toy->info().domains;
+    // the judge, fitted on the toy's outputs at the labels' points read against their inputs
+    // (and the centroid classifier measure_continuous also takes, on the same outputs' keyframe features)
+    std::vector<std::vector<double>> x, r, kx;
+    std::vector<std::string> y, g;
+    const auto kf = [](const clip& c) { return metrics::motion_features(extract_keyframes<9>(c), metrics::measure<9>(c).duration); };
+    for (hand_motion m : all_hand_motions) {
+        if (m == hand_motion::patting) continue;  // held out below
+        for (int take = 0; take < 2; ++take) {
+            const clip in = synthesize(m, emotion::neutral, take, 3, 60.0);
+            const auto in_f = metrics::full_rate_features(in);
+            const auto lk = control.prepare(in);
+            for (const auto& d : domains) {
+                const auto& p = table.at(d);
+                const clip out = control.transfer(in, lk, p.valence, p.arousal).motion;
+                x.push_back(metrics::full_rate_features(out)), kx.push_back(kf(out));
+                r.push_back(in_f), y.push_back(d), g.push_back(std::string(to_string(m)));
+            }
+        }
+    }
+    metrics::full_rate_judge judge;
+    judge.fit(x, r, y, g, {metrics::full_rate_inputs::pooled});
+    metrics::nearest_centroid_classifier clf;
+    clf.fit(kx, y, 0.5);
+    // a held-out motion: its neutral takes the inputs, its real clips each read against its own take's neutral clip
+    const clip in0 = synthesize(hand_motion::patting, emotion::neutral, 0, 3, 60.0), in1 = synthesize(hand_motion::patting, emotion::neutral, 1, 3, 60.0);
+    std::vector<clip> real_clips;
+    std::vector<std::string> real_emotions;
+    for (int take = 0; take < 2; ++take)
+        for (const auto& d : domains) real_clips.push_back(synthesize(hand_motion::patting, emotion_from_string(d), take, 3, 60.0)), real_emotions.push_back(d);
+    std::vector<std::pair<const clip*, std::string>> reals;
+    std::vector<const clip*> refs;
+    for (std::size_t i = 0; i < real_clips.size(); ++i) reals.emplace_back(&real_clips[i], real_emotions[i]), refs.push_back(i < domains.size() ? &in0 : &in1);
+    const std::vector<const clip*> inputs{&in0, &in1};
+    const auto f = eval::measure_continuous<9>(*toy, control, clf, inputs, reals, "patting", 10, {}, &judge, refs);
+    // the same counts computed here from the judge's probabilities
+    const auto third = [](const std::string& p, const std::string& label) { return p != label && p != "neutral"; };
+    const auto argmax = [&](const std::vector<double>& p) { return judge.classifier().classes()[static_cast<std::size_t>(std::max_element(p.begin(), p.end()) - p.begin())]; };
+    std::size_t monotone = 0, peak = 0, halfway_third = 0, real_third = 0, real = 0;
+    for (const clip* in : inputs) {
+        const auto in_f = metrics::full_rate_features(*in);
+        const auto lk = control.prepare(*in);
+        for (const auto& d : domains) {
+            if (d == "neutral") continue;
+            std::vector<double> lp;
+            for (int s = 0; s <= 10; ++s) {
+                const auto [v, a] = toward(table, d, s / 10.0);
+                const auto p = judge.probabilities(metrics::full_rate_features(control.transfer(*in, lk, v, a).motion), in_f);
+                const auto& cl = judge.classifier().classes();
+                lp.push_back(std::log(p.at(static_cast<std::size_t>(std::find(cl.begin(), cl.end(), d) - cl.begin()))));
+                if (s == 5) halfway_third += third(argmax(p), d);
+            }
+            const auto shape = eval::shape_of_path(lp);
+            monotone += shape.monotone, peak += !shape.monotone && shape.peak_before_label;
+        }
+    }
+    for (std::size_t i = 0; i < reals.size(); ++i) {
+        if (real_emotions[i] == "neutral") continue;
+        ++real;
+        real_third += third(judge.predict(metrics::full_rate_features(real_clips[i]), metrics::full_rate_features(*refs[i])), real_emotions[i]);
+    }
+    CHECK(f.full_judge);
+    CHECK(f.paths == 8);
+    CHECK(f.monotone_full == monotone);
+    CHECK(f.peak_before_label_full == peak);
+    CHECK(f.halfway_third_full == halfway_third);
+    CHECK(f.real_full == real);
+    CHECK(f.real_third_full == real_third);
+    CHECK(real == 8);
+    // the judge's table in the report, its total row
+    const auto sec = eval::continuous_section({f});
+    CHECK(sec.markdown.find("read by the full-rate judge") != std::string::npos);
+    char total[96];
+    std::snprintf(total, sizeof total, "| all | %zu / 8 (", monotone);
+    CHECK(sec.markdown.find(total) != std::string::npos);
+    // without a judge: nothing of it measured or reported; references that do not match the real clips are refused
+    const auto plain = eval::measure_continuous<9>(*toy, control, clf, inputs, reals, "patting", 10);
+    CHECK_FALSE(plain.full_judge);
+    CHECK(plain.monotone == f.monotone);
+    CHECK(eval::continuous_section({plain}).markdown.find("read by the full-rate judge") == std::string::npos);
+    CHECK_THROWS_WITH_AS(eval::measure_continuous<9>(*toy, control, clf, inputs, reals, "patting", 10, {}, &judge, {}),
+                         doctest::Contains("0 neutral references for 10 real clips"), value_error);
+    CHECK(eval::log_probability({0.25, 0.0}, 0) == std::log(0.25));
+    CHECK(eval::log_probability({0.25, 0.0}, 1) == -1e300);
+    CHECK(eval::log_probability({0.25, 0.0}, 2) == -1e300);
 }
 
 TEST_CASE("continuous transfer: keyframes move at most the weights' Lipschitz bound per unit of circumplex distance")

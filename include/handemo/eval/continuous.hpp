@@ -12,6 +12,7 @@
 #include <handemo/metrics/classifier.hpp>
 #include <handemo/metrics/compare.hpp>
 #include <handemo/metrics/correlation.hpp>
+#include <handemo/metrics/full_rate_judge.hpp>
 #include <handemo/motion/circumplex.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/stargan/continuous.hpp>
@@ -42,6 +43,10 @@ struct continuous_fold {
     /// the real held-out clips' labels' points against their analysis; NaN when no analysis was given
     double spearman_valence = std::nan(""), spearman_arousal = std::nan("");
     double real_spearman_valence = std::nan(""), real_spearman_arousal = std::nan("");
+    /// the same path and halfway counts by the full-rate judge (metrics::full_rate_judge, each output read against
+    /// its input, each real clip against its take's neutral clip), when one was given (`full_judge`)
+    bool full_judge = false;
+    std::size_t monotone_full = 0, peak_before_label_full = 0, halfway_third_full = 0, real_full = 0, real_third_full = 0;
 };
 
 /// @brief An analysis of a clip onto the circumplex, (valence, arousal); NaN where it cannot say.
@@ -80,14 +85,27 @@ inline std::vector<std::pair<double, double>> continuous_grid()
     return g;
 }
 
+/// @brief The log of probability `i` of `p` (-1e300 for an index out of range or a zero probability).
+inline double log_probability(const std::vector<double>& p, std::size_t i)
+{
+    return i < p.size() && p[i] > 0 ? std::log(p[i]) : -1e300;
+}
+
 /// @brief Measures the properties on a fold: `inputs` the held-out neutral takes, `reals` the held-out real clips
 /// with their emotion, `steps` the path's steps from neutral to a label (its halfway point is step steps / 2).
+/// With `full_judge` the paths and halfway points are also read by the full-rate judge, each output against its
+/// input and each real clip against `real_refs` (one neutral clip per entry of `reals`).
+/// @throws value_error when `full_judge` is given and `real_refs` does not match `reals`.
 template <std::size_t K>
 continuous_fold measure_continuous(const stargan::emotion_model& model, const stargan::continuous_control& control,
                                    const metrics::nearest_centroid_classifier& clf, const std::vector<const clip*>& inputs,
                                    const std::vector<std::pair<const clip*, std::string>>& reals, const std::string& held, std::size_t steps = 10,
-                                   const circumplex_analysis& analyse = {})
+                                   const circumplex_analysis& analyse = {}, const metrics::full_rate_judge* full_judge = nullptr,
+                                   const std::vector<const clip*>& real_refs = {})
 {
+    if (full_judge && real_refs.size() != reals.size())
+        throw value_error("measure_continuous: " + std::to_string(real_refs.size()) + " neutral references for " + std::to_string(reals.size()) +
+                          " real clips");
     const auto& info = model.info();
     const auto& labels = control.interpolation().labels();
     const auto& neutral = labels[control.interpolation().neutral()];
@@ -95,16 +113,23 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
     f.held_out = held;
     const auto features = [](const clip& c) { return metrics::motion_features(extract_keyframes<K>(c), metrics::measure<K>(c).duration); };
     const auto third = [&](const std::string& predicted, const std::string& label) { return predicted != label && predicted != info.neutral; };
-    for (const auto& [c, emotion] : reals) {
+    f.full_judge = full_judge != nullptr;
+    for (std::size_t i = 0; i < reals.size(); ++i) {
+        const auto& [c, emotion] = reals[i];
         if (emotion == info.neutral) continue;
         ++f.real;
         f.real_third += third(clf.predict(features(*c)), emotion);
+        if (full_judge) {
+            ++f.real_full;
+            f.real_third_full += third(full_judge->predict(metrics::full_rate_features(*c), metrics::full_rate_features(*real_refs[i])), emotion);
+        }
     }
     auto ws = model.make_workspace();
     std::vector<double> grid_v, grid_a;  // per input
     for (const clip* in : inputs) {
         ++f.inputs;
         const auto lk = control.prepare(*in);
+        const std::vector<double> in_full = full_judge ? metrics::full_rate_features(*in) : std::vector<double>{};
         for (std::size_t d = 0; d < info.domains.size(); ++d) {
             const auto& label = labels[d];
             ++f.label_points;
@@ -112,7 +137,11 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
             if (info.domains[d] == info.neutral) continue;
             ++f.paths;
             const std::size_t ci = clf.index_of(info.domains[d]);
-            std::vector<double> log_posts;
+            const std::size_t fi = full_judge ? static_cast<std::size_t>(std::find(full_judge->classifier().classes().begin(),
+                                                                                     full_judge->classifier().classes().end(), info.domains[d]) -
+                                                                           full_judge->classifier().classes().begin())
+                                               : 0;  // classes().size(): a label the judge never saw, a path of -1e300
+            std::vector<double> log_posts, log_posts_full;
             std::vector<double> prev_keys;
             const double step_dist = std::hypot(label.valence - neutral.valence, label.arousal - neutral.arousal) / static_cast<double>(steps);
             for (std::size_t s = 0; s <= steps; ++s) {
@@ -127,6 +156,11 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
                 for (double v : dist) z += std::exp(-0.5 * (v - dmin));
                 const double log_post = ci < dist.size() ? -0.5 * (dist[ci] - dmin) - std::log(z) : -1e300;
                 log_posts.push_back(log_post);
+                std::vector<double> pf;
+                if (full_judge) {
+                    pf = full_judge->probabilities(metrics::full_rate_features(r.motion), in_full);
+                    log_posts_full.push_back(log_probability(pf, fi));
+                }
                 if (!prev_keys.empty()) {
                     double m = 0;
                     for (std::size_t i = 0; i < prev_keys.size(); ++i) m = std::max(m, std::abs(r.keys.angles[i] - prev_keys[i]));
@@ -136,11 +170,21 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
                 if (2 * s == steps) {
                     ++f.halfway;
                     f.halfway_third += third(clf.predict(x), info.domains[d]);
+                    if (full_judge) {
+                        const auto& classes = full_judge->classifier().classes();
+                        f.halfway_third_full += third(classes[static_cast<std::size_t>(std::max_element(pf.begin(), pf.end()) - pf.begin())],
+                                                      info.domains[d]);
+                    }
                 }
             }
             const path_shape shape = shape_of_path(log_posts);
             f.monotone += shape.monotone;
             f.peak_before_label += !shape.monotone && shape.peak_before_label;
+            if (full_judge) {
+                const path_shape sf = shape_of_path(log_posts_full);
+                f.monotone_full += sf.monotone;
+                f.peak_before_label_full += !sf.monotone && sf.peak_before_label;
+            }
         }
         if (analyse) {  // the grid of targets against their analysis
             std::vector<double> tv, ta, av, aa;
@@ -234,6 +278,30 @@ inline report_section continuous_section(const std::vector<continuous_fold>& fol
     all.spearman_valence = avg(sv, nsv), all.spearman_arousal = avg(sa, nsa);
     all.real_spearman_valence = avg(rv, nrv), all.real_spearman_arousal = avg(ra, nra);
     row(all);
+    // the same paths and halfway points read by the full-rate judge (the other judge of the report)
+    if (!folds.empty() && std::all_of(folds.begin(), folds.end(), [](const continuous_fold& f) { return f.full_judge; })) {
+        m += "\nThe same paths and halfway points read by the full-rate judge (each output against its input, each real clip against "
+             "its take's neutral clip; its posterior is a softmax of linear functions of the features, so the argument of "
+             "docs/continuous.md on paths that peak first holds for it too):\n\n";
+        m += "| fold | monotone paths | not monotone: peak first | halfway: third emotion | real clips: third emotion |\n";
+        m += "|---|---|---|---|---|\n";
+        continuous_fold tot;
+        tot.held_out = "all";
+        const auto row_full = [&](const continuous_fold& f) {
+            std::snprintf(b, sizeof b, "| %s | %zu / %zu (%.1f%%) | %zu / %zu | %zu / %zu (%.1f%%) | %zu / %zu (%.1f%%) |\n", f.held_out.c_str(),
+                          f.monotone_full, f.paths, pct(f.monotone_full, f.paths), f.peak_before_label_full, f.paths - f.monotone_full,
+                          f.halfway_third_full, f.halfway, pct(f.halfway_third_full, f.halfway), f.real_third_full, f.real_full,
+                          pct(f.real_third_full, f.real_full));
+            m += b;
+        };
+        for (const auto& f : folds) {
+            row_full(f);
+            tot.paths += f.paths, tot.halfway += f.halfway, tot.monotone_full += f.monotone_full;
+            tot.peak_before_label_full += f.peak_before_label_full, tot.halfway_third_full += f.halfway_third_full;
+            tot.real_full += f.real_full, tot.real_third_full += f.real_third_full;
+        }
+        row_full(tot);
+    }
     return sec;
 }
 

@@ -1035,11 +1035,23 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
             throw value_error("eval: data set " + opt.data + ": fold '" + held + "' has no '" + info.neutral + "' clip to transfer");
         if (continuous_table) {  // the continuous control of the fold's model on its held-out clips
             const stargan::continuous_control control(models.model, *continuous_table, opt.continuous_rates, opt.continuous);
-            std::vector<const clip*> inputs;
+            std::vector<const clip*> inputs, real_refs;
             std::vector<std::pair<const clip*, std::string>> reals;
             for (const auto* p : split.test_p) {
                 if (p->src->emotion == info.neutral) inputs.push_back(&p->src->motion);
+                // the full-rate judge's reference, as in its training: the same take's neutral clip, else the content's first
+                const clip* ref = nullptr;
+                for (const auto* q : split.test_p) {
+                    if (q->src->emotion != info.neutral || q->src->content != p->src->content) continue;
+                    if (q->src->take == p->src->take) {
+                        ref = &q->src->motion;
+                        break;
+                    }
+                    if (!ref) ref = &q->src->motion;
+                }
+                if (!ref) continue;  // no neutral clip of its content: nothing to read it against (nor to transfer)
                 reals.emplace_back(&p->src->motion, p->src->emotion);
+                real_refs.push_back(ref);
             }
             // the circumplex analysis of an extension that gives one (eval/rcm.hpp's, fitted on this fold's training clips)
             circumplex_analysis analyse;
@@ -1051,7 +1063,7 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                     }
                     return std::pair{std::nan(""), std::nan("")};
                 };
-            continuous_folds.push_back(measure_continuous<K>(models.model, control, clf, inputs, reals, held, 10, analyse));
+            continuous_folds.push_back(measure_continuous<K>(models.model, control, clf, inputs, reals, held, 10, analyse, &judge, real_refs));
         }
         fsum.eval_seconds = std::chrono::duration<double>(clock::now() - t0).count();
         res.folds.push_back(fsum);
