@@ -392,8 +392,7 @@ TEST_CASE("measure_continuous: the full-rate judge reads every path, halfway poi
             for (int s = 0; s <= 10; ++s) {
                 const auto [v, a] = toward(table, d, s / 10.0);
                 const auto p = judge.probabilities(metrics::full_rate_features(control.transfer(*in, lk, v, a).motion), in_f);
-                const auto& cl = judge.classifier().classes();
-                lp.push_back(std::log(p.at(static_cast<std::size_t>(std::find(cl.begin(), cl.end(), d) - cl.begin()))));
+                lp.push_back(std::log(p.at(judge.classifier().index_of(d))));
                 if (s == 5) halfway_third += third(argmax(p), d);
             }
             const auto shape = eval::shape_of_path(lp);

@@ -137,10 +137,8 @@ continuous_fold measure_continuous(const stargan::emotion_model& model, const st
             if (info.domains[d] == info.neutral) continue;
             ++f.paths;
             const std::size_t ci = clf.index_of(info.domains[d]);
-            const std::size_t fi = full_judge ? static_cast<std::size_t>(std::find(full_judge->classifier().classes().begin(),
-                                                                                     full_judge->classifier().classes().end(), info.domains[d]) -
-                                                                           full_judge->classifier().classes().begin())
-                                               : 0;  // classes().size(): a label the judge never saw, a path of -1e300
+            // (a label the judge never saw: past its classes, a path of -1e300)
+            const std::size_t fi = full_judge ? full_judge->classifier().index_of(info.domains[d]) : 0;
             std::vector<double> log_posts, log_posts_full;
             std::vector<double> prev_keys;
             const double step_dist = std::hypot(label.valence - neutral.valence, label.arousal - neutral.arousal) / static_cast<double>(steps);

@@ -550,6 +550,20 @@ metrics::nearest_centroid_classifier fit_classifier(const std::vector<const prep
     return clf;
 }
 
+/// The neutral clip the full-rate judge reads `p` against, among `clips`: the neutral clip of p's content and take,
+/// else its content's first neutral clip; nullptr when its content has none.
+template <std::size_t K>
+const prepared_clip<K>* neutral_reference(const std::vector<const prepared_clip<K>*>& clips, const prepared_clip<K>& p, const std::string& neutral)
+{
+    const prepared_clip<K>* ref = nullptr;
+    for (const auto* q : clips) {
+        if (q->src->emotion != neutral || q->src->content != p.src->content) continue;
+        if (q->src->take == p.src->take) return q;
+        if (!ref) ref = q;
+    }
+    return ref;
+}
+
 /// The full-rate judge of a fold (metrics::full_rate_judge), fitted on its training clips only: each clip read
 /// against the neutral clip of its content and take (its content's first neutral clip when that take has none;
 /// a content without a neutral clip is left out), the contents as the groups of its cross-validation, the input set
@@ -562,15 +576,7 @@ metrics::full_rate_judge fit_full_rate_judge(const std::vector<const prepared_cl
     std::vector<std::vector<double>> x, r;
     std::vector<std::string> y, g;
     for (const auto* p : train_p) {
-        const prepared_clip<K>* ref = nullptr;  // the same take's neutral clip, else the content's first
-        for (const auto* q : train_p) {
-            if (q->src->emotion != neutral || q->src->content != p->src->content) continue;
-            if (q->src->take == p->src->take) {
-                ref = q;
-                break;
-            }
-            if (!ref) ref = q;
-        }
+        const auto* ref = neutral_reference(train_p, *p, neutral);
         if (!ref) continue;
         x.push_back(p->full_f), r.push_back(ref->full_f), y.push_back(p->src->emotion), g.push_back(p->src->content);
     }
@@ -1039,19 +1045,11 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
             std::vector<std::pair<const clip*, std::string>> reals;
             for (const auto* p : split.test_p) {
                 if (p->src->emotion == info.neutral) inputs.push_back(&p->src->motion);
-                // the full-rate judge's reference, as in its training: the same take's neutral clip, else the content's first
-                const clip* ref = nullptr;
-                for (const auto* q : split.test_p) {
-                    if (q->src->emotion != info.neutral || q->src->content != p->src->content) continue;
-                    if (q->src->take == p->src->take) {
-                        ref = &q->src->motion;
-                        break;
-                    }
-                    if (!ref) ref = &q->src->motion;
-                }
+                // the full-rate judge's reference, as in its training
+                const auto* ref = detail::neutral_reference(split.test_p, *p, info.neutral);
                 if (!ref) continue;  // no neutral clip of its content: nothing to read it against (nor to transfer)
                 reals.emplace_back(&p->src->motion, p->src->emotion);
-                real_refs.push_back(ref);
+                real_refs.push_back(&ref->src->motion);
             }
             // the circumplex analysis of an extension that gives one (eval/rcm.hpp's, fitted on this fold's training clips)
             circumplex_analysis analyse;

@@ -392,6 +392,11 @@ public:
 
     /// Class labels, sorted.
     const std::vector<std::string>& classes() const noexcept { return classes_; }
+    /// @brief The index of `label` in classes(); classes().size() when the classifier never saw it.
+    std::size_t index_of(std::string_view label) const
+    {
+        return static_cast<std::size_t>(std::find(classes_.begin(), classes_.end(), label) - classes_.begin());
+    }
     /// The L2 weight of the fitted model.
     double lambda() const noexcept { return lambda_; }
     /// Cross-validated accuracy per weight of lambda_grid (fit() only; empty after fit_fixed()).
@@ -419,10 +424,6 @@ private:
         if (distinct(labels) < 2) throw value_error(std::string("full_rate_classifier::") + who + ": one class only ('" + labels.front() + "')");
     }
 
-    std::size_t index_of(std::string_view label) const
-    {
-        return static_cast<std::size_t>(std::find(classes_.begin(), classes_.end(), label) - classes_.begin());
-    }
 
     /// L-BFGS (10 pairs) with a backtracking Armijo line search, from w_ = 0, until the gradient's largest
     /// component is below 1e-6 or 500 iterations.
