@@ -1,6 +1,7 @@
-// Header-only hygiene, first translation unit: includes the umbrella and image headers and uses
-// inline functions that two_tu_b.cpp uses too; linking both into one program fails on any
-// non-inline definition or a second stb implementation.
+// Header-only hygiene, first translation unit (this file is merged into its test group's unity unit;
+// two_tu_b.cpp never is): includes the umbrella and image headers and uses inline functions that
+// two_tu_b.cpp uses too; linking both into one program fails on any non-inline definition or a second
+// stb implementation.
 #include <handemo.hpp>
 #include <handemo/image.hpp>
 
