@@ -141,30 +141,32 @@ TEST_CASE("forward_ws: the image groups stay within the scratch the geometry ask
     CHECK(hk::conv2d_scratch_size<float>(one) == hk::conv2d_scratch_size<float>(small));
 }
 
-TEST_CASE("forward_ws: the panel packers write what ws_pack writes")
+TEST_CASE_TEMPLATE("forward_ws: the panel packers (blocks transposed in registers, or gathers) write what ws_pack writes", T,
+                   float, double)
 {
     std::mt19937 rng(5);
     using kernel_test::random_values;
-    for (const int co : {8, 16, 17, 40, 64, 70, 128})
-        for (const int ci : {3, 16, 33}) {
-            const int kk = 9, K = ci * kk;
-            const auto w = kernel_test::cast<float>(random_values(std::size_t(co) * K, rng));
-            std::vector<float> a(hkd::ws_packed_elements<float>(co, K) + 64), b(a.size());
-            auto* pa = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(a.data()) + 63) / 64 * 64);
-            auto* pb = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(b.data()) + 63) / 64 * 64);
-            hkd::ws_pack_rows<float>(co, K, w.data(), pa);
-            hkd::ws_pack<float>(co, K, pb, [&](int o, int k) { return w[std::size_t(o) * K + k]; });
-            CHECK(std::memcmp(pa, pb, hkd::ws_packed_elements<float>(co, K) * sizeof(float)) == 0);
-            // flipped: a convolution with ci output channels, K' = co kk
-            const int Kf = co * kk;
-            std::vector<float> c(hkd::ws_packed_elements<float>(ci, Kf) + 64), d(c.size());
-            auto* pc = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(c.data()) + 63) / 64 * 64);
-            auto* pd = reinterpret_cast<float*>((reinterpret_cast<std::uintptr_t>(d.data()) + 63) / 64 * 64);
-            hkd::ws_pack_flipped<float>(co, ci, kk, w.data(), pc);
-            hkd::ws_pack<float>(ci, Kf, pd, [&](int c2, int k) {
-                const int o = k / kk, t = k % kk;
-                return w[(std::size_t(o) * ci + c2) * kk + kk - 1 - t];
-            });
-            CHECK(std::memcmp(pc, pd, hkd::ws_packed_elements<float>(ci, Kf) * sizeof(float)) == 0);
-        }
+    for (const int kk : {1, 9, 16, 49})  // 1x1, 3x3, 4x4 and 7x7 kernels: taps in one block, a block and a tail
+        for (const int co : {8, 16, 17, 40, 64, 70, 128})
+            for (const int ci : {3, 16, 33}) {
+                const int K = ci * kk;
+                const auto w = kernel_test::cast<T>(random_values(std::size_t(co) * K, rng));
+                std::vector<T> a(hkd::ws_packed_elements<T>(co, K) + 64), b(a.size());
+                auto* pa = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(a.data()) + 63) / 64 * 64);
+                auto* pb = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(b.data()) + 63) / 64 * 64);
+                hkd::ws_pack_rows<T>(co, K, w.data(), pa);
+                hkd::ws_pack<T>(co, K, pb, [&](int o, int k) { return w[std::size_t(o) * K + k]; });
+                CHECK(std::memcmp(pa, pb, hkd::ws_packed_elements<T>(co, K) * sizeof(T)) == 0);
+                // flipped: a convolution with ci output channels, K' = co kk
+                const int Kf = co * kk;
+                std::vector<T> c(hkd::ws_packed_elements<T>(ci, Kf) + 64), d(c.size());
+                auto* pc = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(c.data()) + 63) / 64 * 64);
+                auto* pd = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(d.data()) + 63) / 64 * 64);
+                hkd::ws_pack_flipped<T>(co, ci, kk, w.data(), pc);
+                hkd::ws_pack<T>(ci, Kf, pd, [&](int c2, int k) {
+                    const int o = k / kk, t = k % kk;
+                    return w[(std::size_t(o) * ci + c2) * kk + kk - 1 - t];
+                });
+                CHECK(std::memcmp(pc, pd, hkd::ws_packed_elements<T>(ci, Kf) * sizeof(T)) == 0);
+            }
 }

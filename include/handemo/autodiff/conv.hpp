@@ -56,25 +56,40 @@ void for_batch_chunks(tape<T>& t, const conv_geometry& g, F&& f)
         t.pool()->parallel_for(0, P, run);
 }
 
-// ---- raw kernels over a whole batch, threaded when the tape has a pool --------------------------
-// y = conv(x, w) + b
+/// The weights of node w packed for `use` over geometry g, once per tape (tape::packed) when w is a parameter
+/// (caller memory, unchanged until the tape's reset()) and that call of g takes packed panels; else nullptr, and
+/// the kernel packs them at the call. G's weights are read by three forward passes and three backward-data
+/// passes in a training step, D's by four and more: the same panels, so the same bits.
 template <class T>
-void conv_fwd(tape<T>& t, const conv_geometry& g, const T* x, const T* w, const T* b, T* y)
+const T* weight_panels(tape<T>& t, int w, const conv_geometry& g, ck::conv_panels use)
+{
+    const node<T>& n = t.at(w);
+    if (!n.external_value) return nullptr;
+    const std::size_t m = ck::conv2d_panel_elements<T>(g, use);
+    if (m == 0) return nullptr;
+    const T* v = n.value;
+    return t.packed(v, int(use), m, [&](T* dst) { ck::conv2d_pack_panels<T>(g, use, v, dst); });
+}
+
+// ---- raw kernels over a whole batch, threaded when the tape has a pool --------------------------
+// y = conv(x, w) + b (panels: w packed ahead, or nullptr)
+template <class T>
+void conv_fwd(tape<T>& t, const conv_geometry& g, const T* x, const T* w, const T* b, T* y, const T* panels = nullptr)
 {
     const std::size_t xs = std::size_t(g.in_channels) * g.in_h * g.in_w;
     const std::size_t ys = std::size_t(g.out_channels) * g.out_h() * g.out_w();
     for_batch_chunks(t, g, [&](const conv_geometry& gc, int n0, int, T* s) {
-        ck::conv2d_forward<T>(gc, x + n0 * xs, w, b, y + n0 * ys, s);
+        ck::conv2d_forward<T>(gc, x + n0 * xs, w, b, y + n0 * ys, s, panels);
     });
 }
-// gx += conv^T(gy, w)
+// gx += conv^T(gy, w) (panels: w packed ahead, or nullptr)
 template <class T>
-void conv_bwd_data(tape<T>& t, const conv_geometry& g, const T* gy, const T* w, T* gx)
+void conv_bwd_data(tape<T>& t, const conv_geometry& g, const T* gy, const T* w, T* gx, const T* panels = nullptr)
 {
     const std::size_t xs = std::size_t(g.in_channels) * g.in_h * g.in_w;
     const std::size_t ys = std::size_t(g.out_channels) * g.out_h() * g.out_w();
     for_batch_chunks(t, g, [&](const conv_geometry& gc, int n0, int, T* s) {
-        ck::conv2d_backward_data<T>(gc, gy + n0 * ys, w, gx + n0 * xs, s);
+        ck::conv2d_backward_data<T>(gc, gy + n0 * ys, w, gx + n0 * xs, s, panels);
     });
 }
 // gw += sum_n x[n] (*) gy[n]; per-chunk accumulators reduced in chunk order (deterministic).
@@ -116,7 +131,8 @@ void conv_backward(tape<T>& t, int self)
 {
     const node<T>& n = t.at(self);
     const conv_geometry g = geometry_of(n);
-    if (T* gx = t.adj(n.in[0])) conv_bwd_data(t, g, n.adjoint, t.at(n.in[1]).value, gx);
+    if (T* gx = t.adj(n.in[0]))
+        conv_bwd_data(t, g, n.adjoint, t.at(n.in[1]).value, gx, weight_panels(t, n.in[1], g, ck::conv_panels::backward_data));
     if (T* gw = t.adj(n.in[1])) conv_bwd_weight(t, g, t.at(n.in[0]).value, n.adjoint, gw);
     if (T* gb = t.adj(n.in[2])) ck::conv2d_backward_bias<T>(g, n.adjoint, gb);
 }
@@ -137,7 +153,7 @@ int conv_raw(tape<T>& t, int x, int w, int b, const conv_geometry& g)
 {
     const int id = t.make("conv2d", g.y_size(), {x, w, b}, &conv_backward<T>, &conv_graph<T>, g);
     conv_fwd(t, g, t.at(x).value, t.at(w).value, b >= 0 ? t.at(b).value : static_cast<const T*>(nullptr),
-             t.at(id).value);
+             t.at(id).value, weight_panels(t, w, g, ck::conv_panels::forward));
     return id;
 }
 
@@ -151,7 +167,8 @@ void conv_transpose_backward(tape<T>& t, int self)
     const conv_geometry g = geometry_of(n);
     if (T* gx = t.adj(n.in[0])) {
         T* tmp = t.alloc(g.y_size());
-        conv_fwd(t, g, n.adjoint, t.at(n.in[1]).value, static_cast<const T*>(nullptr), tmp);
+        conv_fwd(t, g, n.adjoint, t.at(n.in[1]).value, static_cast<const T*>(nullptr), tmp,
+                 weight_panels(t, n.in[1], g, ck::conv_panels::forward));
         add_into(gx, tmp, g.y_size());
     }
     if (T* gw = t.adj(n.in[1])) conv_bwd_weight(t, g, n.adjoint, t.at(n.in[0]).value, gw);
@@ -171,7 +188,7 @@ int conv_transpose_raw(tape<T>& t, int x, int w, const conv_geometry& g)
                           &conv_transpose_graph<T>, g);
     T* z = t.at(id).value;
     std::memset(z, 0, g.x_size() * sizeof(T));
-    conv_bwd_data(t, g, t.at(x).value, t.at(w).value, z);
+    conv_bwd_data(t, g, t.at(x).value, t.at(w).value, z, weight_panels(t, w, g, ck::conv_panels::backward_data));
     return id;
 }
 

@@ -64,6 +64,7 @@ struct node {
     int grad = -1;                  ///< grad(): id of the node holding d out / d this, or -1
     bool requires_grad = false;
     bool external_adjoint = false;  ///< adjoint is caller memory (a parameter's grad): never zeroed
+    bool external_value = false;    ///< value is caller memory (a parameter), unchanged until the tape's reset()
     bool mark = false;              ///< scratch flag of backward()/grad()
 
     /// @brief Stores `p` as this node's parameter record (replacing any earlier one).
@@ -135,6 +136,7 @@ public:
     {
         blocks_.reserve(256);
         nodes_.reserve(1024);
+        packed_.reserve(64);
     }
     tape(const tape&) = delete;
     tape& operator=(const tape&) = delete;
@@ -143,6 +145,7 @@ public:
     void reset() noexcept
     {
         nodes_.clear();
+        packed_.clear();
         block_ = 0;
         used_ = 0;
     }
@@ -178,6 +181,22 @@ public:
         if (scratch_.size() < n) scratch_ = aligned_buffer<T>(n);
         return scratch_.data();
     }
+    /// @brief `n` elements of arena memory that fill(dst) writes from caller memory `key` for a use `kind`
+    /// (a convolution's weights packed into panels), filled at the first request after reset() and the same
+    /// memory at every later request for (key, kind, n) until reset(). Only for memory that does not change while
+    /// the tape holds nodes reading it: a parameter's values (leaf_ref), which optimisers update between steps.
+    template <class Fill>
+    const T* packed(const void* key, int kind, std::size_t n, Fill&& fill)
+    {
+        for (const packed_entry& e : packed_)
+            if (e.key == key && e.kind == kind && e.n == n) return e.data;
+        T* p = alloc(n);
+        fill(p);
+        packed_.push_back({key, kind, n, p});
+        return p;
+    }
+    /// @brief Entries packed() holds since the last reset().
+    std::size_t packed_count() const noexcept { return packed_.size(); }
     /// @brief Zeroed arena memory.
     T* alloc_zero(std::size_t n)
     {
@@ -247,7 +266,8 @@ public:
     }
 
     /// @brief A leaf over caller memory: values at `value`; gradients accumulate (+=) into `grad`
-    /// (nullptr: the leaf does not require grad). Both must outlive the tape's use of the node.
+    /// (nullptr: the leaf does not require grad). Both must outlive the tape's use of the node, and the values
+    /// must not change until reset(): the convolutions pack a parameter's weights once per tape (packed()).
     int leaf_ref(T* value, T* grad, std::size_t size)
     {
         node<T> n;
@@ -257,6 +277,7 @@ public:
         n.adjoint = grad;
         n.requires_grad = grad != nullptr;
         n.external_adjoint = true;
+        n.external_value = true;
         nodes_.push_back(n);
         return static_cast<int>(nodes_.size() - 1);
     }
@@ -362,8 +383,15 @@ public:
     void accumulate_grad(int target, int contribution);
 
 private:
+    struct packed_entry {
+        const void* key;
+        int kind;
+        std::size_t n;
+        T* data;
+    };
     std::vector<aligned_buffer<T>> blocks_;
     aligned_buffer<T> scratch_;
+    std::vector<packed_entry> packed_;
     std::size_t block_ = 0, used_ = 0, block_elems_;
     std::vector<node<T>> nodes_;
     thread_pool* pool_ = nullptr;

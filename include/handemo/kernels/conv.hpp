@@ -39,34 +39,87 @@ inline bool use_forward_ws(const conv_geometry& g) noexcept
     return fast_type<T> && g.out_channels >= simd_lanes<T> && g.out_h() * g.out_w() >= ws_min_pixels && !use_dot_forward<T>(g);
 }
 
-/// y (+)= conv(x, w) + bias: forward_ws where use_forward_ws, else conv_simd.hpp's forward.
+/// Whether a stride-1 backward-data of geometry g runs as the forward pass of its flipped kernel on forward_ws.
+template <class T>
+inline bool backward_data_ws(const conv_geometry& g) noexcept
+{
+    return backward_data_by_forward(g) && use_forward_ws<T>(flipped_geometry(g));
+}
+
+/// y (+)= conv(x, w) + bias: forward_ws where use_forward_ws (its weights `panels` when given, else packed at the
+/// call), else conv_simd.hpp's forward.
 template <class T>
 inline void forward_any(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
-                        bool accumulate_out) noexcept
+                        bool accumulate_out, const T* panels = nullptr) noexcept
 {
     if (use_forward_ws<T>(g)) {
         const int K = g.in_channels * g.kernel_h * g.kernel_w;
-        return forward_ws<T>(g, x, [&](T* panels) { ws_pack_rows<T>(g.out_channels, K, w, panels); }, bias, y, scratch,
-                             accumulate_out);
+        return forward_ws<T>(g, x,
+                             [&](T* dst) -> const T* {
+                                 if (panels) return panels;
+                                 ws_pack_rows<T>(g.out_channels, K, w, dst);
+                                 return dst;
+                             },
+                             bias, y, scratch, accumulate_out);
     }
     forward(g, x, w, bias, y, scratch, accumulate_out);
 }
 
 /// gx += dL/dx: a stride-1 backward-data whose flipped forward pass takes forward_ws packs the flipped kernel
-/// straight into its panels; everything else is conv_simd.hpp's backward_data.
+/// straight into its panels (or takes `panels` when given); everything else is conv_simd.hpp's backward_data.
 template <class T>
-inline void backward_data_any(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
+inline void backward_data_any(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch,
+                              const T* panels = nullptr) noexcept
 {
-    if (backward_data_by_forward(g) && use_forward_ws<T>(flipped_geometry(g))) {
+    if (backward_data_ws<T>(g)) {
         return forward_ws<T>(flipped_geometry(g), gy,
-                             [&](T* panels) {
-                                 ws_pack_flipped<T>(g.out_channels, g.in_channels, g.kernel_h * g.kernel_w, w, panels);
+                             [&](T* dst) -> const T* {
+                                 if (panels) return panels;
+                                 ws_pack_flipped<T>(g.out_channels, g.in_channels, g.kernel_h * g.kernel_w, w, dst);
+                                 return dst;
                              },
                              static_cast<const T*>(nullptr), gx, scratch, true);
     }
     backward_data(g, gy, w, gx, scratch);
 }
 }  // namespace detail
+
+/// @brief The two uses of a convolution's weights that can take them packed ahead of the call.
+enum class conv_panels {
+    forward,        ///< conv2d_forward (and conv_transpose2d_backward_data, the same pass)
+    backward_data,  ///< conv2d_backward_data
+};
+
+/// @brief Elements of the panels conv2d_pack_panels writes for geometry g and `use`, or 0 when that call of
+/// geometry g does not take packed panels (it then reads w as it is). Training packs each weight once per tape
+/// instead of at every call: the same panels and kernels, so the same bits.
+template <class T>
+std::size_t conv2d_panel_elements(const conv_geometry& g, conv_panels use) noexcept
+{
+    if constexpr (detail::fast_type<T>) {
+        if (use == conv_panels::forward)
+            return detail::use_forward_ws<T>(g) ? detail::ws_packed_elements<T>(g.out_channels, g.in_channels * g.kernel_h * g.kernel_w)
+                                                : 0;
+        return detail::backward_data_ws<T>(g)
+                   ? detail::ws_packed_elements<T>(g.in_channels, g.out_channels * g.kernel_h * g.kernel_w)
+                   : 0;
+    } else {
+        return 0;
+    }
+}
+
+/// @brief Packs w [out_channels, in_channels, kh, kw] for `use` into `panels` (conv2d_panel_elements(g, use)
+/// elements, 64-byte aligned); only where that count is not 0.
+template <class T>
+void conv2d_pack_panels(const conv_geometry& g, conv_panels use, const T* w, T* panels) noexcept
+{
+    if constexpr (detail::fast_type<T>) {
+        if (use == conv_panels::forward)
+            detail::ws_pack_rows<T>(g.out_channels, g.in_channels * g.kernel_h * g.kernel_w, w, panels);
+        else
+            detail::ws_pack_flipped<T>(g.out_channels, g.in_channels, g.kernel_h * g.kernel_w, w, panels);
+    }
+}
 
 /// @brief Elements of T the kernels of this file need as `scratch` for geometry g (the maximum over all
 /// of conv2d_forward / backward_data / backward_weight and the conv_transpose2d functions). It does not
@@ -89,20 +142,24 @@ std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
 /// @param bias_or_null [out_channels] or nullptr for no bias
 /// @param y [batch, out_channels, out_h, out_w], overwritten
 /// @param scratch conv2d_scratch_size<T>(g) elements
+/// @param panels nullptr, or w packed by conv2d_pack_panels(g, conv_panels::forward) where that packing exists
 template <class T>
-void conv2d_forward(const conv_geometry& g, const T* x, const T* w, const T* bias_or_null, T* y, T* scratch) noexcept
+void conv2d_forward(const conv_geometry& g, const T* x, const T* w, const T* bias_or_null, T* y, T* scratch,
+                    const T* panels = nullptr) noexcept
 {
-    if constexpr (detail::fast_type<T>) detail::forward_any(g, x, w, bias_or_null, y, scratch, false);
+    if constexpr (detail::fast_type<T>) detail::forward_any(g, x, w, bias_or_null, y, scratch, false, panels);
     else reference::conv2d_forward(g, x, w, bias_or_null, y, scratch);
 }
 
 /// @brief gx += dL/dx.  dL/dx[n,c,h,w] = sum_{o,u,v: h = i*s-p+u, w = j*s-p+v} gy[n,o,i,j] w[o,c,u,v]
 /// @param gy [batch, out_channels, out_h, out_w]  @param w [out_channels, in_channels, kh, kw]
 /// @param gx [batch, in_channels, in_h, in_w], accumulated into  @param scratch conv2d_scratch_size<T>(g)
+/// @param panels nullptr, or w packed by conv2d_pack_panels(g, conv_panels::backward_data) where that packing exists
 template <class T>
-void conv2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
+void conv2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch,
+                          const T* panels = nullptr) noexcept
 {
-    if constexpr (detail::fast_type<T>) detail::backward_data_any(g, gy, w, gx, scratch);
+    if constexpr (detail::fast_type<T>) detail::backward_data_any(g, gy, w, gx, scratch, panels);
     else reference::conv2d_backward_data(g, gy, w, gx, scratch);
 }
 

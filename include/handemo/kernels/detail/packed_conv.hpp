@@ -430,6 +430,70 @@ inline simd_t<T> ws_strided(const T* p, std::int32_t stride, int valid) noexcept
     return simd_t<T>::load_aligned(v);
 }
 
+/// Whether ws_transpose_block has an in-register transpose for T on this target (float with AVX-512 or AVX2, the
+/// types vector_gather_type names); elsewhere the panels are packed one gathered vector at a time.
+template <class T>
+inline constexpr bool ws_transpose_type = vector_gather_type<T>;
+
+/// out[j] for j < L = simd_lanes<T>: lane i is p[i * stride + j] for i < rows and j < cols, else 0. An L x L block
+/// of a row-major matrix transposed in registers: L contiguous (masked) loads and 4 log2(L) / 2 shuffles per
+/// vector, where packing by gathers issues one L-lane gather per vector. Only where ws_transpose_type<T>.
+template <class T>
+inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int cols, simd_t<T>* out) noexcept
+{
+#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
+    if constexpr (ws_transpose_type<T>) {
+        const __mmask16 m = cols >= 16 ? __mmask16(0xffff) : __mmask16((1u << cols) - 1u);
+        __m512 r[16], t[16];
+        for (int i = 0; i < 16; ++i) r[i] = i < rows ? _mm512_maskz_loadu_ps(m, p + i * stride) : _mm512_setzero_ps();
+        for (int i = 0; i < 16; i += 2) {
+            t[i] = _mm512_unpacklo_ps(r[i], r[i + 1]);
+            t[i + 1] = _mm512_unpackhi_ps(r[i], r[i + 1]);
+        }
+        for (int i = 0; i < 16; i += 4) {
+            const __m512d a = _mm512_castps_pd(t[i]), b = _mm512_castps_pd(t[i + 1]), c = _mm512_castps_pd(t[i + 2]),
+                          d = _mm512_castps_pd(t[i + 3]);
+            r[i] = _mm512_castpd_ps(_mm512_unpacklo_pd(a, c));
+            r[i + 1] = _mm512_castpd_ps(_mm512_unpackhi_pd(a, c));
+            r[i + 2] = _mm512_castpd_ps(_mm512_unpacklo_pd(b, d));
+            r[i + 3] = _mm512_castpd_ps(_mm512_unpackhi_pd(b, d));
+        }
+        for (int i = 0; i < 16; i += 8)
+            for (int j = 0; j < 4; ++j) {
+                t[i + j] = _mm512_shuffle_f32x4(r[i + j], r[i + j + 4], 0x88);
+                t[i + j + 4] = _mm512_shuffle_f32x4(r[i + j], r[i + j + 4], 0xdd);
+            }
+        for (int j = 0; j < 8; ++j) {
+            out[j] = simd_t<T>(_mm512_shuffle_f32x4(t[j], t[j + 8], 0x88));
+            out[j + 8] = simd_t<T>(_mm512_shuffle_f32x4(t[j], t[j + 8], 0xdd));
+        }
+        return;
+    }
+#elif defined(__AVX2__) && (defined(__x86_64__) || defined(__i386__))
+    if constexpr (ws_transpose_type<T>) {
+        const __m256i m = _mm256_cmpgt_epi32(_mm256_set1_epi32(cols), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        __m256 r[8], t[8];
+        for (int i = 0; i < 8; ++i) r[i] = i < rows ? _mm256_maskload_ps(p + i * stride, m) : _mm256_setzero_ps();
+        for (int i = 0; i < 8; i += 2) {
+            t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]);
+            t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
+        }
+        for (int i = 0; i < 8; i += 4) {
+            r[i] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(1, 0, 1, 0));
+            r[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(3, 2, 3, 2));
+            r[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(1, 0, 1, 0));
+            r[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(3, 2, 3, 2));
+        }
+        for (int j = 0; j < 4; ++j) {
+            out[j] = simd_t<T>(_mm256_permute2f128_ps(r[j], r[j + 4], 0x20));
+            out[j + 4] = simd_t<T>(_mm256_permute2f128_ps(r[j], r[j + 4], 0x31));
+        }
+        return;
+    }
+#endif
+    (void)p, (void)stride, (void)rows, (void)cols, (void)out;
+}
+
 /// Panels as ws_pack writes them, one vector of channels at a time: vec(o, k, n) gives channels o .. o + n - 1 of
 /// row k (n <= simd_lanes<T>, the other lanes 0).
 template <class T, class Vec>
@@ -450,29 +514,77 @@ inline void ws_pack_vectors(int co, int K, T* dst, Vec&& vec) noexcept
         }
 }
 
-/// ws_pack of a weight matrix w [co, K] (row o at w + o K): value(o, k) = w[o K + k], gathered K apart.
+/// Panels as ws_pack writes them, one vector of channels at a time and L rows k at a time: block(o, n, d, MR) writes
+/// rows 0 .. K - 1 of channels o .. o + n - 1 (n <= L, the other lanes 0) at d + k MR. Channels past co are zeros.
+template <class T, class Block>
+inline void ws_pack_blocks(int co, int K, T* dst, Block&& block) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    const int NV = ws_tile_for<T>(co).nv, MR = NV * L, panels = (co + MR - 1) / MR;
+    for (int pn = 0; pn < panels; ++pn)
+        for (int q = 0; q < NV; ++q) {
+            const int o = pn * MR + q * L;
+            T* d = dst + std::ptrdiff_t(pn) * K * MR + q * L;
+            if (o >= co) {
+                for (int k = 0; k < K; ++k) simd_t<T>(T(0)).store_aligned(d + std::ptrdiff_t(k) * MR);
+                continue;
+            }
+            block(o, std::min(L, co - o), d, MR);
+        }
+}
+
+/// ws_pack of a weight matrix w [co, K] (row o at w + o K): value(o, k) = w[o K + k]; transposed in blocks of L x L
+/// where ws_transpose_type<T>, else gathered K apart.
 template <class T>
 inline void ws_pack_rows(int co, int K, const T* w, T* dst) noexcept
 {
-    ws_pack_vectors<T>(co, K, dst, [&](int o, int k, int n) { return ws_strided<T>(w + std::ptrdiff_t(o) * K + k, K, n); });
+    if constexpr (ws_transpose_type<T>) {
+        constexpr int L = simd_lanes<T>;
+        ws_pack_blocks<T>(co, K, dst, [&](int o, int n, T* d, int MR) {
+            simd_t<T> v[L];
+            for (int k0 = 0; k0 < K; k0 += L) {
+                const int nc = std::min(L, K - k0);
+                ws_transpose_block<T>(w + std::ptrdiff_t(o) * K + k0, K, n, nc, v);
+                for (int j = 0; j < nc; ++j) v[j].store_aligned(d + std::ptrdiff_t(k0 + j) * MR);
+            }
+        });
+    } else {
+        ws_pack_vectors<T>(co, K, dst, [&](int o, int k, int n) { return ws_strided<T>(w + std::ptrdiff_t(o) * K + k, K, n); });
+    }
 }
 
 /// ws_pack of the flipped, channel-swapped kernel whose stride-1 forward pass is the backward-data of a
 /// convolution with weights w [co, ci, kk taps] (conv_simd.hpp's backward_data_stride1): a convolution with ci
-/// output channels and K = co kk, value(c, (o, t)) = w[(o ci + c) kk + kk - 1 - t], gathered kk apart.
+/// output channels and K = co kk, value(c, (o, t)) = w[(o ci + c) kk + kk - 1 - t]; for each o, the taps of L
+/// channels transposed in blocks of L where ws_transpose_type<T>, else gathered kk apart.
 template <class T>
 inline void ws_pack_flipped(int co, int ci, int kk, const T* w, T* dst) noexcept
 {
-    ws_pack_vectors<T>(ci, co * kk, dst, [&](int c, int k, int n) {
-        const int o = k / kk, t = k % kk;
-        return ws_strided<T>(w + (std::ptrdiff_t(o) * ci + c) * kk + kk - 1 - t, kk, n);
-    });
+    if constexpr (ws_transpose_type<T>) {
+        constexpr int L = simd_lanes<T>;
+        ws_pack_blocks<T>(ci, co * kk, dst, [&](int c, int n, T* d, int MR) {
+            simd_t<T> v[L];
+            for (int o = 0; o < co; ++o)
+                for (int t0 = 0; t0 < kk; t0 += L) {
+                    const int nc = std::min(L, kk - t0);
+                    ws_transpose_block<T>(w + (std::ptrdiff_t(o) * ci + c) * kk + t0, kk, n, nc, v);
+                    for (int j = 0; j < nc; ++j)  // tap t0 + j is row k = o kk + kk - 1 - (t0 + j)
+                        v[j].store_aligned(d + (std::ptrdiff_t(o) * kk + kk - 1 - t0 - j) * MR);
+                }
+        });
+    } else {
+        ws_pack_vectors<T>(ci, co * kk, dst, [&](int c, int k, int n) {
+            const int o = k / kk, t = k % kk;
+            return ws_strided<T>(w + (std::ptrdiff_t(o) * ci + c) * kk + kk - 1 - t, kk, n);
+        });
+    }
 }
 
 /// y (+)= conv(x, W) + bias for a convolution of geometry g with at least simd_lanes<T> output channels, the
-/// weights given by pack(panels), which writes them as ws_pack does (value(o, k) of w [out, in, kh, kw]: w[o K + k]).
-/// scratch: forward_ws_scratch_elements<T>(g) elements (any alignment). The same bits as conv_simd.hpp's
-/// packed and stride-1 forward paths (not its dot path).
+/// weights given by pack(panels), which either writes them into `panels` (scratch) as ws_pack does (value(o, k) of
+/// w [out, in, kh, kw]: w[o K + k]) and returns `panels`, or returns panels packed so before (a tape packs a
+/// parameter once for all of its convolutions). scratch: forward_ws_scratch_elements<T>(g) elements (any
+/// alignment). The same bits as conv_simd.hpp's packed and stride-1 forward paths (not its dot path).
 template <class T, class Pack>
 inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T* bias, T* y, T* scratch,
                        bool accumulate_out) noexcept
@@ -483,7 +595,7 @@ inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T*
     T* acc = wp + lay.panels;
     T* sum = acc + std::size_t(lay.group) * lay.tiles;
     T* xp = sum + std::size_t(lay.group) * lay.tiles;
-    pack(wp);
+    const T* const panels = pack(wp);
     const std::size_t x_per = std::size_t(g.in_channels) * g.in_h * g.in_w, y_per = std::size_t(g.out_channels) * g.out_h() * g.out_w();
     // the padding of each image's buffer is written once; the interiors at every group
     std::memset(xp, 0, std::size_t(std::min(lay.group, g.batch)) * lay.padded * sizeof(T));
@@ -492,7 +604,7 @@ inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T*
             const int images = std::min(lay.group, g.batch - n0);
             for (int n = 0; n < images; ++n)
                 copy_into_padded(xp + n * lay.padded, Hp, Wp, g.pad, g.pad, x + (n0 + n) * x_per, g.in_channels, g.in_h, g.in_w);
-            ws_run_chains<T, NV, NR, SJ>(g, Hp, Wp, wp, images, xp, lay.padded, bias, y + n0 * y_per, y_per, acc, sum,
+            ws_run_chains<T, NV, NR, SJ>(g, Hp, Wp, panels, images, xp, lay.padded, bias, y + n0 * y_per, y_per, acc, sum,
                                          lay.tiles, accumulate_out);
         }
     });
