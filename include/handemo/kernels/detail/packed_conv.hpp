@@ -494,27 +494,7 @@ inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int 
     (void)p, (void)stride, (void)rows, (void)cols, (void)out;
 }
 
-/// Panels as ws_pack writes them, one vector of channels at a time: vec(o, k, n) gives channels o .. o + n - 1 of
-/// row k (n <= simd_lanes<T>, the other lanes 0).
-template <class T, class Vec>
-inline void ws_pack_vectors(int co, int K, T* dst, Vec&& vec) noexcept
-{
-    constexpr int L = simd_lanes<T>;
-    const int NV = ws_tile_for<T>(co).nv, MR = NV * L, panels = (co + MR - 1) / MR;
-    for (int pn = 0; pn < panels; ++pn)
-        for (int q = 0; q < NV; ++q) {
-            const int o = pn * MR + q * L;
-            T* d = dst + std::ptrdiff_t(pn) * K * MR + q * L;
-            if (o >= co) {
-                for (int k = 0; k < K; ++k) simd_t<T>(T(0)).store_aligned(d + std::ptrdiff_t(k) * MR);
-                continue;
-            }
-            const int n = std::min(L, co - o);
-            for (int k = 0; k < K; ++k) vec(o, k, n).store_aligned(d + std::ptrdiff_t(k) * MR);
-        }
-}
-
-/// Panels as ws_pack writes them, one vector of channels at a time and L rows k at a time: block(o, n, d, MR) writes
+/// Panels as ws_pack writes them, one vector of channels at a time: block(o, n, d, MR) writes
 /// rows 0 .. K - 1 of channels o .. o + n - 1 (n <= L, the other lanes 0) at d + k MR. Channels past co are zeros.
 template <class T, class Block>
 inline void ws_pack_blocks(int co, int K, T* dst, Block&& block) noexcept
@@ -531,6 +511,16 @@ inline void ws_pack_blocks(int co, int K, T* dst, Block&& block) noexcept
             }
             block(o, std::min(L, co - o), d, MR);
         }
+}
+
+/// Panels as ws_pack writes them, one vector of channels at a time: vec(o, k, n) gives channels o .. o + n - 1 of
+/// row k (n <= simd_lanes<T>, the other lanes 0).
+template <class T, class Vec>
+inline void ws_pack_vectors(int co, int K, T* dst, Vec&& vec) noexcept
+{
+    ws_pack_blocks<T>(co, K, dst, [&](int o, int n, T* d, int MR) {
+        for (int k = 0; k < K; ++k) vec(o, k, n).store_aligned(d + std::ptrdiff_t(k) * MR);
+    });
 }
 
 /// ws_pack of a weight matrix w [co, K] (row o at w + o K): value(o, k) = w[o K + k]; transposed in blocks of L x L
