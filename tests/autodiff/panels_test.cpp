@@ -43,9 +43,12 @@ struct run_result {
 /// loss = sum(y r) + mean((|d sum(y r) / dx| - 1)^2). With `as_parameters` the weights are parameters (caller
 /// memory, packed once per tape); else copies on the tape, which the kernels pack at every call.
 run_result run(tape<float>& t, const std::vector<float>& x, const std::vector<float>& x2, std::vector<float>& w1,
-               std::vector<float>& w2, const std::vector<float>& r, bool as_parameters)
+               std::vector<float>& w2, const std::vector<float>& r, bool as_parameters, bool keep_w1 = false)
 {
-    t.reset();
+    if (keep_w1)
+        t.reset_keeping_packed(w1.data(), w1.data() + w1.size());
+    else
+        t.reset();
     run_result out;
     std::vector<float> g1(w1.size(), 0.f), g2(w2.size(), 0.f);
     var<float, w1_shape> v1;
@@ -118,6 +121,22 @@ TEST_CASE("autodiff: a parameter's convolution panels are packed once per tape, 
     CHECK(same_bits(c.gx, d.gx));
     CHECK(same_bits(c.gw1, d.gw1));
     CHECK(same_bits(c.gw2, d.gw2));
+
+    // a reset that keeps w1's panels (the trainer's G phase keeps G's from the D phase): w2 changed and is packed
+    // again, w1 is not, and the result is the same bits as packing everything at every call
+    for (auto& v : w2) v *= 0.75f;
+    const run_result e = run(t, x, x2, w1, w2, r, true, true);
+    const run_result f = run(ref, x, x2, w1, w2, r, false);
+    CHECK(e.packed == 4);
+    CHECK(same_bits(e.loss, f.loss));
+    CHECK(same_bits(e.gx, f.gx));
+    CHECK(same_bits(e.gw1, f.gw1));
+    CHECK(same_bits(e.gw2, f.gw2));
+    // the kept panels are really the old ones: had w1 changed, keeping them would be wrong (the caller's promise)
+    for (auto& v : w1) v *= 0.5f;
+    const run_result stale = run(t, x, x2, w1, w2, r, true, true);
+    const run_result fresh = run(ref, x, x2, w1, w2, r, false);
+    CHECK(!same_bits(stale.gx, fresh.gx));
 }
 
 TEST_CASE("autodiff: gradient check through panels packed once per tape (double, a weight read four times)")

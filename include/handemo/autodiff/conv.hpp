@@ -64,7 +64,7 @@ template <class T>
 const T* weight_panels(tape<T>& t, int w, const conv_geometry& g, ck::conv_panels use)
 {
     const node<T>& n = t.at(w);
-    if (!n.external_value) return nullptr;
+    if (!n.external_value || !t.panel_cache()) return nullptr;
     const std::size_t m = ck::conv2d_panel_elements<T>(g, use);
     if (m == 0) return nullptr;
     const T* v = n.value;

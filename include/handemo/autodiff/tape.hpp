@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <span>
 #include <string>
@@ -137,15 +138,30 @@ public:
         blocks_.reserve(256);
         nodes_.reserve(1024);
         packed_.reserve(64);
+        slots_.reserve(64);
     }
     tape(const tape&) = delete;
     tape& operator=(const tape&) = delete;
 
-    /// @brief Forgets every node and rewinds the arena; keeps all memory for the next iteration.
-    void reset() noexcept
+    /// @brief Forgets every node and every packed() entry and rewinds the arena; keeps all memory for the next
+    /// iteration.
+    void reset() noexcept { reset_keeping_packed(nullptr, nullptr); }
+    /// @brief As reset(), but keeps the packed() entries whose key lies in [begin, end): the caller's promise that
+    /// that memory has not changed since they were packed (the trainer keeps G's panels from a step's D phase for
+    /// its G phase, between which only D's weights change).
+    void reset_keeping_packed(const void* begin, const void* end) noexcept
     {
         nodes_.clear();
-        packed_.clear();
+        const auto lo = reinterpret_cast<std::uintptr_t>(begin), hi = reinterpret_cast<std::uintptr_t>(end);
+        std::size_t kept = 0;
+        for (const packed_entry& e : packed_) {
+            const auto k = reinterpret_cast<std::uintptr_t>(e.key);
+            if (lo <= k && k < hi)
+                packed_[kept++] = e;
+            else
+                slots_[e.slot].used = false;
+        }
+        packed_.resize(kept);
         block_ = 0;
         used_ = 0;
     }
@@ -181,22 +197,35 @@ public:
         if (scratch_.size() < n) scratch_ = aligned_buffer<T>(n);
         return scratch_.data();
     }
-    /// @brief `n` elements of arena memory that fill(dst) writes from caller memory `key` for a use `kind`
-    /// (a convolution's weights packed into panels), filled at the first request after reset() and the same
-    /// memory at every later request for (key, kind, n) until reset(). Only for memory that does not change while
-    /// the tape holds nodes reading it: a parameter's values (leaf_ref), which optimisers update between steps.
+    /// @brief `n` elements (64-byte aligned) that fill(dst) writes from caller memory `key` for a use `kind` (a
+    /// convolution's weights packed into panels), filled at the first request after reset() and the same memory at
+    /// every later request for (key, kind, n) until reset(). Only for memory that does not change while the tape
+    /// holds nodes reading it: a parameter's values (leaf_ref), which optimisers update between steps. The entries
+    /// live outside the arena, in buffers kept across reset() and reused by size, so that reset_keeping_packed()
+    /// can keep some and a step after the first allocates nothing.
     template <class Fill>
     const T* packed(const void* key, int kind, std::size_t n, Fill&& fill)
     {
         for (const packed_entry& e : packed_)
-            if (e.key == key && e.kind == kind && e.n == n) return e.data;
-        T* p = alloc(n);
+            if (e.key == key && e.kind == kind && e.n == n) return slots_[e.slot].buf.data();
+        std::size_t best = slots_.size();
+        for (std::size_t i = 0; i < slots_.size(); ++i)  // the smallest free buffer that holds n
+            if (!slots_[i].used && slots_[i].buf.size() >= n && (best == slots_.size() || slots_[i].buf.size() < slots_[best].buf.size()))
+                best = i;
+        if (best == slots_.size()) slots_.push_back({aligned_buffer<T>(n), false});
+        slots_[best].used = true;
+        T* p = slots_[best].buf.data();
         fill(p);
-        packed_.push_back({key, kind, n, p});
+        packed_.push_back({key, kind, n, best});
         return p;
     }
     /// @brief Entries packed() holds since the last reset().
     std::size_t packed_count() const noexcept { return packed_.size(); }
+    /// @brief Whether the convolutions keep a parameter's packed panels for the tape's later convolutions
+    /// (packed(); on by default). Off, every convolution packs its weights at the call: the same bits, more time,
+    /// and none of the panels' memory (about the parameters' size, twice for G in training).
+    void set_panel_cache(bool on) noexcept { panel_cache_ = on; }
+    bool panel_cache() const noexcept { return panel_cache_; }
     /// @brief Zeroed arena memory.
     T* alloc_zero(std::size_t n)
     {
@@ -387,11 +416,17 @@ private:
         const void* key;
         int kind;
         std::size_t n;
-        T* data;
+        std::size_t slot;  ///< index into slots_
+    };
+    struct packed_slot {
+        aligned_buffer<T> buf;
+        bool used;
     };
     std::vector<aligned_buffer<T>> blocks_;
     aligned_buffer<T> scratch_;
     std::vector<packed_entry> packed_;
+    std::vector<packed_slot> slots_;
+    bool panel_cache_ = true;
     std::size_t block_ = 0, used_ = 0, block_elems_;
     std::vector<node<T>> nodes_;
     thread_pool* pool_ = nullptr;

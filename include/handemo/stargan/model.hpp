@@ -125,6 +125,7 @@ public:
     /// Elements of the flat value (and grad) buffer, entries padded to 16.
     std::size_t total() const noexcept { return total_; }
     T* grads() noexcept { return grads_.data(); }
+    const T* value_data() const noexcept { return values_.data(); }
     std::size_t count() const noexcept { return entries_.size(); }
     const param_entry& entry(std::size_t i) const noexcept { return entries_[i]; }
     template <class F>
@@ -204,6 +205,9 @@ public:
     void set_requires_grad(bool on) noexcept { requires_grad_ = on; }
     /// @brief Number of scalar parameters.
     std::size_t parameter_count() const noexcept { return p_.numel(); }
+    /// @brief The flat buffer every parameter's values live in (entries padded to 16 values): what a tape may keep
+    /// its packed panels of across a reset while these values do not change (tape::reset_keeping_packed).
+    std::span<const T> parameter_values() const noexcept { return {p_.value_data(), p_.total()}; }
 
 protected:
     T* grad_or_null(std::size_t i, std::size_t shard = 0)

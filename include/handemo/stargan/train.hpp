@@ -991,6 +991,14 @@ public:
     std::size_t shards() const noexcept { return shards_; }
     /// @brief The most parts a batch of N can be cut into: 2 for an even batch, else 1.
     static constexpr std::size_t max_shards() noexcept { return S; }
+    /// @brief Whether the training tapes keep each parameter's packed panels for all the convolutions of a phase
+    /// that read it, and G's from a step's D phase for its G phase (autodiff::tape::set_panel_cache; on by
+    /// default). Off: the same bits, more time, less memory.
+    void set_panel_cache(bool on) noexcept
+    {
+        for (auto& t : tapes_)
+            if (t) t->set_panel_cache(on);
+    }
 
 private:
     /// The step on parts of B samples (N / B of them, each on tapes_[part]).
@@ -1074,7 +1082,7 @@ private:
                 p[3] = lg.item();
                 part_[s] = p;
                 t.backward(lg);
-            });
+            }, g_.parameter_values());  // G has not changed since this step's D phase packed its panels
             share_parts<N / B, B>(g_, false);
             const auto gl = sum_parts<N / B>();
             check_finite({{"G/fake", gl[0]}, {"G/cls", gl[1]}, {"G/rec", gl[2]}, {"G/id", gl[4]}, {"G/pair", gl[5]},
@@ -1317,12 +1325,14 @@ private:
         return static_cast<double>(ok) / N;
     }
 
-    /// Runs f(tape, part) for parts 0..P-1, each on tapes_[part], on the pool's threads when P > 1.
+    /// Runs f(tape, part) for parts 0..P-1, each on tapes_[part], on the pool's threads when P > 1. Each tape is
+    /// reset first, keeping the panels it packed of the values in `unchanged` (parameters no optimiser has updated
+    /// since the tape's last phase; empty: none).
     template <std::size_t P, class F>
-    void run_parts(F&& f)
+    void run_parts(F&& f, std::span<const float> unchanged = {})
     {
         auto one = [&](int s) {
-            tapes_[std::size_t(s)]->reset();
+            tapes_[std::size_t(s)]->reset_keeping_packed(unchanged.data(), unchanged.data() + unchanged.size());
             f(*tapes_[std::size_t(s)], std::size_t(s));
         };
         if constexpr (P == 1) one(0);
