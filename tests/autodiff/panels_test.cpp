@@ -86,6 +86,12 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b)
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
 }
 
+/// The loss, the input gradient and both weight gradients of two runs, bit for bit.
+bool same_run(const run_result& a, const run_result& b)
+{
+    return same_bits(a.loss, b.loss) && same_bits(a.gx, b.gx) && same_bits(a.gw1, b.gw1) && same_bits(a.gw2, b.gw2);
+}
+
 }  // namespace panels_case
 
 TEST_CASE("autodiff: a parameter's convolution panels are packed once per tape, the same bits as at every call")
@@ -107,20 +113,14 @@ TEST_CASE("autodiff: a parameter's convolution panels are packed once per tape, 
     const run_result b = run(ref, x, x2, w1, w2, r, false);
     CHECK(a.packed == 4);  // (w1, w2) x (forward, backward-data), each once for all of its passes
     CHECK(b.packed == 0);
-    CHECK(same_bits(a.loss, b.loss));
-    CHECK(same_bits(a.gx, b.gx));
-    CHECK(same_bits(a.gw1, b.gw1));
-    CHECK(same_bits(a.gw2, b.gw2));
+    CHECK(same_run(a, b));
 
     // an optimiser's update between two resets: the tape packs the new weights, not the old panels
     for (auto& v : w1) v *= -1.5f;
     const run_result c = run(t, x, x2, w1, w2, r, true);
     const run_result d = run(ref, x, x2, w1, w2, r, false);
     CHECK(!same_bits(c.gx, a.gx));
-    CHECK(same_bits(c.loss, d.loss));
-    CHECK(same_bits(c.gx, d.gx));
-    CHECK(same_bits(c.gw1, d.gw1));
-    CHECK(same_bits(c.gw2, d.gw2));
+    CHECK(same_run(c, d));
 
     // a reset that keeps w1's panels (the trainer's G phase keeps G's from the D phase): w2 changed and is packed
     // again, w1 is not, and the result is the same bits as packing everything at every call
@@ -128,10 +128,7 @@ TEST_CASE("autodiff: a parameter's convolution panels are packed once per tape, 
     const run_result e = run(t, x, x2, w1, w2, r, true, true);
     const run_result f = run(ref, x, x2, w1, w2, r, false);
     CHECK(e.packed == 4);
-    CHECK(same_bits(e.loss, f.loss));
-    CHECK(same_bits(e.gx, f.gx));
-    CHECK(same_bits(e.gw1, f.gw1));
-    CHECK(same_bits(e.gw2, f.gw2));
+    CHECK(same_run(e, f));
     // the kept panels are really the old ones: had w1 changed, keeping them would be wrong (the caller's promise)
     for (auto& v : w1) v *= 0.5f;
     const run_result stale = run(t, x, x2, w1, w2, r, true, true);
