@@ -58,8 +58,9 @@ void for_batch_chunks(tape<T>& t, const conv_geometry& g, F&& f)
 
 /// The weights of node w packed for `use` over geometry g, once per tape (tape::packed) when w is a parameter
 /// (caller memory, unchanged until the tape's reset()) and that call of g takes packed panels; else nullptr, and
-/// the kernel packs them at the call. G's weights are read by three forward passes and three backward-data
-/// passes in a training step, D's by four and more: the same panels, so the same bits.
+/// the kernel packs them at the call. In a training step's G phase G's weights are read by three or four forward
+/// and as many backward-data passes, in its D phase D's by three forward passes and the penalty's double backward:
+/// the same panels, so the same bits.
 template <class T>
 const T* weight_panels(tape<T>& t, int w, const conv_geometry& g, ck::conv_panels use)
 {

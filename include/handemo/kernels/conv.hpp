@@ -17,6 +17,12 @@
 
 namespace handemo::kernels {
 
+/// @brief The two uses of a convolution's weights that can take them packed ahead of the call.
+enum class conv_panels {
+    forward,        ///< conv2d_forward (and conv_transpose2d_backward_data, the same pass)
+    backward_data,  ///< conv2d_backward_data
+};
+
 namespace detail {
 /// float and double take the xsimd path when xsimd has an instruction set for the target; any other T,
 /// or a target without SIMD, the reference loops.
@@ -46,22 +52,37 @@ inline bool backward_data_ws(const conv_geometry& g) noexcept
     return backward_data_by_forward(g) && use_forward_ws<T>(flipped_geometry(g));
 }
 
+/// Packs w [out_channels, in_channels, kh, kw] of geometry g for `use` into dst: the rows for the forward pass, the
+/// flipped, channel-swapped kernel for the stride-1 backward-data.
+template <class T>
+inline void pack_panels(const conv_geometry& g, conv_panels use, const T* w, T* dst) noexcept
+{
+    if (use == conv_panels::forward)
+        ws_pack_rows<T>(g.out_channels, g.in_channels * g.kernel_h * g.kernel_w, w, dst);
+    else
+        ws_pack_flipped<T>(g.out_channels, g.in_channels, g.kernel_h * g.kernel_w, w, dst);
+}
+
+/// forward_ws's pack argument for the weights w of geometry g and `use`: `panels` when given (packed ahead by
+/// pack_panels), else w packed into the scratch's panels at the call.
+template <class T>
+inline auto panels_or_pack(const conv_geometry& g, conv_panels use, const T* w, const T* panels) noexcept
+{
+    return [g, use, w, panels](T* dst) -> const T* {
+        if (panels) return panels;
+        pack_panels<T>(g, use, w, dst);
+        return dst;
+    };
+}
+
 /// y (+)= conv(x, w) + bias: forward_ws where use_forward_ws (its weights `panels` when given, else packed at the
 /// call), else conv_simd.hpp's forward.
 template <class T>
 inline void forward_any(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
                         bool accumulate_out, const T* panels = nullptr) noexcept
 {
-    if (use_forward_ws<T>(g)) {
-        const int K = g.in_channels * g.kernel_h * g.kernel_w;
-        return forward_ws<T>(g, x,
-                             [&](T* dst) -> const T* {
-                                 if (panels) return panels;
-                                 ws_pack_rows<T>(g.out_channels, K, w, dst);
-                                 return dst;
-                             },
-                             bias, y, scratch, accumulate_out);
-    }
+    if (use_forward_ws<T>(g))
+        return forward_ws<T>(g, x, panels_or_pack<T>(g, conv_panels::forward, w, panels), bias, y, scratch, accumulate_out);
     forward(g, x, w, bias, y, scratch, accumulate_out);
 }
 
@@ -71,24 +92,12 @@ template <class T>
 inline void backward_data_any(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch,
                               const T* panels = nullptr) noexcept
 {
-    if (backward_data_ws<T>(g)) {
-        return forward_ws<T>(flipped_geometry(g), gy,
-                             [&](T* dst) -> const T* {
-                                 if (panels) return panels;
-                                 ws_pack_flipped<T>(g.out_channels, g.in_channels, g.kernel_h * g.kernel_w, w, dst);
-                                 return dst;
-                             },
+    if (backward_data_ws<T>(g))
+        return forward_ws<T>(flipped_geometry(g), gy, panels_or_pack<T>(g, conv_panels::backward_data, w, panels),
                              static_cast<const T*>(nullptr), gx, scratch, true);
-    }
     backward_data(g, gy, w, gx, scratch);
 }
 }  // namespace detail
-
-/// @brief The two uses of a convolution's weights that can take them packed ahead of the call.
-enum class conv_panels {
-    forward,        ///< conv2d_forward (and conv_transpose2d_backward_data, the same pass)
-    backward_data,  ///< conv2d_backward_data
-};
 
 /// @brief Elements of the panels conv2d_pack_panels writes for geometry g and `use`, or 0 when that call of
 /// geometry g does not take packed panels (it then reads w as it is). Training packs each weight once per tape
@@ -113,12 +122,7 @@ std::size_t conv2d_panel_elements(const conv_geometry& g, conv_panels use) noexc
 template <class T>
 void conv2d_pack_panels(const conv_geometry& g, conv_panels use, const T* w, T* panels) noexcept
 {
-    if constexpr (detail::fast_type<T>) {
-        if (use == conv_panels::forward)
-            detail::ws_pack_rows<T>(g.out_channels, g.in_channels * g.kernel_h * g.kernel_w, w, panels);
-        else
-            detail::ws_pack_flipped<T>(g.out_channels, g.in_channels, g.kernel_h * g.kernel_w, w, panels);
-    }
+    if constexpr (detail::fast_type<T>) detail::pack_panels<T>(g, use, w, panels);
 }
 
 /// @brief Elements of T the kernels of this file need as `scratch` for geometry g (the maximum over all
