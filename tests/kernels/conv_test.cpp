@@ -143,7 +143,7 @@ std::vector<hk::conv_geometry> stargan_shapes(int cd, int b)
 struct route_counts {
     int forward_dot = 0, forward_stride1 = 0, forward_packed = 0;
     int backward_data_by_forward = 0, backward_data_gemm = 0;
-    int backward_weight_stride1 = 0, backward_weight_packed = 0;
+    int backward_weight_stride1 = 0, backward_weight_packed = 0, backward_weight_ws = 0;
 
     template <class T>
     void add(const hk::conv_geometry& g)
@@ -154,7 +154,8 @@ struct route_counts {
         else ++forward_packed;
         if (d::backward_data_by_forward(g)) ++backward_data_by_forward;
         else ++backward_data_gemm;
-        if (d::use_stride1_backward_weight<T>(g)) ++backward_weight_stride1;
+        if (d::use_backward_weight_ws<T>(g)) ++backward_weight_ws;
+        else if (d::use_stride1_backward_weight<T>(g)) ++backward_weight_stride1;
         else ++backward_weight_packed;
     }
     int total_forward() const { return forward_dot + forward_stride1 + forward_packed; }
@@ -164,7 +165,8 @@ void check_every_route(const route_counts& r, int geometries)
 {
     INFO("forward dot/stride1/packed ", r.forward_dot, "/", r.forward_stride1, "/", r.forward_packed,
          ", backward_data by-forward/gemm ", r.backward_data_by_forward, "/", r.backward_data_gemm,
-         ", backward_weight stride1/packed ", r.backward_weight_stride1, "/", r.backward_weight_packed);
+         ", backward_weight stride1/packed/ws ", r.backward_weight_stride1, "/", r.backward_weight_packed, "/",
+         r.backward_weight_ws);
     CHECK(r.total_forward() == geometries);
     CHECK(r.forward_dot > 0);
     CHECK(r.forward_stride1 > 0);
@@ -232,8 +234,9 @@ TEST_CASE("conv kernels match the reference on random geometries with many chann
     const hk::conv_geometry anchors[] = {
         {1, 32, 3, 6, 32, 3, 3, 1, 1},    // forward dot (K = 288, 18 pixels)
         {1, 8, 12, 24, 32, 7, 7, 1, 3},   // forward stride-1, backward-data by forward
-        {3, 20, 12, 24, 40, 4, 4, 2, 1},  // forward packed, backward-data GEMM, backward-weight packed
+        {3, 20, 12, 24, 40, 4, 4, 2, 1},  // forward packed, backward-data GEMM, backward-weight weight-stationary
         {1, 20, 12, 24, 8, 3, 3, 1, 1},   // backward-weight stride 1 (8 outputs, wide grid 310)
+        {3, 20, 12, 24, 3, 4, 4, 2, 1},   // backward-weight packed (3 outputs, stride 2)
     };
     for (const auto& g : anchors) {
         check_geometry<float>(g, 1e-5, unsigned(tested) + 77u);
@@ -241,4 +244,5 @@ TEST_CASE("conv kernels match the reference on random geometries with many chann
         ++tested;
     }
     check_every_route(routes, tested);  // the title's claim: every dispatch route was taken
+    CHECK(routes.backward_weight_ws > 0);
 }

@@ -1,9 +1,10 @@
 // The weight-stationary path for convolutions whose weights change between calls (training:
 // kernels/detail/packed_conv.hpp's forward_ws behind conv2d_forward, the stride-1 backward-data and the
-// transposed convolution's backward-data). It must give conv_simd.hpp's packed and stride-1 paths bit for bit,
-// so that a model trains to the same bits whichever path ran: compared with memcmp, float and double, with and
-// without bias, overwriting and accumulating, on the StarGAN layers and on random geometries, batches across
-// the image groups, and with nothing written past the scratch it asks for.
+// transposed convolution's backward-data, and backward_weight_ws behind both weight gradients). It must give
+// conv_simd.hpp's packed and stride-1 paths bit for bit, so that a model trains to the same bits whichever path
+// ran: compared with memcmp, float and double, with and without bias, overwriting and accumulating, on the
+// StarGAN layers and on random geometries, batches across the image groups and pixel blocks, and with nothing
+// written past the scratch it asks for.
 #include <doctest/doctest.h>
 
 #include <handemo/kernels/conv.hpp>
@@ -43,8 +44,9 @@ struct guarded_scratch {
     std::vector<T> v;
 };
 
-/// forward_any (weight-stationary where use_forward_ws) against conv_simd.hpp's forward, and backward_data_any
-/// against backward_data, each bit for bit. Returns how many of the two took the weight-stationary path.
+/// forward_any (weight-stationary where use_forward_ws) against conv_simd.hpp's forward, backward_data_any
+/// against backward_data and backward_weight_any against backward_weight, each bit for bit. Returns how many of
+/// the three took the weight-stationary path.
 template <class T>
 int check_same_bits(const hk::conv_geometry& g, unsigned seed)
 {
@@ -75,6 +77,15 @@ int check_same_bits(const hk::conv_geometry& g, unsigned seed)
     CHECK(std::memcmp(ga.data(), gb.data(), ga.size() * sizeof(T)) == 0);
     CHECK(sa.intact());
     took += hkd::backward_data_by_forward(g) && hkd::use_forward_ws<T>(hkd::flipped_geometry(g)) ? 1 : 0;
+    // backward-weight accumulates into gw
+    const auto gw0 = cast<T>(random_values(g.w_size(), rng));
+    std::vector<T> wa = gw0, wb = gw0;
+    guarded_scratch<T> sc(g), sd(g);
+    hkd::backward_weight_any<T>(g, x.data(), y0.data(), wa.data(), sc.data());
+    hkd::backward_weight<T>(g, x.data(), y0.data(), wb.data(), sd.data());
+    CHECK(std::memcmp(wa.data(), wb.data(), wa.size() * sizeof(T)) == 0);
+    CHECK(sc.intact());
+    took += hkd::use_backward_weight_ws<T>(g) ? 1 : 0;
     return took;
 }
 
@@ -99,7 +110,7 @@ TEST_CASE("forward_ws: conv_simd.hpp's bits on the StarGAN layers (float and dou
             for (const auto& g : stargan_layers(n, c)) {
                 took += check_same_bits<float>(g, unsigned(7 * n + c));
                 took += check_same_bits<double>(g, unsigned(11 * n + c));
-                cases += 4;
+                cases += 6;
             }
     MESSAGE(took, " of ", cases, " passes took the weight-stationary path");
     CHECK(took >= cases / 3);  // the test must reach the path it checks
@@ -116,12 +127,17 @@ TEST_CASE("forward_ws: conv_simd.hpp's bits on random geometries (strides 1-3, l
         g.pad = std::uniform_int_distribution<int>(0, g.kernel_h - 1)(rng);
         if (!g.valid()) continue;
         took += check_same_bits<float>(g, unsigned(i));
-        cases += 2;
+        cases += 3;
     }
-    // a reduction of several chains (K = 300 > 256) and images too large for a group of 16
+    // a reduction of several chains (K = 300 > 256) and images too large for a group of 16; for the weight
+    // gradients, rows longer than a pixel block (150 > wg_block_pixels), 20 images of 3 pixels in two groups, and
+    // channels that end within a panel and within a vector (100 = 64 + 36 on AVX-512)
     took += check_same_bits<float>({5, 75, 6, 6, 20, 2, 2, 1, 0}, 1u);
     took += check_same_bits<float>({3, 64, 90, 90, 16, 3, 3, 1, 1}, 2u);
-    cases += 4;
+    took += check_same_bits<float>({2, 5, 3, 150, 24, 3, 3, 1, 1}, 3u);
+    took += check_same_bits<float>({20, 40, 1, 3, 100, 1, 1, 1, 0}, 4u);
+    took += check_same_bits<double>({20, 40, 1, 3, 100, 1, 1, 1, 0}, 5u);
+    cases += 15;
     MESSAGE(took, " of ", cases, " passes took the weight-stationary path");
     CHECK(took >= cases / 4);
 }
@@ -139,6 +155,15 @@ TEST_CASE("forward_ws: the image groups stay within the scratch the geometry ask
     hk::conv_geometry one = small;
     one.batch = 1;
     CHECK(hk::conv2d_scratch_size<float>(one) == hk::conv2d_scratch_size<float>(small));
+    // the weight gradients' groups and blocks: several images of a few pixels, or one row per block
+    const hkd::wg_scratch_layout<float> few({40, 32, 3, 6, 32, 3, 3, 1, 1});
+    CHECK(few.group == hkd::wg_block_pixels / 18);
+    CHECK(few.runs == hkd::wg_block_pixels / 6);
+    const hkd::wg_scratch_layout<float> wide({2, 5, 3, 150, 24, 3, 3, 1, 1});
+    CHECK(wide.group == 1);
+    CHECK(wide.runs == 1);
+    CHECK(hkd::backward_weight_ws_scratch_elements<float>(big) <= hk::conv2d_scratch_size<float>(big));
+    CHECK(hkd::backward_weight_ws_scratch_elements<float>(small) <= hk::conv2d_scratch_size<float>(small));
 }
 
 TEST_CASE_TEMPLATE("forward_ws: the panel packers (blocks transposed in registers, or gathers) write what ws_pack writes", T,

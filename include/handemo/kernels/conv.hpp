@@ -52,6 +52,23 @@ inline bool backward_data_ws(const conv_geometry& g) noexcept
     return backward_data_by_forward(g) && use_forward_ws<T>(flipped_geometry(g));
 }
 
+/// Whether a backward-weight pass of geometry g takes backward_weight_ws (kernels/detail/packed_conv.hpp, the same
+/// bits as conv_simd.hpp's packed path): where its tiles fill the vectors (at least one vector of output channels)
+/// and conv_simd.hpp would take its packed path (the stride-1 path for few output channels sums in another order).
+template <class T>
+inline bool use_backward_weight_ws(const conv_geometry& g) noexcept
+{
+    return fast_type<T> && g.out_channels >= simd_lanes<T> && !use_stride1_backward_weight<T>(g);
+}
+
+/// gw += dL/dw: backward_weight_ws where use_backward_weight_ws, else conv_simd.hpp's backward_weight.
+template <class T>
+inline void backward_weight_any(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
+{
+    if (use_backward_weight_ws<T>(g)) return backward_weight_ws<T>(g, x, gy, gw, scratch);
+    backward_weight(g, x, gy, gw, scratch);
+}
+
 /// Packs w [out_channels, in_channels, kh, kw] of geometry g for `use` into dst: the rows for the forward pass, the
 /// flipped, channel-swapped kernel for the stride-1 backward-data.
 template <class T>
@@ -133,6 +150,7 @@ std::size_t conv2d_scratch_size(const conv_geometry& g) noexcept
 {
     if constexpr (detail::fast_type<T>)
         return std::max({detail::scratch_elements<T>(g), detail::forward_ws_scratch_elements<T>(g),
+                         detail::use_backward_weight_ws<T>(g) ? detail::backward_weight_ws_scratch_elements<T>(g) : std::size_t(0),
                          detail::backward_data_by_forward(g) ? detail::forward_ws_scratch_elements<T>(detail::flipped_geometry(g))
                                                             : std::size_t(0)});
     else return reference::conv2d_scratch_size<T>(g);
@@ -173,7 +191,7 @@ void conv2d_backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
 template <class T>
 void conv2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
 {
-    if constexpr (detail::fast_type<T>) detail::backward_weight(g, x, gy, gw, scratch);
+    if constexpr (detail::fast_type<T>) detail::backward_weight_any(g, x, gy, gw, scratch);
     else reference::conv2d_backward_weight(g, x, gy, gw, scratch);
 }
 
@@ -221,7 +239,7 @@ void conv_transpose2d_backward_data(const conv_geometry& g, const T* gy, const T
 template <class T>
 void conv_transpose2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
 {
-    if constexpr (detail::fast_type<T>) detail::backward_weight(g, gy, x, gw, scratch);
+    if constexpr (detail::fast_type<T>) detail::backward_weight_any(g, gy, x, gw, scratch);
     else reference::conv_transpose2d_backward_weight(g, x, gy, gw, scratch);
 }
 

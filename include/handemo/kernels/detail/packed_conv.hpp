@@ -600,4 +600,214 @@ inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T*
     });
 }
 
+// ------------------------------------------------------------------------------------------- weight gradients
+// gw[o, k] += sum_{n,p} gy[n,o,p] x[n, c, window of p + (u, v)], k = (c, u, v). conv_simd.hpp's packed
+// backward_weight vectorises along k, so it packs every image's im2col windows (kh kw copies of each input
+// element, one gather per vector) to reuse each only out_channels times. Here the tile of the weight-stationary
+// kernel is turned around: its vectors run along the output channels, read from gy transposed into blocks of
+// [pixel][channel] (one copy of each gradient element), and its broadcasts read the NR taps k straight from a
+// zero-padded copy of the image, as the forward pass reads its pixels. Each (o, k) lane sums its products in
+// the packed path's order, images then pixels, from zero, and the sums are added to gw once at the end: the
+// same bits.
+
+/// Pixels of gy per transposed block: one block of a panel ([pixels][MR], 32 KiB for 128 pixels and 64 float
+/// channels) stays in L1 while every tile of taps runs over it. Images with fewer pixels go in groups.
+inline constexpr int wg_block_pixels = 128;
+
+/// The parts of backward_weight_ws's scratch (elements of T, each part 64-byte aligned) for geometry g.
+template <class T>
+struct wg_scratch_layout {
+    std::size_t sums, block, offsets, padded;  // per call ([panel][K][MR]); one block of one panel; K tap
+                                               // offsets (std::ptrdiff_t); per image
+    int group;                        // images per group
+    int runs;                         // output rows (runs of out_w pixels) per block
+    std::size_t total;
+    explicit wg_scratch_layout(const conv_geometry& g) noexcept
+    {
+        constexpr std::size_t a = 64 / sizeof(T);
+        auto up = [](std::size_t n) { return (n + a - 1) / a * a; };
+        const ws_tile t = ws_tile_for<T>(g.out_channels);
+        const std::size_t MR = std::size_t(t.nv) * simd_lanes<T>;
+        sums = up(ws_packed_elements<T>(g.out_channels, g.in_channels * g.kernel_h * g.kernel_w));
+        runs = std::max(1, wg_block_pixels / g.out_w());
+        block = up(std::size_t(runs) * g.out_w() * MR);
+        const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
+        offsets = up((K * sizeof(std::ptrdiff_t) + sizeof(T) - 1) / sizeof(T));
+        padded = up(std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad));
+        group = std::clamp(wg_block_pixels / (g.out_h() * g.out_w()), 1, ws_group_max);
+        total = a + sums + block + offsets + std::size_t(group) * padded;
+    }
+};
+
+/// Elements (of T) of backward_weight_ws's scratch for geometry g. It does not depend on g.batch.
+template <class T>
+inline std::size_t backward_weight_ws_scratch_elements(const conv_geometry& g) noexcept
+{
+    return wg_scratch_layout<T>(g).total;
+}
+
+/// tile[j][0..MR) (+)= sum_{r < runs} sum_{w < len} v[(r len + w) MR + 0..MR) * src[run_off[r] + koff[j] + w sj],
+/// j < NR taps: v is a block of gy transposed ([pixel][channel]), src the zero-padded images, run r one output
+/// row. SJ > 0 fixes the stride at compile time, as in micro_ws.
+template <class T, int NV, int NR, int SJ>
+[[gnu::noinline]] inline void micro_wg(int runs, const std::ptrdiff_t* __restrict run_off, int len, const T* __restrict v,
+                                       const T* __restrict src, const std::ptrdiff_t* __restrict koff, int sj,
+                                       T* __restrict tile, bool accumulate) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>, MR = NV * L;
+    B acc[NR][NV];
+    if (accumulate) {
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j)
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
+    } else {
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j)
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
+    }
+    const int step = SJ > 0 ? SJ : sj;
+    for (int r = 0; r < runs; ++r) {
+        const T* sp[NR];
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j) sp[j] = src + run_off[r] + koff[j];
+        for (int w = 0; w < len; ++w) {
+            B a[NV];
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_aligned(v + q * L));
+            HANDEMO_UNROLL_TILE
+            for (int j = 0; j < NR; ++j) {
+                const B b(sp[j][w * step]);
+                HANDEMO_UNROLL_TILE
+                for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
+            }
+            v += MR;
+        }
+    }
+    HANDEMO_UNROLL_TILE
+    for (int j = 0; j < NR; ++j)
+        HANDEMO_UNROLL_TILE
+        for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
+}
+
+/// micro_wg<T, NV, nr, SJ> for nr = 1..N.
+template <class T, int NV, int N, int SJ>
+inline void micro_wg_dispatch(int nr, int runs, const std::ptrdiff_t* run_off, int len, const T* v, const T* src,
+                              const std::ptrdiff_t* koff, int sj, T* tile, bool accumulate) noexcept
+{
+    if constexpr (N <= 1) micro_wg<T, NV, 1, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate);
+    else if (nr >= N) micro_wg<T, NV, N, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate);
+    else micro_wg_dispatch<T, NV, N - 1, SJ>(nr, runs, run_off, len, v, src, koff, sj, tile, accumulate);
+}
+
+/// dst[p MR + l] = gy[(o0 + l) P + p] for p < pixels, l < MR (0 for channels past co): pixels of one image's
+/// gradient (channel stride P) transposed into a block of a panel.
+template <class T>
+inline void wg_transpose(const T* gy, std::ptrdiff_t P, int o0, int co, int MR, int pixels, T* dst) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    for (int q = 0; q < MR; q += L) {
+        const int o = o0 + q, n = std::clamp(co - o, 0, L);
+        if constexpr (ws_transpose_type<T>) {
+            simd_t<T> v[L];
+            for (int p0 = 0; p0 < pixels; p0 += L) {
+                const int nc = std::min(L, pixels - p0);
+                if (n > 0) ws_transpose_block<T>(gy + std::ptrdiff_t(o) * P + p0, P, n, nc, v);
+                for (int j = 0; j < nc; ++j)
+                    (n > 0 ? v[j] : simd_t<T>(T(0))).store_aligned(dst + std::ptrdiff_t(p0 + j) * MR + q);
+            }
+        } else {
+            for (int p = 0; p < pixels; ++p)
+                for (int l = 0; l < L; ++l) dst[std::ptrdiff_t(p) * MR + q + l] = l < n ? gy[std::ptrdiff_t(o + l) * P + p] : T(0);
+        }
+    }
+}
+
+/// gw[o K + k] += sums[(pn K + k) MR + o - pn MR], pn = o / MR: the sums' panels added to the weight gradient
+/// [co][K], in blocks of L x L transposed in registers where ws_transpose_type<T> (one strided read per element
+/// was a fifth of the residual conv's time: each a different cache line of a panel larger than L2).
+template <class T>
+inline void wg_add_sums(int co, int K, int MR, const T* sums, T* gw) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    for (int o = 0; o < co; o += L) {
+        const int pn = o / MR, n = std::min(L, co - o);
+        const T* src = sums + std::ptrdiff_t(pn) * K * MR + (o - pn * MR);
+        if constexpr (ws_transpose_type<T>) {
+            simd_t<T> v[L];
+            alignas(64) T row[L];
+            for (int k0 = 0; k0 < K; k0 += L) {
+                const int nk = std::min(L, K - k0);
+                ws_transpose_block<T>(src + std::ptrdiff_t(k0) * MR, MR, nk, n, v);  // v[i]: channel o + i, taps k0..
+                for (int i = 0; i < n; ++i) {
+                    T* dst = gw + std::ptrdiff_t(o + i) * K + k0;
+                    if (nk == L) {
+                        (simd_t<T>::load_unaligned(dst) + v[i]).store_unaligned(dst);
+                    } else {
+                        v[i].store_aligned(row);
+                        for (int k = 0; k < nk; ++k) dst[k] += row[k];
+                    }
+                }
+            }
+        } else {
+            for (int k0 = 0; k0 < K; k0 += L)
+                for (int i = 0; i < n; ++i)
+                    for (int k = k0; k < std::min(K, k0 + L); ++k) gw[std::ptrdiff_t(o + i) * K + k] += src[std::ptrdiff_t(k) * MR + i];
+        }
+    }
+}
+
+/// gw += dL/dw of a convolution of geometry g (x the input, gy the output gradient; swapped for the transposed
+/// convolution, as for conv_simd.hpp's backward_weight) with the vectors along the output channels (see above).
+/// scratch: backward_weight_ws_scratch_elements<T>(g) elements (any alignment). The same bits as conv_simd.hpp's
+/// packed backward_weight.
+template <class T>
+inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
+{
+    const wg_scratch_layout<T> lay(g);
+    const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
+    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, co = g.out_channels;
+    T* sums = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(scratch) + 63) / 64 * 64);
+    T* vb = sums + lay.sums;
+    std::ptrdiff_t* koff = reinterpret_cast<std::ptrdiff_t*>(vb + lay.block);
+    T* xp = vb + lay.block + lay.offsets;
+    for (int k = 0; k < K; ++k) {
+        const int c = k / (kh * kw), u = (k / kw) % kh, v = k % kw;
+        koff[k] = (std::ptrdiff_t(c) * Hp + u) * Wp + v;
+    }
+    const std::size_t x_per = std::size_t(g.in_channels) * g.in_h * g.in_w, y_per = std::size_t(co) * P;
+    std::memset(xp, 0, std::size_t(std::min(lay.group, g.batch)) * lay.padded * sizeof(T));
+    ws_with_tile<T>(co, g.stride, [&]<int NV, int NR, int SJ>() {
+        constexpr int MR = NV * simd_lanes<T>;
+        const int panels = (co + MR - 1) / MR;
+        std::ptrdiff_t run_off[wg_block_pixels];
+        for (int n0 = 0; n0 < g.batch; n0 += lay.group) {
+            const int images = std::min(lay.group, g.batch - n0);
+            for (int n = 0; n < images; ++n)
+                copy_into_padded(xp + n * lay.padded, Hp, Wp, g.pad, g.pad, x + (n0 + n) * x_per, g.in_channels, g.in_h, g.in_w);
+            const int runs = images * oh;
+            for (int pn = 0; pn < panels; ++pn)
+                for (int r0 = 0; r0 < runs; r0 += lay.runs) {
+                    const int nruns = std::min(lay.runs, runs - r0);
+                    // the block's runs: their offsets in the padded images and their gradients transposed
+                    for (int r = r0; r < r0 + nruns;) {
+                        const int n = r / oh, h = r % oh, rows = std::min(oh - h, r0 + nruns - r);
+                        for (int i = 0; i < rows; ++i)
+                            run_off[r - r0 + i] = std::ptrdiff_t(n) * lay.padded + std::ptrdiff_t(h + i) * g.stride * Wp;
+                        wg_transpose<T>(gy + (n0 + n) * y_per + std::ptrdiff_t(h) * ow, P, pn * MR, co, MR, rows * ow,
+                                        vb + std::ptrdiff_t(r - r0) * ow * MR);
+                        r += rows;
+                    }
+                    const bool accumulate = n0 > 0 || r0 > 0;
+                    for (int k0 = 0; k0 < K; k0 += NR)
+                        micro_wg_dispatch<T, NV, NR, SJ>(std::min(NR, K - k0), nruns, run_off, ow, vb, xp, koff + k0, g.stride,
+                                                         sums + (std::ptrdiff_t(pn) * K + k0) * MR, accumulate);
+                }
+        }
+        wg_add_sums<T>(co, K, MR, sums, gw);
+    });
+}
+
 }  // namespace handemo::kernels::detail
