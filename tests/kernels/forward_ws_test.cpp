@@ -100,6 +100,9 @@ std::vector<hk::conv_geometry> stargan_layers(int n, int c)
 }  // namespace forward_ws_test
 
 using forward_ws_test::check_same_bits;
+using forward_ws_test::describe;
+using forward_ws_test::random_values;
+using forward_ws_test::cast;
 using forward_ws_test::stargan_layers;
 
 TEST_CASE("forward_ws: conv_simd.hpp's bits on the StarGAN layers (float and double, batches 1 to 17)")
@@ -140,6 +143,45 @@ TEST_CASE("forward_ws: conv_simd.hpp's bits on random geometries (strides 1-3, l
     cases += 15;
     MESSAGE(took, " of ", cases, " passes took the weight-stationary path");
     CHECK(took >= cases / 4);
+}
+
+TEST_CASE("backward-data GEMM path: the same bits whatever the pixel tile (4 or 8 pixels per micro-tile)")
+{
+    // conv_simd.hpp's backward_data takes 8-pixel tiles where there are 32 vector registers; the bits must be those
+    // of the 4-pixel tiles that trained every earlier model: each lane's chain over the output channels and col2im's
+    // order of additions do not depend on the tile
+    std::mt19937 rng(31);
+    std::uniform_int_distribution<int> batch(1, 4), ch(1, 40), co(1, 70), hw(4, 20), k(1, 5), stride(2, 3);
+    std::vector<hk::conv_geometry> shapes;
+    for (const int c : {8, 16, 32}) {
+        shapes.push_back({3, c, 12, 24, 2 * c, 4, 4, 2, 1});
+        shapes.push_back({2, 2 * c, 6, 12, 4 * c, 4, 4, 2, 1});
+    }
+    while (shapes.size() < 40) {
+        hk::conv_geometry g{batch(rng), ch(rng), hw(rng), hw(rng), co(rng), k(rng), 0, stride(rng), 0};
+        g.kernel_w = g.kernel_h;
+        g.pad = std::uniform_int_distribution<int>(0, g.kernel_h - 1)(rng);
+        if (g.valid()) shapes.push_back(g);
+    }
+    auto same = [&]<class T>(const hk::conv_geometry& g, unsigned seed) {
+        INFO(describe(g), (sizeof(T) == 4 ? " float" : " double"));
+        std::mt19937 r(seed);
+        const auto w = cast<T>(random_values(g.w_size(), r)), gy = cast<T>(random_values(g.y_size(), r));
+        const auto gx0 = cast<T>(random_values(g.x_size(), r));
+        std::vector<T> a = gx0, b = gx0;
+        forward_ws_test::guarded_scratch<T> sa(g), sb(g);
+        hkd::backward_data<T, 4>(g, gy.data(), w.data(), a.data(), sa.data());
+        hkd::backward_data<T, 8>(g, gy.data(), w.data(), b.data(), sb.data());
+        CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+        CHECK(sa.intact());
+        CHECK(sb.intact());
+    };
+    unsigned seed = 0;
+    for (const auto& g : shapes) {
+        REQUIRE_FALSE(hkd::backward_data_by_forward(g));  // the GEMM path, not the flipped forward pass
+        same.template operator()<float>(g, ++seed);
+        same.template operator()<double>(g, ++seed);
+    }
 }
 
 TEST_CASE("forward_ws: the image groups stay within the scratch the geometry asks for")

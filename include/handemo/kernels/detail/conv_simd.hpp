@@ -89,6 +89,11 @@ inline constexpr int micro_mr = micro_nv * simd_lanes<T>;
 inline constexpr int dot_no = wide_register_file ? 6 : 4;
 inline constexpr int dot_np = wide_register_file ? 4 : 3;
 static_assert(dot_no >= 4 && dot_np >= 3, "backward_weight_stride1 calls micro_dot with 4 x 3 tiles");
+/// Pixels per tile of the backward-data GEMM (micro_kernel<T, NR>, NV = micro_nv): 8 with the 32 registers of
+/// AVX-512 (24 accumulators, 3 + 8 loads per 24 FMAs), micro_nr elsewhere. Each lane's sum over the output
+/// channels is the same chain whatever the tile, and col2im adds the tiles' pixels in the same order, so the bits
+/// do not depend on it.
+inline constexpr int backward_data_nr = wide_register_file ? 8 : micro_nr;
 /// Reduction block of the forward pass: the packed V block (kc x MR) stays in L1.
 inline constexpr int forward_kc = 256;
 
@@ -361,7 +366,7 @@ inline std::size_t scratch_elements(const conv_geometry& g) noexcept
     const std::size_t co_r = (std::size_t(g.out_channels) + NR - 1) / NR * NR;
     const std::size_t tile = NR * MR;
     const std::size_t fwd = forward_scratch_elements<T>(g);
-    const std::size_t bwd_data = packed_panels_elements<T>(g) + tile +
+    const std::size_t bwd_data = packed_panels_elements<T>(g) + std::size_t(backward_data_nr) * MR +
                                  std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad);
     const std::size_t Pwl = (std::size_t(g.out_h() - 1) * (g.in_w + 2 * g.pad) + g.out_w() + simd_lanes<T> - 1) /
                             simd_lanes<T> * simd_lanes<T>;
@@ -735,16 +740,30 @@ inline void backward_data_stride1(const conv_geometry& g, const T* gy, const T* 
     forward(flipped_geometry(g), gy, wf, static_cast<const T*>(nullptr), gx, scratch + g.w_size(), true);
 }
 
+/// d[0..4) += t[0..4): one vector of 4 lanes (GCC's vector extension: SSE on x86, NEON on aarch64), the same four
+/// additions as a scalar loop, which GCC 12 left scalar in col2im (a load, an add and a store per element).
+template <class T>
+inline void add_run4(T* d, const T* t) noexcept
+{
+    typedef T v4 __attribute__((vector_size(4 * sizeof(T))));
+    v4 a, b;
+    std::memcpy(&a, d, sizeof(v4));
+    std::memcpy(&b, t, sizeof(v4));
+    a += b;
+    std::memcpy(d, &a, sizeof(v4));
+}
+
 /// Backward-data pass: gx += col2im(W^T gy). The GEMM runs per image with V = packed panels of W (rows
 /// of W are contiguous along (c,u,v); read in place, their out_channels rows sit K apart and thrash L1:
-/// 36 -> 46 GFLOP/s on the convT 4x4 s2 layers at batch 1) and S = gy read in place. The col2im
-/// scatter-add goes into a zero-padded image so that it needs no bounds checks, and runs of kw
-/// consecutive (u, v) lanes are added as short vectors; the padded image's interior is then added to gx.
-template <class T>
+/// 36 -> 46 GFLOP/s on the convT 4x4 s2 layers at batch 1) and S = gy read in place, NR pixels per tile
+/// (backward_data_nr). The col2im scatter-add goes into a zero-padded image so that it needs no bounds checks, and
+/// runs of 4 consecutive (u, v) lanes are added as one 4-lane vector (add_run4); the padded image's interior is then
+/// added to gx. Every element of gx receives its additions in the order (block of MR lanes, pixel, lane).
+template <class T, int NR = backward_data_nr>
 inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch) noexcept
 {
     if (backward_data_by_forward(g)) return backward_data_stride1(g, gy, w, gx, scratch);
-    constexpr int MR = micro_mr<T>, NR = micro_nr;
+    constexpr int MR = micro_mr<T>;
     const int oh = g.out_h(), ow = g.out_w(), P = oh * ow;
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, Co = g.out_channels;
     const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, s = g.stride;
@@ -777,16 +796,13 @@ inline void backward_data(const conv_geometry& g, const T* gy, const T* w, T* gx
             const T* vsrc = vpack + std::ptrdiff_t(k0) * Co;
             for (int p0 = 0; p0 < P; p0 += NR) {
                 const int nr = std::min(NR, P - p0);
-                micro_dispatch<T>(nr, Co, vsrc, MR, gyn + p0, 1, P, tile, false);
+                micro_dispatch<T, NR>(nr, Co, vsrc, MR, gyn + p0, 1, P, tile, false);
                 for (int j = 0; j < nr; ++j) {
                     const int p = p0 + j;
                     T* base = gpad + std::ptrdiff_t((p / ow) * s) * Wp + (p % ow) * s;  // padded coordinates
                     const T* t = tile + j * MR;
                     if (runs4 && nk == MR) {
-                        for (int i = 0; i < MR; i += 4) {
-                            T* d = base + koff[i];
-                            for (int q = 0; q < 4; ++q) d[q] += t[i + q];
-                        }
+                        for (int i = 0; i < MR; i += 4) add_run4(base + koff[i], t + i);
                     } else {
                         for (int i = 0; i < nk; ++i) base[koff[i]] += t[i];
                     }
