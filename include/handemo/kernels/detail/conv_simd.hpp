@@ -364,7 +364,6 @@ inline std::size_t scratch_elements(const conv_geometry& g) noexcept
     constexpr std::size_t MR = micro_mr<T>, NR = micro_nr;
     const std::size_t P = std::size_t(g.out_h()) * g.out_w();
     const std::size_t co_r = (std::size_t(g.out_channels) + NR - 1) / NR * NR;
-    const std::size_t tile = NR * MR;
     const std::size_t fwd = forward_scratch_elements<T>(g);
     const std::size_t bwd_data = packed_panels_elements<T>(g) + std::size_t(backward_data_nr) * MR +
                                  std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad);
