@@ -618,7 +618,7 @@ inline constexpr int wg_block_pixels = 128;
 template <class T>
 struct wg_scratch_layout {
     std::size_t sums, block, offsets, padded;  // per call ([panel][K][MR]); one block of one panel; K tap
-                                               // offsets (std::ptrdiff_t); per image
+                                               // offsets (int); per image
     int group;                        // images per group
     int runs;                         // output rows (runs of out_w pixels) per block
     std::size_t total;
@@ -632,7 +632,7 @@ struct wg_scratch_layout {
         runs = std::max(1, wg_block_pixels / g.out_w());
         block = up(std::size_t(runs) * g.out_w() * MR);
         const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
-        offsets = up((K * sizeof(std::ptrdiff_t) + sizeof(T) - 1) / sizeof(T));
+        offsets = up((K * sizeof(int) + sizeof(T) - 1) / sizeof(T));
         padded = up(std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad));
         group = std::clamp(wg_block_pixels / (g.out_h() * g.out_w()), 1, ws_group_max);
         total = a + sums + block + offsets + std::size_t(group) * padded;
@@ -651,7 +651,7 @@ inline std::size_t backward_weight_ws_scratch_elements(const conv_geometry& g) n
 /// row. SJ > 0 fixes the stride at compile time, as in micro_ws.
 template <class T, int NV, int NR, int SJ>
 [[gnu::noinline]] inline void micro_wg(int runs, const std::ptrdiff_t* __restrict run_off, int len, const T* __restrict v,
-                                       const T* __restrict src, const std::ptrdiff_t* __restrict koff, int sj,
+                                       const T* __restrict src, const int* __restrict koff, int sj,
                                        T* __restrict tile, bool accumulate) noexcept
 {
     using B = simd_t<T>;
@@ -695,7 +695,7 @@ template <class T, int NV, int NR, int SJ>
 /// micro_wg<T, NV, nr, SJ> for nr = 1..N.
 template <class T, int NV, int N, int SJ>
 inline void micro_wg_dispatch(int nr, int runs, const std::ptrdiff_t* run_off, int len, const T* v, const T* src,
-                              const std::ptrdiff_t* koff, int sj, T* tile, bool accumulate) noexcept
+                              const int* koff, int sj, T* tile, bool accumulate) noexcept
 {
     if constexpr (N <= 1) micro_wg<T, NV, 1, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate);
     else if (nr >= N) micro_wg<T, NV, N, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate);
@@ -771,12 +771,9 @@ inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, 
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, co = g.out_channels;
     T* sums = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(scratch) + 63) / 64 * 64);
     T* vb = sums + lay.sums;
-    std::ptrdiff_t* koff = reinterpret_cast<std::ptrdiff_t*>(vb + lay.block);
+    int* koff = reinterpret_cast<int*>(vb + lay.block);
     T* xp = vb + lay.block + lay.offsets;
-    for (int k = 0; k < K; ++k) {
-        const int c = k / (kh * kw), u = (k / kw) % kh, v = k % kw;
-        koff[k] = (std::ptrdiff_t(c) * Hp + u) * Wp + v;
-    }
+    padded_window_offsets(0, K, kh, kw, Hp, Wp, koff);
     const std::size_t x_per = std::size_t(g.in_channels) * g.in_h * g.in_w, y_per = std::size_t(co) * P;
     std::memset(xp, 0, std::size_t(std::min(lay.group, g.batch)) * lay.padded * sizeof(T));
     ws_with_tile<T>(co, g.stride, [&]<int NV, int NR, int SJ>() {
