@@ -21,7 +21,7 @@ struct train_overrides {
     std::optional<int> n_critic, gate_folds;
     std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, tempo_shrink, tempo_neighbours, lag;
     std::optional<double> gate_margin, gate_guard, gate_iters_scale;
-    std::optional<std::string> range, tempo_basis;
+    std::optional<std::string> range, tempo_basis, amplitude_anchor;
 };
 
 /// @brief Adds `--inference-weights native|f16` (kernels::weight_storage) to `sub`, read into `w` (which must
@@ -67,6 +67,12 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
     sub->add_option("--ema", o.ema, "Decay of the EMA of G's weights used for transfer, 0 = off (handemo 0.999, paper 0)");
     sub->add_option("--amplitude", o.amplitude,
                     "Scale the output's excursions by the learned amplitude ratio of the emotions, as the tempo (handemo true)");
+    sub->add_option("--amplitude-anchor", o.amplitude_anchor,
+                    "What --amplitude scales each channel's excursions about: 'mean' (its mean over the keyframes), 'ends' (the "
+                    "mean of its first and last keyframes: the movement away from the rest pose a take starts and ends in) or "
+                    "'auto' (the ends when leave-one-content-out on the training clips finds that closer to the left-out "
+                    "contents' takes) (handemo mean)")
+        ->check(CLI::IsMember({"mean", "ends", "auto"}));
     sub->add_option("--augment", o.augment,
                     "Per-channel offset jitter of training images and paired targets, std in network units (handemo 0.1, paper 0)");
     sub->add_option("--gate-folds", o.gate_folds,
@@ -133,6 +139,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.ema = o.ema.value_or(p.ema);
     t.range = o.range.value_or(p.range);
     t.amplitude = o.amplitude.value_or(p.amplitude);
+    t.amplitude_anchor = o.amplitude_anchor.value_or(p.amplitude_anchor);
     t.augment = o.augment.value_or(p.augment);
     t.gate_folds = o.gate_folds.value_or(p.gate_folds);
     t.gate_prior = o.gate_prior.value_or(p.gate_prior);

@@ -72,8 +72,15 @@ inline void run_train(train_cli& o)
         if (o.opt.amplitude) {
             out << "train: amplitude factors (excursion relative to " << info.neutral << "):";
             for (std::size_t k = 0; k < info.domains; ++k) out << " " << info.domain_names[k] << " " << tr.data().amplitude[k];
-            out << " (leave-one-content-out on the training clips: RMSE " << tr.data().amplitude_check.second << " deg scaled vs "
-                      << tr.data().amplitude_check.first << " unscaled" << (tr.data().amplitude_check.second < tr.data().amplitude_check.first ? ")" : "; not used)") << "\n";
+            const auto& d = tr.data();
+            const bool ends = d.amplitude_anchor == amplitude_anchor::ends;
+            out << " about the " << anchor_name(d.amplitude_anchor) << " (leave-one-content-out on the training clips: RMSE "
+                << d.amplitude_check.second << " deg scaled vs " << d.amplitude_check.first << " unscaled" << (ends ? ", both with the posture prior" : "")
+                << (d.amplitude_check.second < d.amplitude_check.first ? ")" : "; not used)");
+            if (std::isfinite(d.amplitude_anchor_check.first))
+                out << "; the anchor chosen by the same check with the prior: " << d.amplitude_anchor_check.first << " deg about the mean, "
+                    << d.amplitude_anchor_check.second << " about the ends";
+            out << "\n";
         }
         if (o.opt.lag) {
             const auto& lf = tr.data().lag;

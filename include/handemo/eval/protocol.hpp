@@ -655,7 +655,7 @@ template <std::size_t K>
 clip amplitude_only(const clip& in, const stargan::transfer_result& tr)
 {
     auto k = extract_keyframes<dynamic_keyframes>(in, K);
-    stargan::scale_keyframe_excursions(k, tr.amplitude);
+    stargan::scale_keyframe_excursions(k, tr.amplitude, tr.amplitude_anchor);
     clip out = reconstruct(k, in.skel, tr.motion.frames, in.fps);
     out.positions = stargan::stretch_positions(in, tr.motion.frames);
     return out;
@@ -975,6 +975,12 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                                   detail::fmt(lf.check[d].second, 3) + " / " + detail::fmt(lf.check[d].first, 3) + ")";
             }
             fsum.lag_applied = to.lag;
+            // the amplitude stage's anchors checked on the training clips, reported whatever anchor the model uses
+            if (models.model.amplitude_stage()) {
+                const auto af = stargan::fit_amplitude<K>(train, kfs, info.domain_names, info.neutral, "auto");
+                fsum.amplitude_check = detail::fmt(af.anchor_check.first, 3) + " / " + detail::fmt(af.anchor_check.second, 3);
+                fsum.amplitude_anchor = stargan::anchor_name(ckinfo.amplitude_anchor);
+            }
         }
         const auto clf = detail::fit_classifier<K>(split.train_p, opt.shrinkage, fsum);
         const auto judge = detail::fit_full_rate_judge<K>(split.train_p, info.neutral, opt.judge_inputs, fsum);

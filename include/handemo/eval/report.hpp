@@ -89,6 +89,10 @@ struct fold_summary {
     /// used (with / without deg)", and whether the model applies it (train_options::lag)
     std::string lag_check;
     bool lag_applied = false;
+    /// The amplitude stage's check on the fold's training clips (stargan::amplitude_prior_cv(), the statistics transfer
+    /// left out content by content): "RMSE about the mean / about the ends" in degrees, and the anchor the model scales
+    /// about (train_options::amplitude_anchor); empty without the amplitude stage
+    std::string amplitude_check, amplitude_anchor;
     /// The tempo neighbours' check on the fold's training clips (stargan::tempo_neighbours_fit()): each candidate's
     /// mean left-out error ("learned 0.799, 3: 0.620, ..."), the count it chose (0: the learned factors) and whether
     /// the model applies it (train_options::tempo_neighbours)
@@ -648,6 +652,10 @@ inline std::string report_folds(const eval_result& r, const std::vector<metric_d
              (f.lag_check.empty() ? std::string()
                                   : "; joint lag by the check on the training contents (excursion RMSE with / without): " + f.lag_check + ", " +
                                         (f.lag_applied ? "applied" : "not applied (--lag false)")) +
+             (f.amplitude_check.empty()
+                  ? std::string()
+                  : "; amplitude stage by the check on the training contents (statistics RMSE scaling about the mean / the ends): " +
+                        f.amplitude_check + " deg, the model scales about the " + f.amplitude_anchor) +
              (f.tempo_neighbours_check.empty()
                   ? std::string()
                   : "; tempo neighbours by the check on the training contents (left-out error " + f.tempo_neighbours_check + "): " +

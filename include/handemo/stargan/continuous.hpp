@@ -187,7 +187,7 @@ public:
         }
         if (first) throw value_error("continuous transfer: every weight is zero");
         const double a = amplitude(w);
-        if (a != 1.0) scale_keyframe_excursions(out, a);
+        if (a != 1.0) scale_keyframe_excursions(out, a, model_->info().amplitude_anchor);
         return out;
     }
 
@@ -247,13 +247,11 @@ public:
             for (std::size_t k = 0; k < K; ++k)
                 for (std::size_t ch = 0; ch < C; ++ch) r.keys.angles[k * C + ch] += wk[k][d] * lk.keys[d].angles[k * C + ch];
         }
-        // the amplitude stage, each keyframe's excursion about the channel's mean scaled by its own factor
+        // the amplitude stage, each keyframe's excursion about the channel's anchor scaled by its own factor
         std::vector<double> amp(K);
         for (std::size_t k = 0; k < K; ++k) amp[k] = amplitude(wk[k]);
         for (std::size_t ch = 0; ch < C; ++ch) {
-            double m = 0;
-            for (std::size_t k = 0; k < K; ++k) m += r.keys.angles[k * C + ch];
-            m /= static_cast<double>(K);
+            const double m = excursion_anchor(r.keys, ch, model_->info().amplitude_anchor);
             for (std::size_t k = 0; k < K; ++k) r.keys.angles[k * C + ch] = m + amp[k] * (r.keys.angles[k * C + ch] - m);
         }
         // the time warp: input frame i lasts tempo(i) frames of output; T(i) the output time at input frame i

@@ -133,11 +133,15 @@ inline constexpr std::array<double, 5> gate_grid{1.0, 0.75, 0.5, 0.25, 0.0};
 /// @brief The posture prior of train_options::gate_prior: for every domain, the mean over the training pairs
 /// (an emotional take and the neutral take of the same content and take) of their keyframe difference, averaged
 /// over the keyframes per channel, in degrees: [C][J*3]; zeros for the neutral domain and for a domain without pairs.
-/// It is the keyframe mean of mean-offset's difference, so it does not depend on the amplitude stage (which
-/// scales excursions about that mean).
+/// It is the keyframe mean of mean-offset's difference, so it does not depend on an amplitude stage that scales
+/// excursions about that mean. An amplitude stage that scales about the ends (`factors` about `anchor`, the model's:
+/// train_options::amplitude) moves the mean too, by (f - 1) x (mean - ends' mean); the prior then subtracts the
+/// training pairs' mean of that shift (anchor_mean_shift()), so the prior and the scaling together move the mean
+/// by the pairs' mean change.
 /// @throws value_error when no clip is neutral; shape_error for clips of different skeletons.
 template <std::size_t K>
-std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>& clips, const config_info& info)
+std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>& clips, const config_info& info,
+                                               const std::vector<double>& factors = {}, amplitude_anchor anchor = amplitude_anchor::mean)
 {
     if (clips.empty()) throw value_error("posture_prior: no clips");
     const std::size_t J = clips.front().motion.skel.size(), C = J * 3;
@@ -153,6 +157,14 @@ std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>&
         const auto delta = b.delta(e, J);
         for (std::size_t k = 0; k < delta.count(); ++k)
             for (std::size_t ch = 0; ch < C; ++ch) prior[d][ch] += delta.angles[k * C + ch] / static_cast<double>(delta.count());
+    }
+    if (anchor != amplitude_anchor::mean && factors.size() == info.domains) {
+        std::vector<keyframes<K>> kfs;
+        for (const auto& c : clips) kfs.push_back(extract_keyframes<K>(c.motion));
+        const auto shift = anchor_mean_shift<K>(clips, kfs, info.domain_names, info.neutral, factors, anchor);
+        for (std::size_t d = 0; d < info.domains; ++d)
+            if (info.domain_names[d] != info.neutral && b.has(info.domain_names[d]))
+                for (std::size_t ch = 0; ch < C; ++ch) prior[d][ch] -= shift[d][ch];
     }
     return prior;
 }
@@ -606,7 +618,9 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         // and with or without the joint lag: the lag training would store now (G's options are the same)
         ck_info.lag = joint_lag_of<Config>(train, info, opt);
         detail::emotion_model_impl<Config> model(ck.first, ck_info);
-        if (opt.gate_prior) model.set_prior_posture(posture_prior<K>(train, info));
+        if (opt.gate_prior)
+            model.set_prior_posture(opt.amplitude ? posture_prior<K>(train, info, ck_info.amplitude, ck_info.amplitude_anchor)
+                                                  : posture_prior<K>(train, info));
         detail::score_gate_group<Config>(model, train, held, info, opt, set, tallies[f]);
     }
     double margin = opt.gate_margin;
@@ -660,8 +674,10 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
     j["gate"] = {{"posture", g.posture.empty() ? std::vector<double>(C, 1.0) : g.posture},
                  {"motion", g.motion.empty() ? std::vector<double>(C, 1.0) : g.motion},
                  {"prior", g.prior.empty() ? std::vector<double>(C, 0.0) : g.prior},
-                 {"prior_posture", opt.gate_prior && opt.gate_folds > 0 ? posture_prior<Config::keyframes>(clips, info)
-                                                                        : std::vector<std::vector<double>>{}}};
+                 {"prior_posture", opt.gate_prior && opt.gate_folds > 0
+                                       ? (opt.amplitude ? posture_prior<Config::keyframes>(clips, info, stored.amplitude, stored.amplitude_anchor)
+                                                        : posture_prior<Config::keyframes>(clips, info))
+                                       : std::vector<std::vector<double>>{}}};
     j["tempo"] = tempo_factors(clips, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis));
     if (const auto lag = joint_lag_of<Config>(clips, info, opt); !lag.empty())
         j["lag"] = lag;
@@ -697,7 +713,9 @@ std::unique_ptr<trainer<Config>> train_model(const std::vector<labelled_clip>& c
     if (opt.gate_folds > 0 && !resume) g = fit_change_gate<Config>(clips, info, opt, out_dir / "gate", reuse_inner, plan);
     auto data = prepare_data<Config>(clips, info, opt, range);
     if (!g.posture.empty()) data.gate_posture = g.posture, data.gate_motion = g.motion, data.gate_prior = g.prior;
-    if (opt.gate_prior && opt.gate_folds > 0 && !resume) data.prior_posture = posture_prior<Config::keyframes>(clips, info);
+    if (opt.gate_prior && opt.gate_folds > 0 && !resume)
+        data.prior_posture = opt.amplitude ? posture_prior<Config::keyframes>(clips, info, data.amplitude, data.amplitude_anchor)
+                                           : posture_prior<Config::keyframes>(clips, info);
     auto tr = std::make_unique<trainer<Config>>(info, std::move(data), opt);
     tr->run(out_dir, resume);
     if (gate_out) *gate_out = std::move(g);

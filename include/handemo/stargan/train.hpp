@@ -51,6 +51,23 @@
 
 namespace handemo::stargan {
 
+/// @brief The point of each channel the amplitude stage scales excursions about (train_options::amplitude_anchor):
+/// the channel's mean over the keyframes, or the mean of its first and last keyframes (the take's ends, where a
+/// gesture starts from and returns to its rest pose, so the excursion is the movement away from rest).
+enum class amplitude_anchor { mean, ends };
+
+/// @brief "mean" or "ends".
+inline const char* anchor_name(amplitude_anchor a) noexcept { return a == amplitude_anchor::ends ? "ends" : "mean"; }
+
+/// @brief "mean" or "ends" as an amplitude_anchor.
+/// @throws value_error naming `who` and the value otherwise.
+inline amplitude_anchor parse_amplitude_anchor(std::string_view s, std::string_view who)
+{
+    if (s == "mean") return amplitude_anchor::mean;
+    if (s == "ends") return amplitude_anchor::ends;
+    throw value_error(std::string(who) + ": amplitude anchor '" + std::string(s) + "' is not 'mean' or 'ends'");
+}
+
 /// @brief Hyper-parameters and run options of training (defaults: the StarGAN paper's).
 struct train_options {
     long iters = 4000;          ///< D iterations (G every n_critic of them)
@@ -84,6 +101,11 @@ struct train_options {
     /// transfer scales the output keyframes' excursions about their per-channel mean by amplitude[target] /
     /// amplitude[source], learned from the training pairs as the tempo is (amplitude_factors())
     bool amplitude = false;
+    /// the amplitude stage's anchor (amplitude_anchor): "mean" (each channel's mean over the keyframes), "ends" (the
+    /// mean of its first and last keyframes: the movement away from the rest pose a take starts and ends in) or "auto"
+    /// (the ends when leave-one-content-out on the training clips finds scaling about them closer to the left-out
+    /// contents' takes, fit_amplitude()). G trains in the amplitude-normalised space, so it reaches G
+    std::string amplitude_anchor = "mean";
     /// per-channel offset jitter: every training image (and its paired target) gets the same random offset per
     /// channel, N(0, augment) in network units, so G's change cannot hinge on the absolute pose; 0: off
     double augment = 0.0;
@@ -163,6 +185,7 @@ struct train_options {
         if (!(gate_iters_scale > 0 && gate_iters_scale <= 1))
             bad("gate_iters_scale " + std::to_string(gate_iters_scale) + " is not in (0, 1] (a share of iters)");
         parse_tempo_basis(tempo_basis, "train: tempo_basis");
+        if (amplitude_anchor != "auto") parse_amplitude_anchor(amplitude_anchor, "train: amplitude_anchor");
     }
     nlohmann::json to_json() const
     {
@@ -180,6 +203,7 @@ struct train_options {
         if (tempo_basis != "duration") j["tempo_basis"] = tempo_basis;  // written only when not the duration
         if (tempo_neighbours) j["tempo_neighbours"] = true;
         if (lag) j["lag"] = true;
+        if (amplitude_anchor != "mean") j["amplitude_anchor"] = amplitude_anchor;  // written only when not the mean
         return j;
     }
 };
@@ -257,6 +281,10 @@ struct prepared_data {
     /// amplitude_cv() on the training clips: mean RMSE without / with the factors; when scaling does not
     /// beat identity there, `amplitude` is set to all 1 (the data set carries no usable amplitude style)
     std::pair<double, double> amplitude_check{std::nan(""), std::nan("")};
+    /// what the amplitude stage scales about (train_options::amplitude_anchor as fit_amplitude() resolved it)
+    handemo::stargan::amplitude_anchor amplitude_anchor = handemo::stargan::amplitude_anchor::mean;
+    /// with the anchor "auto": amplitude_prior_cv()'s RMSE about the mean and about the ends (NaN otherwise)
+    std::pair<double, double> amplitude_anchor_check{std::nan(""), std::nan("")};
     /// the joint lag and its check (train_options::lag; lag.hpp); empty lags without the option
     joint_lag_fit lag;
     std::vector<std::string> joint_names;  ///< skeleton the model is trained for
@@ -280,49 +308,86 @@ struct prepared_data {
     std::size_t size() const noexcept { return labels.size(); }
 };
 
-/// @brief Scales every channel's excursion about its mean over the keyframes by `f` (in place).
+/// @brief The anchor of channel `ch` of `kf` (see amplitude_anchor).
 template <std::size_t K>
-void scale_keyframe_excursions(keyframes<K>& kf, double f) noexcept
+double excursion_anchor(const keyframes<K>& kf, std::size_t ch, amplitude_anchor a) noexcept
+{
+    const std::size_t C = kf.joints * 3, n = kf.count();
+    if (a == amplitude_anchor::ends) return 0.5 * (kf.angles[ch] + kf.angles[(n - 1) * C + ch]);
+    double m = 0;
+    for (std::size_t i = 0; i < n; ++i) m += kf.angles[i * C + ch];
+    return m / static_cast<double>(n);
+}
+
+/// @brief Scales every channel's excursion about its anchor (its mean over the keyframes by default) by `f`
+/// (in place). Scaling about the ends keeps the ends' mean, so dividing by f undoes it exactly as about the mean.
+template <std::size_t K>
+void scale_keyframe_excursions(keyframes<K>& kf, double f, amplitude_anchor a = amplitude_anchor::mean) noexcept
 {
     if (f == 1.0) return;
     const std::size_t C = kf.joints * 3, n = kf.count();
     for (std::size_t ch = 0; ch < C; ++ch) {
-        double m = 0;
-        for (std::size_t i = 0; i < n; ++i) m += kf.angles[i * C + ch];
-        m /= static_cast<double>(n);
+        const double m = excursion_anchor(kf, ch, a);
         for (std::size_t i = 0; i < n; ++i) kf.angles[i * C + ch] = m + f * (kf.angles[i * C + ch] - m);
     }
 }
 
-/// @brief Excursion of keyframes: the sum over channels of each channel's standard deviation over the keyframes.
+/// @brief Excursion of keyframes: the sum over channels of each channel's root mean square distance from its
+/// anchor over the keyframes (about the mean: its standard deviation).
 template <std::size_t K>
-double keyframe_excursion(const keyframes<K>& kf)
+double keyframe_excursion(const keyframes<K>& kf, amplitude_anchor a = amplitude_anchor::mean)
 {
     const std::size_t C = kf.joints * 3, n = kf.count();
     double total = 0;
     for (std::size_t ch = 0; ch < C; ++ch) {
-        double m = 0, q = 0;
-        for (std::size_t i = 0; i < n; ++i) m += kf.angles[i * C + ch];
-        m /= static_cast<double>(n);
+        const double m = excursion_anchor(kf, ch, a);
+        double q = 0;
         for (std::size_t i = 0; i < n; ++i) q += (kf.angles[i * C + ch] - m) * (kf.angles[i * C + ch] - m);
         total += std::sqrt(q / static_cast<double>(n));
     }
     return total;
 }
 
+namespace detail {
+
+/// The training pairs of the amplitude stage: for every clip of a domain other than `neutral`, the neutral clip of
+/// the same content and take, else the content's first neutral clip (-1: none).
+inline std::vector<int> amplitude_partners(const std::vector<labelled_clip>& clips, const std::string& neutral)
+{
+    std::map<std::pair<std::string, std::string>, int> by_take;
+    std::map<std::string, int> first;
+    for (std::size_t m = 0; m < clips.size(); ++m)
+        if (clips[m].emotion == neutral) {
+            by_take.try_emplace({clips[m].content, clips[m].take}, static_cast<int>(m));
+            first.try_emplace(clips[m].content, static_cast<int>(m));
+        }
+    std::vector<int> out(clips.size(), -1);
+    for (std::size_t m = 0; m < clips.size(); ++m) {
+        if (clips[m].emotion == neutral) continue;
+        if (auto it = by_take.find({clips[m].content, clips[m].take}); it != by_take.end())
+            out[m] = it->second;
+        else if (auto f = first.find(clips[m].content); f != first.end())
+            out[m] = f->second;
+    }
+    return out;
+}
+
+}  // namespace detail
+
 /// @brief Amplitude factor per domain, relative to `neutral` (Table 1's "amplitude", learned as the tempo is):
 /// the median over training pairs (a clip of the domain, the neutral clip of the same content and take, or
-/// the content's first neutral take) of the ratio of their keyframe excursions. 1 for the neutral domain and
-/// for a domain without pairs.
+/// the content's first neutral take) of the ratio of their keyframe excursions about `anchor`. 1 for the neutral
+/// domain and for a domain without pairs.
 template <std::size_t K>
 std::vector<double> amplitude_factors(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
-                                      const std::vector<std::string>& domains, const std::string& neutral)
+                                      const std::vector<std::string>& domains, const std::string& neutral,
+                                      amplitude_anchor anchor = amplitude_anchor::mean)
 {
     std::map<std::pair<std::string, std::string>, double> by_take;
     std::map<std::string, double> first;
     for (std::size_t m = 0; m < clips.size(); ++m)
         if (clips[m].emotion == neutral) {
-            const double e = keyframe_excursion(kfs[m]);
+            const double e = keyframe_excursion(kfs[m], anchor);
             by_take[{clips[m].content, clips[m].take}] = e;
             first.try_emplace(clips[m].content, e);
         }
@@ -337,7 +402,7 @@ std::vector<double> amplitude_factors(const std::vector<labelled_clip>& clips, c
                 base = it->second;
             else if (auto f = first.find(clips[m].content); f != first.end())
                 base = f->second;
-            const double e = keyframe_excursion(kfs[m]);
+            const double e = keyframe_excursion(kfs[m], anchor);
             if (base > 1e-9 && std::isfinite(e)) r.push_back(e / base);
         }
         if (r.empty()) continue;
@@ -346,6 +411,49 @@ std::vector<double> amplitude_factors(const std::vector<labelled_clip>& clips, c
     }
     return out;
 }
+
+/// @brief What scaling about the ends moves the keyframe mean by, per domain and channel, on the training pairs:
+/// [C][J*3], for domain d the mean over its pairs (amplitude_factors()' pairs) of (f_d - 1) x (the neutral clip's
+/// keyframe mean - its ends' mean). Scaling about the mean leaves the mean alone (all zeros). The posture prior
+/// subtracts it (posture_prior()), so that the prior and the scaling together move the mean by the training
+/// pairs' mean change, as the prior alone does about the mean.
+template <std::size_t K>
+std::vector<std::vector<double>> anchor_mean_shift(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
+                                                   const std::vector<std::string>& domains, const std::string& neutral,
+                                                   const std::vector<double>& factors, amplitude_anchor anchor)
+{
+    const std::size_t C = kfs.empty() ? 0 : kfs.front().joints * 3;
+    std::vector<std::vector<double>> out(domains.size(), std::vector<double>(C, 0.0));
+    if (anchor == amplitude_anchor::mean) return out;
+    const auto partner = detail::amplitude_partners(clips, neutral);
+    for (std::size_t d = 0; d < domains.size(); ++d) {
+        if (domains[d] == neutral || factors[d] == 1.0) continue;
+        std::size_t n = 0;
+        for (std::size_t m = 0; m < clips.size(); ++m) {
+            if (clips[m].emotion != domains[d] || partner[m] < 0) continue;
+            const auto& base = kfs[static_cast<std::size_t>(partner[m])];
+            for (std::size_t ch = 0; ch < C; ++ch)
+                out[d][ch] += excursion_anchor(base, ch, amplitude_anchor::mean) - excursion_anchor(base, ch, anchor);
+            ++n;
+        }
+        if (n)
+            for (auto& v : out[d]) v *= (factors[d] - 1.0) / static_cast<double>(n);
+    }
+    return out;
+}
+
+namespace detail {
+
+/// Keyframe RMSE in wrapped degrees.
+template <std::size_t K>
+double amplitude_rmse(const keyframes<K>& a, const keyframes<K>& b)
+{
+    double q = 0;
+    for (std::size_t i = 0; i < a.angles.size(); ++i) q += std::pow(wrap_angle_deg(a.angles[i] - b.angles[i]), 2);
+    return std::sqrt(q / static_cast<double>(a.angles.size()));
+}
+
+}  // namespace detail
 
 /// @brief Leave-one-content-out check of the amplitude factors on training clips: for each content, the
 /// factors fitted on the other contents scale that content's neutral keyframes toward each of its emotional
@@ -359,11 +467,6 @@ std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, 
     for (const auto& c : clips)
         if (std::find(contents.begin(), contents.end(), c.content) == contents.end()) contents.push_back(c.content);
     if (contents.size() < 2) return {std::nan(""), std::nan("")};
-    const auto rmse = [](const keyframes<K>& a, const keyframes<K>& b) {
-        double q = 0;
-        for (std::size_t i = 0; i < a.angles.size(); ++i) q += std::pow(wrap_angle_deg(a.angles[i] - b.angles[i]), 2);
-        return std::sqrt(q / static_cast<double>(a.angles.size()));
-    };
     double s_id = 0, s_amp = 0;
     std::size_t n = 0;
     for (const auto& held : contents) {
@@ -382,8 +485,8 @@ std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, 
             if (d >= domains.size()) continue;
             auto scaled = *base;
             scale_keyframe_excursions(scaled, f[d]);
-            s_id += rmse(*base, kfs[m]);
-            s_amp += rmse(scaled, kfs[m]);
+            s_id += detail::amplitude_rmse(*base, kfs[m]);
+            s_amp += detail::amplitude_rmse(scaled, kfs[m]);
             ++n;
         }
     }
@@ -391,18 +494,116 @@ std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, 
     return {s_id / static_cast<double>(n), s_amp / static_cast<double>(n)};
 }
 
+/// @brief Leave-one-content-out check of the amplitude stage with the posture prior, as the statistics transfer
+/// combines them, about `anchor`: for each content, the factors, the prior (the pairs' mean keyframe-mean change) and
+/// the anchor's mean shift (anchor_mean_shift()) fitted on the other contents; each of the content's emotional takes
+/// against its neutral take (amplitude_factors()' pairs) with the prior (first) and with the prior corrected by the
+/// shift, then scaled about the anchor (second). Mean keyframe RMSE (wrapped degrees) over those pairs; NaN when there
+/// are fewer than two contents or no pairs.
+template <std::size_t K>
+std::pair<double, double> amplitude_prior_cv(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
+                                             const std::vector<std::string>& domains, const std::string& neutral, amplitude_anchor anchor)
+{
+    std::vector<std::string> contents;
+    for (const auto& c : clips)
+        if (std::find(contents.begin(), contents.end(), c.content) == contents.end()) contents.push_back(c.content);
+    if (contents.size() < 2 || kfs.empty()) return {std::nan(""), std::nan("")};
+    const std::size_t C = kfs.front().joints * 3;
+    const auto partner = detail::amplitude_partners(clips, neutral);
+    const auto domain_of = [&](const labelled_clip& c) {
+        return static_cast<std::size_t>(std::find(domains.begin(), domains.end(), c.emotion) - domains.begin());
+    };
+    double s_id = 0, s_amp = 0;
+    std::size_t n = 0;
+    for (const auto& held : contents) {
+        std::vector<labelled_clip> other_c;
+        std::vector<keyframes<K>> other_k;
+        for (std::size_t m = 0; m < clips.size(); ++m)
+            if (clips[m].content != held) other_c.push_back(clips[m]), other_k.push_back(kfs[m]);
+        const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral, anchor);
+        const auto shift = anchor_mean_shift<K>(other_c, other_k, domains, neutral, f, anchor);
+        // the prior on the other contents: the pairs' mean keyframe-mean change per domain and channel
+        std::vector<std::vector<double>> prior(domains.size(), std::vector<double>(C, 0.0));
+        std::vector<std::size_t> count(domains.size(), 0);
+        const auto other_partner = detail::amplitude_partners(other_c, neutral);
+        for (std::size_t m = 0; m < other_c.size(); ++m) {
+            const std::size_t d = domain_of(other_c[m]);
+            if (other_partner[m] < 0 || d >= domains.size()) continue;
+            const auto& base = other_k[static_cast<std::size_t>(other_partner[m])];
+            for (std::size_t ch = 0; ch < C; ++ch)
+                prior[d][ch] += excursion_anchor(other_k[m], ch, amplitude_anchor::mean) - excursion_anchor(base, ch, amplitude_anchor::mean);
+            ++count[d];
+        }
+        for (std::size_t d = 0; d < domains.size(); ++d)
+            if (count[d])
+                for (auto& v : prior[d]) v /= static_cast<double>(count[d]);
+        for (std::size_t m = 0; m < clips.size(); ++m) {
+            const std::size_t d = domain_of(clips[m]);
+            if (clips[m].content != held || partner[m] < 0 || d >= domains.size()) continue;
+            const auto& base = kfs[static_cast<std::size_t>(partner[m])];
+            auto plain = base, scaled = base;
+            for (std::size_t i = 0; i < base.angles.size(); ++i) {
+                plain.angles[i] += prior[d][i % C];
+                scaled.angles[i] += prior[d][i % C] - shift[d][i % C];
+            }
+            scale_keyframe_excursions(scaled, f[d], anchor);
+            s_id += detail::amplitude_rmse(plain, kfs[m]);
+            s_amp += detail::amplitude_rmse(scaled, kfs[m]);
+            ++n;
+        }
+    }
+    if (!n) return {std::nan(""), std::nan("")};
+    return {s_id / static_cast<double>(n), s_amp / static_cast<double>(n)};
+}
+
+/// @brief The amplitude stage's factors, the anchor they scale about and their checks (checked_amplitude_factors()).
+struct amplitude_fit {
+    std::vector<double> factors;  ///< [C]; all 1 when the check finds that scaling does not beat identity
+    amplitude_anchor anchor = amplitude_anchor::mean;
+    /// the check that kept or dropped the factors: mean RMSE without / with them (amplitude_cv() about the mean,
+    /// amplitude_prior_cv() about the ends)
+    std::pair<double, double> check{std::nan(""), std::nan("")};
+    /// with the anchor "auto": amplitude_prior_cv()'s RMSE with scaling about the mean and about the ends, which
+    /// chose the anchor (NaN otherwise)
+    std::pair<double, double> anchor_check{std::nan(""), std::nan("")};
+};
+
+/// @brief The amplitude factors the amplitude stage uses, about the anchor `anchor` names ("mean", "ends" or "auto":
+/// the ends when amplitude_prior_cv() finds scaling about them, with the prior, closer to the left-out contents'
+/// takes than scaling about the mean, the mean otherwise, a tie included). About the mean the factors are kept when
+/// amplitude_cv() finds that scaling beats identity; about the ends when amplitude_prior_cv() finds that the prior
+/// with scaling beats the prior alone. Otherwise all 1.
+/// @throws value_error for an anchor name other than mean, ends or auto.
+template <std::size_t K>
+amplitude_fit fit_amplitude(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
+                            const std::vector<std::string>& domains, const std::string& neutral, std::string_view anchor = "mean")
+{
+    amplitude_fit r;
+    if (anchor == "auto") {
+        const auto about_mean = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::mean);
+        const auto about_ends = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::ends);
+        r.anchor_check = {about_mean.second, about_ends.second};
+        r.anchor = about_ends.second < about_mean.second ? amplitude_anchor::ends : amplitude_anchor::mean;
+    } else {
+        r.anchor = parse_amplitude_anchor(anchor, "train: amplitude_anchor");
+    }
+    r.factors = amplitude_factors<K>(clips, kfs, domains, neutral, r.anchor);
+    r.check = r.anchor == amplitude_anchor::mean ? amplitude_cv<K>(clips, kfs, domains, neutral)
+                                                 : amplitude_prior_cv<K>(clips, kfs, domains, neutral, r.anchor);
+    if (!(r.check.second < r.check.first)) r.factors.assign(r.factors.size(), 1.0);
+    return r;
+}
+
 /// @brief The amplitude factors the amplitude stage uses and their check: amplitude_factors(), all 1 when
-/// amplitude_cv() finds that scaling does not beat identity on the training clips (first: the check).
+/// amplitude_cv() finds that scaling does not beat identity on the training clips (first: the check). About the mean.
 template <std::size_t K>
 std::pair<std::pair<double, double>, std::vector<double>> checked_amplitude_factors(const std::vector<labelled_clip>& clips,
                                                                                    const std::vector<keyframes<K>>& kfs,
                                                                                    const std::vector<std::string>& domains,
                                                                                    const std::string& neutral)
 {
-    auto factors = amplitude_factors<K>(clips, kfs, domains, neutral);
-    const auto check = amplitude_cv<K>(clips, kfs, domains, neutral);
-    if (!(check.second < check.first)) factors.assign(factors.size(), 1.0);
-    return {check, std::move(factors)};
+    auto r = fit_amplitude<K>(clips, kfs, domains, neutral, "mean");
+    return {r.check, std::move(r.factors)};
 }
 
 /// @brief Pads a [3, K, J] network image into [3, H, W] (zeros bottom/right).
@@ -440,7 +641,7 @@ template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
                            std::optional<angle_range> range = {}, std::string_view range_mode = "global",
                            bool amplitude_normalise = false, bool tempo_shrink = false,
-                           tempo_basis basis = tempo_basis::duration, bool lag = false)
+                           tempo_basis basis = tempo_basis::duration, bool lag = false, std::string_view anchor = "mean")
 {
     constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
     if (clips.empty()) throw value_error("train: no clips to train on");
@@ -490,7 +691,13 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
         }
     }
     p.tempo = tempo_factors(clips, info.domain_names, info.neutral, tempo_shrink, basis);
-    std::tie(p.amplitude_check, p.amplitude) = checked_amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral);
+    {
+        auto amp = fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, anchor);
+        p.amplitude = std::move(amp.factors);
+        p.amplitude_check = amp.check;
+        p.amplitude_anchor = amp.anchor;
+        p.amplitude_anchor_check = amp.anchor_check;
+    }
     {
         std::vector<detail_layer::sample> d;
         for (const auto& c : clips) d.push_back({&c.motion, c.emotion, c.content, c.take});
@@ -500,7 +707,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     p.images.resize(clips.size() * 3 * H * W);
     for (std::size_t m = 0; m < clips.size(); ++m) {
         auto kf = kfs[m];
-        if (amplitude_normalise) scale_keyframe_excursions(kf, 1.0 / p.amplitude[static_cast<std::size_t>(p.labels[m])]);
+        if (amplitude_normalise) scale_keyframe_excursions(kf, 1.0 / p.amplitude[static_cast<std::size_t>(p.labels[m])], p.amplitude_anchor);
         const auto net = to_network(encode(kf, p.range));
         pad_image(net.data.data(), K, J, p.images.data() + m * 3 * H * W, H, W);
     }
@@ -522,7 +729,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
                            std::optional<angle_range> range = {})
 {
     auto p = prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink,
-                                  parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"), opt.lag);
+                                  parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"), opt.lag, opt.amplitude_anchor);
     p.tempo_table = tempo_table_of(clips, info, opt);
     return p;
 }
@@ -536,9 +743,21 @@ std::vector<std::vector<double>> joint_lag_of(const std::vector<labelled_clip>& 
     constexpr std::size_t K = Config::keyframes;
     std::vector<keyframes<K>> kfs;
     for (const auto& c : clips) kfs.push_back(extract_keyframes<K>(c.motion));
-    const auto amp = opt.amplitude ? checked_amplitude_factors<K>(clips, kfs, info.domain_names, info.neutral).second
+    const auto amp = opt.amplitude ? fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, opt.amplitude_anchor).factors
                                    : std::vector<double>(info.domain_names.size(), 1.0);
     return joint_lags_checked<K>(clips, kfs, info.domain_names, info.neutral, amp).lag;
+}
+
+/// @brief The amplitude stage prepare_data() fits for `opt` (fit_amplitude() on `clips`), without the rest of the
+/// data; all factors 1 about the mean when opt.amplitude is off. The posture prior takes it this way.
+template <stargan_config Config>
+amplitude_fit amplitude_of(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt)
+{
+    if (!opt.amplitude) return {std::vector<double>(info.domain_names.size(), 1.0)};
+    constexpr std::size_t K = Config::keyframes;
+    std::vector<keyframes<K>> kfs;
+    for (const auto& c : clips) kfs.push_back(extract_keyframes<K>(c.motion));
+    return fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, opt.amplitude_anchor);
 }
 
 namespace detail {
@@ -653,6 +872,8 @@ struct checkpoint_info {
     /// without them
     tempo_neighbours tempo_table;
     std::vector<double> amplitude;  ///< [C] (all 1 for checkpoints written before it existed)
+    /// what the amplitude stage scales about (metadata field 'amplitude_anchor'; the mean when absent)
+    handemo::stargan::amplitude_anchor amplitude_anchor = handemo::stargan::amplitude_anchor::mean;
     /// [C] change gate per target domain (prepared_data::gate_posture/gate_motion; all 1 for checkpoints
     /// written before it existed or trained without it)
     std::vector<double> gate_posture, gate_motion;
@@ -723,6 +944,12 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
         }
         info.tempo = detail::json_doubles(j.at("tempo"));
         info.amplitude = j.contains("amplitude") ? detail::json_doubles(j.at("amplitude")) : std::vector<double>(info.tempo.size(), 1.0);
+        if (j.contains("amplitude_anchor")) {
+            const auto& a = j.at("amplitude_anchor");
+            if (!a.is_string() || (a.get<std::string>() != "mean" && a.get<std::string>() != "ends"))
+                throw fail("metadata field 'amplitude_anchor' is " + a.dump() + ", expected \"mean\" or \"ends\"");
+            info.amplitude_anchor = parse_amplitude_anchor(a.get<std::string>(), "checkpoint");
+        }
         info.gate_posture = info.gate_motion = std::vector<double>(info.tempo.size(), 1.0);
         if (j.contains("gate")) {
             info.gate_posture = detail::json_doubles(j.at("gate").at("posture"));
@@ -1175,6 +1402,8 @@ public:
                             {"options", opt_.to_json()}};
         if (data_.detail) j["detail"] = data_.detail->to_json();
         if (!data_.lag.lag.empty()) j["lag"] = data_.lag.lag;
+        // written only about the ends: a checkpoint without the field scales about the mean, as all did before it
+        if (data_.amplitude_anchor != amplitude_anchor::mean) j["amplitude_anchor"] = anchor_name(data_.amplitude_anchor);
         if (!data_.tempo_table.empty()) j["tempo_neighbours"] = detail::tempo_neighbours_json(data_.tempo_table);
         f.metadata["format"] = "handemo-checkpoint/1";
         f.metadata["handemo"] = j.dump();

@@ -54,6 +54,8 @@ struct transfer_result {
     std::size_t clamped_values = 0;   ///< input keyframe angles outside [p_min, p_max] (clamped by Eq. 3)
     double tempo = 1.0;               ///< duration factor applied
     double amplitude = 1.0;           ///< excursion factor applied (1 unless the model learned amplitudes)
+    /// what the excursions were scaled about (the model's anchor, checkpoint_info::amplitude_anchor)
+    handemo::stargan::amplitude_anchor amplitude_anchor = handemo::stargan::amplitude_anchor::mean;
 };
 
 using handemo::stretch_positions;
@@ -371,7 +373,7 @@ private:
         const bool amp = amplitude_stage();
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
         const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
-        if (amp) scale_keyframe_excursions(kf, 1.0 / a_src);
+        if (amp) scale_keyframe_excursions(kf, 1.0 / a_src, info_.amplitude_anchor);
         const std::size_t C = joints() * 3;
         r.clamped_values = 0;
         for (std::size_t i = 0; i < kf.angles.size(); ++i) r.clamped_values += info_.range.contains(kf.angles[i], i % C) ? 0 : 1;
@@ -449,7 +451,7 @@ public:
                     for (std::size_t ch = 0; ch < C; ++ch) out.angles[k * C + ch] += prior * p.prior[ch];
         }
         if (!p.lag.empty()) shift_joints(out, p.lag);
-        if (p.amplitude != 1.0) scale_keyframe_excursions(out, p.amplitude);
+        if (p.amplitude != 1.0) scale_keyframe_excursions(out, p.amplitude, info_.amplitude_anchor);
     }
 
     /// @brief The full-rate output clip of `p` (the parts of `in`) with a change gate: combine(), then the
@@ -473,7 +475,7 @@ public:
         const bool amp = amplitude_stage();
         auto kf = extract_keyframes<dynamic_keyframes>(in, keyframes());
         // the order of parts() and combine(): into the amplitude-normalised space, the prior, back out at the target's
-        if (amp) scale_keyframe_excursions(kf, 1.0 / info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))]);
+        if (amp) scale_keyframe_excursions(kf, 1.0 / info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))], info_.amplitude_anchor);
         if (!info_.prior_posture.empty()) {
             const std::size_t C = joints() * 3;
             for (std::size_t k = 0; k < keyframes(); ++k)
@@ -482,10 +484,11 @@ public:
         std::vector<double> lag;
         lag_of(t, source, lag);
         if (!lag.empty()) shift_joints(kf, lag);
-        if (amp && info_.amplitude[t] != 1.0) scale_keyframe_excursions(kf, info_.amplitude[t]);
+        if (amp && info_.amplitude[t] != 1.0) scale_keyframe_excursions(kf, info_.amplitude[t], info_.amplitude_anchor);
         transfer_result r;
         r.tempo = tempo(in, target, source);
         r.amplitude = amp ? amplitude(target, source) : 1.0;
+        r.amplitude_anchor = info_.amplitude_anchor;
         const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(kf, in.skel, frames, in.fps);
         r.motion.positions = stretch_positions(in, frames);
@@ -531,6 +534,7 @@ private:
         out.clamped_values = p.clamped_values;
         out.image = p.image;
         out.amplitude = amplitude_stage() ? amplitude(target, source) : 1.0;
+        out.amplitude_anchor = info_.amplitude_anchor;
         out.tempo = p.tempo;
         stretch_positions_into(in, p.frames, out.motion.positions);
     }
