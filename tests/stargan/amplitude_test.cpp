@@ -202,7 +202,8 @@ TEST_CASE("the checkpoint stores the ends anchor, transfer scales about it, and 
     o.gate_folds = 0;
     o.amplitude_anchor = "ends";
     CHECK(o.to_json().at("amplitude_anchor") == "ends");
-    CHECK_FALSE(handemo_options().to_json().contains("amplitude_anchor"));  // written only when not the mean
+    CHECK_FALSE(paper_options().to_json().contains("amplitude_anchor"));  // written only when not the mean
+    CHECK(handemo_options().amplitude_anchor == "auto");
     auto bad = o;
     bad.amplitude_anchor = "median";
     CHECK_THROWS_WITH_AS(bad.validate(), "train: amplitude_anchor: amplitude anchor 'median' is not 'mean' or 'ends'", value_error);

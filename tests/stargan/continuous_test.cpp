@@ -288,6 +288,45 @@ TEST_CASE("the joint lag: after G's change and the prior, before the amplitude s
     }
 }
 
+TEST_CASE("continuous transfer about the ends (--amplitude-anchor ends): exact at the labels' points, a still target too")
+{
+    auto info = toy_model::make()->info();
+    info.amplitude_anchor = stargan::amplitude_anchor::ends;
+    const toy_model model(info);
+    const auto table = continuous_table();
+    const stargan::continuous_control control(model, table);
+    const clip in = continuous_neutral(hand_motion::pushing);
+    for (const auto& d : info.domains) {
+        CAPTURE(d);
+        const auto& p = table.at(d);
+        const auto c = control.transfer(in, p.valence, p.arousal);
+        const auto r = model.transfer(in, d);
+        CHECK(r.amplitude_anchor == stargan::amplitude_anchor::ends);
+        CHECK(c.motion.angles == r.motion.angles);  // bit for bit
+        // a target that stays at the label's point over the clip: the same keyframes
+        va_curve still;
+        still.time = {0.0};
+        still.valence = {p.valence};
+        still.arousal = {p.arousal};
+        const auto m = control.transfer(in, still);
+        CHECK(max_abs_diff(m.keys.angles, c.keys.angles) < 1e-9);
+    }
+    // between labels the blend is scaled about the blend's ends, which are the blended ends
+    const auto w = control.weights(0.2, 0.3);
+    const auto c = control.transfer(in, 0.2, 0.3);
+    const std::size_t C = model.joints() * 3, K = model.keyframes();
+    double moved = 0;
+    for (std::size_t ch = 0; ch < C; ++ch) {
+        const double first = c.keys.angles[ch], last = c.keys.angles[(K - 1) * C + ch];
+        const auto ends = [&](const auto& k) { return 0.5 * (k.angles[ch] + k.angles[(K - 1) * C + ch]); };
+        double blended = 0;
+        for (std::size_t d = 0; d < w.size(); ++d)
+            if (w[d] > 0) blended += w[d] * ends(model.combine(model.parts(in, info.domains[d]), info.gate_posture[d], info.gate_motion[d], info.gate_prior[d]));
+        moved = std::max(moved, std::abs(0.5 * (first + last) - blended));
+    }
+    CHECK(moved < 1e-9);
+}
+
 TEST_CASE("continuous transfer: along straight paths from neutral the classifier's posterior rises monotonically (toy)")
 {
     const auto toy = toy_model::make();

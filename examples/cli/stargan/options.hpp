@@ -71,7 +71,7 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "What --amplitude scales each channel's excursions about: 'mean' (its mean over the keyframes), 'ends' (the "
                     "mean of its first and last keyframes: the movement away from the rest pose a take starts and ends in) or "
                     "'auto' (the ends when leave-one-content-out on the training clips finds that closer to the left-out "
-                    "contents' takes) (handemo mean)")
+                    "contents' takes) (handemo auto)")
         ->check(CLI::IsMember({"mean", "ends", "auto"}));
     sub->add_option("--augment", o.augment,
                     "Per-channel offset jitter of training images and paired targets, std in network units (handemo 0.1, paper 0)");

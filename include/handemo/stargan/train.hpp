@@ -98,8 +98,8 @@ struct train_options {
     double lambda_delta = 0.0;  ///< size of the change mean |G(x, c) - x|
     double ema = 0.0;           ///< decay of an exponential moving average of G's weights used for transfer; 0: off
     std::string range = "global";  ///< Eq. 3 range: "global" (the paper's one p_min/p_max) or "channel" (handemo-range/2)
-    /// transfer scales the output keyframes' excursions about their per-channel mean by amplitude[target] /
-    /// amplitude[source], learned from the training pairs as the tempo is (amplitude_factors())
+    /// transfer scales the output keyframes' excursions about their per-channel anchor (amplitude_anchor) by
+    /// amplitude[target] / amplitude[source], learned from the training pairs as the tempo is (amplitude_factors())
     bool amplitude = false;
     /// the amplitude stage's anchor (amplitude_anchor): "mean" (each channel's mean over the keyframes), "ends" (the
     /// mean of its first and last keyframes: the movement away from the rest pose a take starts and ends in) or "auto"
@@ -221,7 +221,7 @@ inline train_options paper_options() { return train_options{}; }
 /// adds a bounded change; an identity loss; a paired loss to the same take performed in the target emotion
 /// (the data sets are recorded in pairs: every content in every emotion); an EMA of G's weights for
 /// transfer (StarGAN v2); per-channel ranges wrapped against a reference angle; the learned amplitude
-/// factors; lambda_cls 5 (with 1, D's domain classifier stays at chance on the synthetic training set: the
+/// factors, about the take's ends where the training set says so (amplitude_anchor "auto"); lambda_cls 5 (with 1, D's domain classifier stays at chance on the synthetic training set: the
 /// gradient penalty dominates); n_critic 1 and 2000 iterations (G gets 2000 updates, not 400: with
 /// n_critic 5 G did not fit its training contents better than identity). Chosen from training-set numbers
 /// only: the seen-content diagnostic and an inner validation content inside the demo fold's training set
@@ -237,6 +237,7 @@ inline train_options handemo_options()
     o.ema = 0.999;
     o.range = "channel";
     o.amplitude = true;
+    o.amplitude_anchor = "auto";
     o.augment = 0.1;
     o.n_critic = 1;
     o.iters = 2000;
