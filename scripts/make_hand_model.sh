@@ -20,11 +20,12 @@ while [[ $# -gt 0 ]]; do
 done
 cli=$build/examples/handemo
 [[ -x $cli ]] || { echo "make_hand_model.sh: no $cli: build the project first" >&2; exit 1; }
+cli=$(realpath "$cli")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-"$cli" synth --out "$work/data" --takes 3 --seed 1 >/dev/null
-"$cli" train --data "$work/data" --out "$work/model" --config hand-embedded --iters "$iters" --seed 1 --shards 2 \
-  --checkpoint-every "$iters"
+# run inside the work folder, so that the data folder's name in the loss plot's title is "data", not a temporary path
+(cd "$work" && "$cli" synth --out data --takes 3 --seed 1 >/dev/null &&
+  "$cli" train --data data --out model --config hand-embedded --iters "$iters" --seed 1 --shards 2 --checkpoint-every "$iters")
 mkdir -p "$out"
 # the inference part only (metadata and the EMA generator's weights, stored as binary16): what transfer reads
 "$cli" export --inference "$work/model" --half --out "$out/checkpoint.safetensors"

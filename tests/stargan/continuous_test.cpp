@@ -173,7 +173,7 @@ TEST_CASE("continuous transfer: a toy model with known styles gives, at any poin
         // the known style: the input's keyframes in the neutral's amplitude space, each label's gated change and
         // prior weighted, then the weighted amplitude
         auto kf = extract_keyframes<dynamic_keyframes>(in, K);
-        stargan::scale_keyframe_excursions(kf, 1.0 / info.amplitude[toy->domain("neutral")]);
+        stargan::scale_keyframe_excursions(kf, 1.0 / info.amplitude[toy->domain("neutral")], info.amplitude_anchor);
         auto expect = kf;
         double amp = 0, tempo = 0;
         for (std::size_t d = 0; d < D; ++d) {
@@ -192,7 +192,7 @@ TEST_CASE("continuous transfer: a toy model with known styles gives, at any poin
                 }
         }
         if (geometric) amp = std::exp(amp), tempo = std::exp(tempo);
-        stargan::scale_keyframe_excursions(expect, amp);
+        stargan::scale_keyframe_excursions(expect, amp, info.amplitude_anchor);
         CHECK(max_abs_diff(r.keys.angles, expect.angles) < 1e-3);  // G runs in float
         CHECK(r.tempo == doctest::Approx(tempo / info.tempo[toy->domain("neutral")]).epsilon(1e-12));
         CHECK(r.motion.frames == stargan::emotion_model::output_frames(in.frames, r.tempo));
@@ -264,7 +264,7 @@ TEST_CASE("the joint lag: after G's change and the prior, before the amplitude s
                 p1.amplitude = 1.0;
                 auto expect = plain->combine(p1, posture, motion, prior);
                 if (d != s) stargan::shift_joints(expect, want);
-                stargan::scale_keyframe_excursions(expect, pl.amplitude);
+                stargan::scale_keyframe_excursions(expect, pl.amplitude, info.amplitude_anchor);
                 const auto got = lagged->combine(pg, posture, motion, prior);
                 CHECK(max_abs_diff(got.angles, expect.angles) < 1e-12);
             }

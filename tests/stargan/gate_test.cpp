@@ -80,7 +80,7 @@ TEST_CASE("change gate: (1, 1) is G's whole change, (0, 0) no change, and postur
         const auto r0 = model->transfer(in, e);
         // no change: the input's keyframes with the amplitude stage, as an untrained residual G gives
         auto k = extract_keyframes<dynamic_keyframes>(in, 9);
-        scale_keyframe_excursions(k, r0.amplitude);
+        scale_keyframe_excursions(k, r0.amplitude, r0.amplitude_anchor);
         CHECK(max_abs_diff(r0.motion, reconstruct(k, in.skel, r0.motion.frames, in.fps)) < 1e-9);
         CHECK(max_abs_diff(full, r0.motion) > 1e-3);  // G changed something in 40 steps
         model->set_gate(one, zero);
@@ -143,7 +143,8 @@ TEST_CASE("change gate: fitted on held-out training contents, stored in the chec
     CHECK(model->info().gate_posture == g.posture);
     CHECK(model->info().gate_motion == g.motion);
     CHECK(model->info().gate_prior == g.prior);
-    CHECK(model->info().prior_posture == posture_prior<9>(clips, tiny_info()));  // from every training clip
+    // from every training clip, corrected for the amplitude stage's anchor (posture_prior())
+    CHECK(model->info().prior_posture == posture_prior<9>(clips, tiny_info(), model->info().amplitude, model->info().amplitude_anchor));
     // the table is reproducible from the inner models: gripping and pointing were held out of inner1,
     // patting out of inner2; each row is the mean over the three held-out neutral takes with the chosen gate
     for (const auto& row : g.rows) {
@@ -155,7 +156,7 @@ TEST_CASE("change gate: fitted on held-out training contents, stored in the chec
             std::erase_if(inner_train, [&](const labelled_clip& c) {
                 return std::string(inner_dir) == "inner1" ? c.content != "patting" : c.content == "patting";
             });
-            inner->set_prior_posture(posture_prior<9>(inner_train, tiny_info()));
+            inner->set_prior_posture(posture_prior<9>(inner_train, tiny_info(), inner->info().amplitude, inner->info().amplitude_anchor));
             inner->set_gate(std::vector<double>(5, row.posture), std::vector<double>(5, row.motion), std::vector<double>(5, row.prior));
             const labelled_clip *in = nullptr, *real = nullptr;
             for (const auto& c : clips) {
@@ -661,7 +662,7 @@ TEST_CASE("refit_gate: a new gate around a trained G, inner models reused, G unt
     const auto [after, info] = read_checkpoint(d / "checkpoint.safetensors");
     CHECK(info.options == o2.to_json());
     CHECK(info.gate_prior == g.prior);
-    CHECK(info.prior_posture == posture_prior<9>(clips, tiny_info()));
+    CHECK(info.prior_posture == posture_prior<9>(clips, tiny_info(), info.amplitude, info.amplitude_anchor));
     REQUIRE(after.tensors.size() == before.tensors.size());
     for (std::size_t i = 0; i < before.tensors.size(); ++i) {
         CHECK(after.tensors[i].name == before.tensors[i].name);

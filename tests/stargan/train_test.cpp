@@ -294,9 +294,9 @@ TEST_CASE("residual G (handemo preset) is exactly the identity at initialisation
     for (const char* e : {"neutral", "angry"}) {
         const auto r = model->transfer(in, e);
         // the output is the spline through the input's own keyframes (times the learned amplitude about each
-        // channel's mean): no Eq. 3 quantisation or clamping reaches a residual model's output
+        // channel's anchor): no Eq. 3 quantisation or clamping reaches a residual model's output
         auto k = kin;
-        scale_keyframe_excursions(k, r.amplitude);
+        scale_keyframe_excursions(k, r.amplitude, r.amplitude_anchor);
         const clip expect = reconstruct(k, in.skel, r.motion.frames, in.fps);
         double worst = 0;
         for (std::size_t i = 0; i < expect.angles.size(); ++i) worst = std::max(worst, std::abs(expect.angles[i] - r.motion.angles[i]));
@@ -600,7 +600,7 @@ TEST_CASE("statistics(): every learned part but G is the transfer with G's chang
     const auto plain = load_model(f2, info2);
     const auto s = plain->statistics(in, "angry");
     auto k = extract_keyframes<dynamic_keyframes>(in, 9);
-    scale_keyframe_excursions(k, plain->amplitude("angry"));
+    scale_keyframe_excursions(k, plain->amplitude("angry"), plain->info().amplitude_anchor);
     const clip expect = reconstruct(k, in.skel, s.motion.frames, in.fps);
     double worst = 0;
     for (std::size_t i = 0; i < expect.angles.size(); ++i) worst = std::max(worst, std::abs(expect.angles[i] - s.motion.angles[i]));
