@@ -454,6 +454,25 @@ double amplitude_rmse(const keyframes<K>& a, const keyframes<K>& b)
     return std::sqrt(q / static_cast<double>(a.angles.size()));
 }
 
+/// Leave-one-content-out over `clips` (their contents in order of first appearance): f(held, the other contents'
+/// clips, their keyframes) for each content. False, calling nothing, when there are fewer than two contents.
+template <std::size_t K, class F>
+bool for_each_left_out_content(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs, F&& f)
+{
+    std::vector<std::string> contents;
+    for (const auto& c : clips)
+        if (std::find(contents.begin(), contents.end(), c.content) == contents.end()) contents.push_back(c.content);
+    if (contents.size() < 2) return false;
+    for (const auto& held : contents) {
+        std::vector<labelled_clip> other_c;
+        std::vector<keyframes<K>> other_k;
+        for (std::size_t m = 0; m < clips.size(); ++m)
+            if (clips[m].content != held) other_c.push_back(clips[m]), other_k.push_back(kfs[m]);
+        f(held, other_c, other_k);
+    }
+    return true;
+}
+
 }  // namespace detail
 
 /// @brief Leave-one-content-out check of the amplitude factors on training clips: for each content, the
@@ -464,17 +483,9 @@ template <std::size_t K>
 std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
                                        const std::vector<std::string>& domains, const std::string& neutral)
 {
-    std::vector<std::string> contents;
-    for (const auto& c : clips)
-        if (std::find(contents.begin(), contents.end(), c.content) == contents.end()) contents.push_back(c.content);
-    if (contents.size() < 2) return {std::nan(""), std::nan("")};
     double s_id = 0, s_amp = 0;
     std::size_t n = 0;
-    for (const auto& held : contents) {
-        std::vector<labelled_clip> other_c;
-        std::vector<keyframes<K>> other_k;
-        for (std::size_t m = 0; m < clips.size(); ++m)
-            if (clips[m].content != held) other_c.push_back(clips[m]), other_k.push_back(kfs[m]);
+    const bool split = detail::for_each_left_out_content<K>(clips, kfs, [&](const std::string& held, const auto& other_c, const auto& other_k) {
         const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral);
         for (std::size_t m = 0; m < clips.size(); ++m) {
             if (clips[m].content != held || clips[m].emotion == neutral) continue;
@@ -490,8 +501,8 @@ std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, 
             s_amp += detail::amplitude_rmse(scaled, kfs[m]);
             ++n;
         }
-    }
-    if (!n) return {std::nan(""), std::nan("")};
+    });
+    if (!split || !n) return {std::nan(""), std::nan("")};
     return {s_id / static_cast<double>(n), s_amp / static_cast<double>(n)};
 }
 
@@ -505,10 +516,7 @@ template <std::size_t K>
 std::pair<double, double> amplitude_prior_cv(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
                                              const std::vector<std::string>& domains, const std::string& neutral, amplitude_anchor anchor)
 {
-    std::vector<std::string> contents;
-    for (const auto& c : clips)
-        if (std::find(contents.begin(), contents.end(), c.content) == contents.end()) contents.push_back(c.content);
-    if (contents.size() < 2 || kfs.empty()) return {std::nan(""), std::nan("")};
+    if (kfs.empty()) return {std::nan(""), std::nan("")};
     const std::size_t C = kfs.front().joints * 3;
     const auto partner = detail::amplitude_partners(clips, neutral);
     const auto domain_of = [&](const labelled_clip& c) {
@@ -516,11 +524,7 @@ std::pair<double, double> amplitude_prior_cv(const std::vector<labelled_clip>& c
     };
     double s_id = 0, s_amp = 0;
     std::size_t n = 0;
-    for (const auto& held : contents) {
-        std::vector<labelled_clip> other_c;
-        std::vector<keyframes<K>> other_k;
-        for (std::size_t m = 0; m < clips.size(); ++m)
-            if (clips[m].content != held) other_c.push_back(clips[m]), other_k.push_back(kfs[m]);
+    const bool split = detail::for_each_left_out_content<K>(clips, kfs, [&](const std::string& held, const auto& other_c, const auto& other_k) {
         const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral, anchor);
         const auto shift = anchor_mean_shift<K>(other_c, other_k, domains, neutral, f, anchor);
         // the prior on the other contents: the pairs' mean keyframe-mean change per domain and channel
@@ -552,8 +556,8 @@ std::pair<double, double> amplitude_prior_cv(const std::vector<labelled_clip>& c
             s_amp += detail::amplitude_rmse(scaled, kfs[m]);
             ++n;
         }
-    }
-    if (!n) return {std::nan(""), std::nan("")};
+    });
+    if (!split || !n) return {std::nan(""), std::nan("")};
     return {s_id / static_cast<double>(n), s_amp / static_cast<double>(n)};
 }
 
