@@ -352,14 +352,15 @@ double keyframe_excursion(const keyframes<K>& kf, amplitude_anchor a = amplitude
 namespace detail {
 
 /// The training pairs of the amplitude stage: for every clip of a domain other than `neutral`, the neutral clip of
-/// the same content and take, else the content's first neutral clip (-1: none).
+/// the same content and take (the last one, should a take name repeat), else the content's first neutral clip
+/// (-1: none).
 inline std::vector<int> amplitude_partners(const std::vector<labelled_clip>& clips, const std::string& neutral)
 {
     std::map<std::pair<std::string, std::string>, int> by_take;
     std::map<std::string, int> first;
     for (std::size_t m = 0; m < clips.size(); ++m)
         if (clips[m].emotion == neutral) {
-            by_take.try_emplace({clips[m].content, clips[m].take}, static_cast<int>(m));
+            by_take[{clips[m].content, clips[m].take}] = static_cast<int>(m);
             first.try_emplace(clips[m].content, static_cast<int>(m));
         }
     std::vector<int> out(clips.size(), -1);
@@ -384,26 +385,17 @@ std::vector<double> amplitude_factors(const std::vector<labelled_clip>& clips, c
                                       const std::vector<std::string>& domains, const std::string& neutral,
                                       amplitude_anchor anchor = amplitude_anchor::mean)
 {
-    std::map<std::pair<std::string, std::string>, double> by_take;
-    std::map<std::string, double> first;
-    for (std::size_t m = 0; m < clips.size(); ++m)
-        if (clips[m].emotion == neutral) {
-            const double e = keyframe_excursion(kfs[m], anchor);
-            by_take[{clips[m].content, clips[m].take}] = e;
-            first.try_emplace(clips[m].content, e);
-        }
+    const auto partner = detail::amplitude_partners(clips, neutral);
+    std::vector<double> excursion(clips.size());
+    for (std::size_t m = 0; m < clips.size(); ++m) excursion[m] = keyframe_excursion(kfs[m], anchor);
     std::vector<double> out(domains.size(), 1.0);
     for (std::size_t d = 0; d < domains.size(); ++d) {
         if (domains[d] == neutral) continue;
         std::vector<double> r;
         for (std::size_t m = 0; m < clips.size(); ++m) {
             if (clips[m].emotion != domains[d]) continue;
-            double base = 0;
-            if (auto it = by_take.find({clips[m].content, clips[m].take}); it != by_take.end())
-                base = it->second;
-            else if (auto f = first.find(clips[m].content); f != first.end())
-                base = f->second;
-            const double e = keyframe_excursion(kfs[m], anchor);
+            const double base = partner[m] < 0 ? 0.0 : excursion[static_cast<std::size_t>(partner[m])];
+            const double e = excursion[m];
             if (base > 1e-9 && std::isfinite(e)) r.push_back(e / base);
         }
         if (r.empty()) continue;
@@ -483,21 +475,19 @@ template <std::size_t K>
 std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
                                        const std::vector<std::string>& domains, const std::string& neutral)
 {
+    const auto partner = detail::amplitude_partners(clips, neutral);
     double s_id = 0, s_amp = 0;
     std::size_t n = 0;
     const bool split = detail::for_each_left_out_content<K>(clips, kfs, [&](const std::string& held, const auto& other_c, const auto& other_k) {
         const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral);
         for (std::size_t m = 0; m < clips.size(); ++m) {
-            if (clips[m].content != held || clips[m].emotion == neutral) continue;
-            const keyframes<K>* base = nullptr;
-            for (std::size_t q = 0; q < clips.size(); ++q)
-                if (clips[q].content == held && clips[q].emotion == neutral && (!base || clips[q].take == clips[m].take)) base = &kfs[q];
-            if (!base) continue;
+            if (clips[m].content != held || partner[m] < 0) continue;
+            const auto& base = kfs[static_cast<std::size_t>(partner[m])];
             const auto d = static_cast<std::size_t>(std::find(domains.begin(), domains.end(), clips[m].emotion) - domains.begin());
             if (d >= domains.size()) continue;
-            auto scaled = *base;
+            auto scaled = base;
             scale_keyframe_excursions(scaled, f[d]);
-            s_id += detail::amplitude_rmse(*base, kfs[m]);
+            s_id += detail::amplitude_rmse(base, kfs[m]);
             s_amp += detail::amplitude_rmse(scaled, kfs[m]);
             ++n;
         }
@@ -584,17 +574,20 @@ amplitude_fit fit_amplitude(const std::vector<labelled_clip>& clips, const std::
                             const std::vector<std::string>& domains, const std::string& neutral, std::string_view anchor = "mean")
 {
     amplitude_fit r;
+    std::optional<std::pair<double, double>> about_ends;  // amplitude_prior_cv() about the ends, once computed
     if (anchor == "auto") {
         const auto about_mean = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::mean);
-        const auto about_ends = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::ends);
-        r.anchor_check = {about_mean.second, about_ends.second};
-        r.anchor = about_ends.second < about_mean.second ? amplitude_anchor::ends : amplitude_anchor::mean;
+        about_ends = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::ends);
+        r.anchor_check = {about_mean.second, about_ends->second};
+        r.anchor = about_ends->second < about_mean.second ? amplitude_anchor::ends : amplitude_anchor::mean;
     } else {
         r.anchor = parse_amplitude_anchor(anchor, "train: amplitude_anchor");
     }
     r.factors = amplitude_factors<K>(clips, kfs, domains, neutral, r.anchor);
-    r.check = r.anchor == amplitude_anchor::mean ? amplitude_cv<K>(clips, kfs, domains, neutral)
-                                                 : amplitude_prior_cv<K>(clips, kfs, domains, neutral, r.anchor);
+    if (r.anchor == amplitude_anchor::mean)
+        r.check = amplitude_cv<K>(clips, kfs, domains, neutral);
+    else
+        r.check = about_ends ? *about_ends : amplitude_prior_cv<K>(clips, kfs, domains, neutral, r.anchor);
     if (!(r.check.second < r.check.first)) r.factors.assign(r.factors.size(), 1.0);
     return r;
 }
@@ -751,18 +744,6 @@ std::vector<std::vector<double>> joint_lag_of(const std::vector<labelled_clip>& 
     const auto amp = opt.amplitude ? fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, opt.amplitude_anchor).factors
                                    : std::vector<double>(info.domain_names.size(), 1.0);
     return joint_lags_checked<K>(clips, kfs, info.domain_names, info.neutral, amp).lag;
-}
-
-/// @brief The amplitude stage prepare_data() fits for `opt` (fit_amplitude() on `clips`), without the rest of the
-/// data; all factors 1 about the mean when opt.amplitude is off. The posture prior takes it this way.
-template <stargan_config Config>
-amplitude_fit amplitude_of(const std::vector<labelled_clip>& clips, const config_info& info, const train_options& opt)
-{
-    if (!opt.amplitude) return {std::vector<double>(info.domain_names.size(), 1.0)};
-    constexpr std::size_t K = Config::keyframes;
-    std::vector<keyframes<K>> kfs;
-    for (const auto& c : clips) kfs.push_back(extract_keyframes<K>(c.motion));
-    return fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, opt.amplitude_anchor);
 }
 
 namespace detail {
@@ -951,9 +932,10 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
         info.amplitude = j.contains("amplitude") ? detail::json_doubles(j.at("amplitude")) : std::vector<double>(info.tempo.size(), 1.0);
         if (j.contains("amplitude_anchor")) {
             const auto& a = j.at("amplitude_anchor");
-            if (!a.is_string() || (a.get<std::string>() != "mean" && a.get<std::string>() != "ends"))
+            if (a == "ends")
+                info.amplitude_anchor = amplitude_anchor::ends;
+            else if (a != "mean")
                 throw fail("metadata field 'amplitude_anchor' is " + a.dump() + ", expected \"mean\" or \"ends\"");
-            info.amplitude_anchor = parse_amplitude_anchor(a.get<std::string>(), "checkpoint");
         }
         info.gate_posture = info.gate_motion = std::vector<double>(info.tempo.size(), 1.0);
         if (j.contains("gate")) {
