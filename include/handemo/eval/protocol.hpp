@@ -530,6 +530,7 @@ private:
         info.gate_posture.assign(info.gate_posture.size(), 1.0);
         info.gate_motion.assign(info.gate_motion.size(), 1.0);
         info.gate_prior.assign(info.gate_prior.size(), 0.0);
+        info.posture_centre.clear();  // G's change as G gives it
         return info;
     }
 };

@@ -169,6 +169,37 @@ std::vector<std::vector<double>> posture_prior(const std::vector<labelled_clip>&
     return prior;
 }
 
+/// @brief G's average posture per target (train_options::gate_centre): for every target but the neutral domain, the
+/// mean over the neutral clips of `clips` of G's change averaged over the keyframes (transfer_parts::change_mean),
+/// per channel, in degrees; the neutral domain's row is zeros. emotion_model::set_posture_centre() takes it, and the
+/// gate then weighs G's posture about this average. One transfer per neutral clip and target, in clip order.
+/// @param model a residual model holding no posture centre yet (its change as G gives it)
+/// @throws value_error for a model that is not residual or already holds a centre, or clips without a neutral one;
+///         the errors of emotion_model::parts() (a clip of another skeleton).
+inline std::vector<std::vector<double>> posture_centre_of(const emotion_model& model, const std::vector<labelled_clip>& clips, const config_info& info)
+{
+    if (!model.residual()) throw value_error("posture_centre_of: the model's G is not residual");
+    if (!model.posture_centre().empty()) throw value_error("posture_centre_of: the model already holds a posture centre");
+    const std::size_t C = model.joints() * 3;
+    std::vector<std::vector<double>> centre(info.domains, std::vector<double>(C, 0.0));
+    std::size_t neutrals = 0;
+    auto ws = model.make_workspace();
+    transfer_parts p;
+    for (const auto& c : clips) {
+        if (c.emotion != info.neutral) continue;
+        ++neutrals;
+        for (std::size_t d = 0; d < info.domains; ++d) {
+            if (info.domain_names[d] == info.neutral) continue;
+            model.parts_into(c.motion, info.domain_names[d], {}, ws, p);
+            for (std::size_t ch = 0; ch < C; ++ch) centre[d][ch] += p.change_mean[ch];
+        }
+    }
+    if (neutrals == 0) throw value_error("posture_centre_of: no '" + info.neutral + "' clip to average G's change over");
+    for (auto& row : centre)
+        for (auto& v : row) v /= static_cast<double>(neutrals);
+    return centre;
+}
+
 namespace detail {
 
 /// The training options without the gate's own (gate_folds, gate_prior, gate_margin, ...), the tempo's (the
@@ -177,7 +208,7 @@ namespace detail {
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "gate_iters_scale", "tempo_shrink", "tempo_basis", "tempo_neighbours", "lag"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "gate_centre", "gate_iters_scale", "tempo_shrink", "tempo_basis", "tempo_neighbours", "lag"}) o.erase(k);
     return o;
 }
 
@@ -621,6 +652,7 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         if (opt.gate_prior)
             model.set_prior_posture(opt.amplitude ? posture_prior<K>(train, info, ck_info.amplitude, ck_info.amplitude_anchor)
                                                   : posture_prior<K>(train, info));
+        if (opt.gate_centre) model.set_posture_centre(posture_centre_of(model, train, info));
         detail::score_gate_group<Config>(model, train, held, info, opt, set, tallies[f]);
     }
     double margin = opt.gate_margin;
@@ -678,6 +710,12 @@ gate_fit refit_gate(const std::vector<labelled_clip>& clips, const config_info& 
                                        ? (opt.amplitude ? posture_prior<Config::keyframes>(clips, info, stored.amplitude, stored.amplitude_anchor)
                                                         : posture_prior<Config::keyframes>(clips, info))
                                        : std::vector<std::vector<double>>{}}};
+    if (opt.gate_centre && opt.gate_folds > 0) {
+        auto raw = stored;
+        raw.posture_centre.clear();  // the stored G's change as G gives it, whatever centre the checkpoint held
+        const detail::emotion_model_impl<Config> model(f, raw);
+        j["gate"]["posture_centre"] = posture_centre_of(model, clips, info);
+    }
     j["tempo"] = tempo_factors(clips, info.domain_names, info.neutral, opt.tempo_shrink, parse_tempo_basis(opt.tempo_basis));
     if (const auto lag = joint_lag_of<Config>(clips, info, opt); !lag.empty())
         j["lag"] = lag;
@@ -718,6 +756,13 @@ std::unique_ptr<trainer<Config>> train_model(const std::vector<labelled_clip>& c
                                            : posture_prior<Config::keyframes>(clips, info);
     auto tr = std::make_unique<trainer<Config>>(info, std::move(data), opt);
     tr->run(out_dir, resume);
+    if (opt.gate_centre && opt.gate_folds > 0) {
+        // G's average posture belongs to the weights of the last step: computed from them, then saved with them
+        const auto ck = parse_checkpoint(tr->checkpoint((out_dir / "checkpoint.safetensors").string()));
+        const detail::emotion_model_impl<Config> model(ck.first, ck.second);
+        tr->set_posture_centre(posture_centre_of(model, clips, info));
+        if (writes_files(opt)) tr->save(out_dir);
+    }
     if (gate_out) *gate_out = std::move(g);
     return tr;
 }

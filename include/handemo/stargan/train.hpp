@@ -118,6 +118,13 @@ struct train_options {
     /// change gate: also offer the training set's mean posture change per target emotion (the keyframe mean
     /// of mean-offset's difference emotion - neutral, a "posture prior") as a third gated part, 0 .. 1
     bool gate_prior = false;
+    /// change gate: G's posture part (its change averaged over the keyframes) is taken about its own average: minus
+    /// the mean of that part over the training set's neutral takes transferred to the same target, per target and
+    /// channel (posture_centre_of(), stored in the checkpoint as gate.posture_centre). With the posture prior at
+    /// full weight, (1, 1, 1) is then the prior plus what G says is particular to the input instead of two estimates
+    /// of the emotion's average posture added; (0, 0, 1), the statistics setting, is unchanged. G is the same with or
+    /// without it, so a stored model takes it by refit_gate(). No effect without the gate (gate_folds 0)
+    bool gate_centre = false;
     /// change gate: the setting chosen per target is the lowest-RMSE one among those whose held-out outputs
     /// the independent emotion classifier (trained on the inner training clips) recognises at a rate no more
     /// than gate_margin below the real held-out clips' rate (a negative margin asks for more than it); when
@@ -198,6 +205,7 @@ struct train_options {
         if (gate_posterior) j["gate_posterior"] = true;
         if (gate_auto_margin) j["gate_auto_margin"] = true;  // written only when on: older checkpoints' options stay equal
         if (gate_guard >= 0) j["gate_guard"] = gate_guard;
+        if (gate_centre) j["gate_centre"] = true;  // written only when on: older checkpoints' options stay equal
         if (gate_iters_scale != 1.0) j["gate_iters_scale"] = gate_iters_scale;  // written only when not 1
         if (tempo_shrink) j["tempo_shrink"] = true;
         if (tempo_basis != "duration") j["tempo_basis"] = tempo_basis;  // written only when not the duration
@@ -304,6 +312,9 @@ struct prepared_data {
     std::vector<double> gate_prior;
     /// [C][J*3] the posture prior: the training pairs' mean keyframe-mean change (deg) per target and channel
     std::vector<std::vector<double>> prior_posture;
+    /// [C][J*3] G's average posture per target (train_options::gate_centre): set after G's last step
+    /// (train_model()), so empty while G trains; written to the checkpoint when set
+    std::vector<std::vector<double>> posture_centre;
     /// the detail layer's per-emotion statistics of the training clips (motion/detail_layer.hpp)
     std::optional<detail_layer> detail;
     std::size_t size() const noexcept { return labels.size(); }
@@ -867,6 +878,9 @@ struct checkpoint_info {
     /// prior itself in degrees (empty when every weight is 0)
     std::vector<double> gate_prior;
     std::vector<std::vector<double>> prior_posture;
+    /// [C][J*3] G's average posture per target (train_options::gate_centre, posture_centre_of()), subtracted from
+    /// G's change before the gate weighs it; empty: none (trained without the option, or before it existed)
+    std::vector<std::vector<double>> posture_centre;
     /// [C][J] the joint lag per domain and joint in keyframe intervals (train_options::lag, lag.hpp); empty: none
     /// (checkpoints trained without it)
     std::vector<std::vector<double>> lag;
@@ -944,6 +958,8 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
             if (j.at("gate").contains("prior")) info.gate_prior = detail::json_doubles(j.at("gate").at("prior"));
             if (j.at("gate").contains("prior_posture"))
                 for (const auto& row : j.at("gate").at("prior_posture")) info.prior_posture.push_back(detail::json_doubles(row));
+            if (j.at("gate").contains("posture_centre"))
+                for (const auto& row : j.at("gate").at("posture_centre")) info.posture_centre.push_back(detail::json_doubles(row));
         }
         if (info.gate_prior.empty()) info.gate_prior.assign(info.tempo.size(), 0.0);
         if (j.contains("lag"))
@@ -1001,6 +1017,19 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
                            " channels, expected joints*3 = " + std::to_string(ch));
             for (double v : info.prior_posture[d])
                 if (!(std::abs(v) <= 360)) throw fail("gate prior_posture of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
+        }
+    }
+    if (!info.posture_centre.empty()) {
+        const std::size_t ch = info.range.joints * 3;
+        if (info.posture_centre.size() != info.domains.size())
+            throw fail("gate posture_centre has " + std::to_string(info.posture_centre.size()) + " rows for " + std::to_string(info.domains.size()) +
+                       " domains");
+        for (std::size_t d = 0; d < info.domains.size(); ++d) {
+            if (info.posture_centre[d].size() != ch)
+                throw fail("gate posture_centre of domain '" + info.domains[d] + "' has " + std::to_string(info.posture_centre[d].size()) +
+                           " channels, expected joints*3 = " + std::to_string(ch));
+            for (double v : info.posture_centre[d])
+                if (!(std::abs(v) <= 360)) throw fail("gate posture_centre of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
         }
     }
     if (!info.lag.empty()) {
@@ -1350,6 +1379,10 @@ public:
     }
 
     /// @brief The checkpoint save() writes, in memory (`source`: the file it is named as in error messages).
+    /// @brief Sets G's average posture per target that the next checkpoint() stores (train_model() computes it from
+    /// the G of the last step; a resumed run starts without one, as its G moves on).
+    void set_posture_centre(std::vector<std::vector<double>> centre) { data_.posture_centre = std::move(centre); }
+
     safetensors_file checkpoint(const std::string& source)
     {
         safetensors_file f;
@@ -1389,6 +1422,7 @@ public:
                             {"options", opt_.to_json()}};
         if (data_.detail) j["detail"] = data_.detail->to_json();
         if (!data_.lag.lag.empty()) j["lag"] = data_.lag.lag;
+        if (!data_.posture_centre.empty()) j["gate"]["posture_centre"] = data_.posture_centre;
         // written only about the ends: a checkpoint without the field scales about the mean, as all did before it
         if (data_.amplitude_anchor != amplitude_anchor::mean) j["amplitude_anchor"] = anchor_name(data_.amplitude_anchor);
         if (!data_.tempo_table.empty()) j["tempo_neighbours"] = detail::tempo_neighbours_json(data_.tempo_table);

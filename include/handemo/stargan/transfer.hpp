@@ -262,6 +262,31 @@ public:
         info_.prior_posture = std::move(prior);
     }
 
+    /// @brief Sets G's average posture per target (train_options::gate_centre): [domains][joints*3] degrees
+    /// subtracted from G's change at every keyframe (so from its posture part, its mean over the keyframes, and not
+    /// from the rest) before the gate weighs it; posture_centre_of() computes it. An empty table removes it (G's
+    /// change as G gives it).
+    /// @throws value_error for a wrong size, a value that is not finite, or a model that is not residual.
+    void set_posture_centre(std::vector<std::vector<double>> centre)
+    {
+        if (!centre.empty()) {
+            if (!residual()) throw value_error("transfer: a posture centre needs a residual model (" + info_.config + " is not)");
+            if (centre.size() != info_.domains.size())
+                throw value_error("transfer: a posture centre needs one row per domain (" + std::to_string(info_.domains.size()) + ")");
+            for (const auto& row : centre) {
+                if (row.size() != joints() * 3)
+                    throw value_error("transfer: a posture centre row has " + std::to_string(row.size()) + " channels, expected " +
+                                      std::to_string(joints() * 3));
+                for (double v : row)
+                    if (!std::isfinite(v)) throw value_error("transfer: a posture centre value is not finite");
+            }
+        }
+        info_.posture_centre = std::move(centre);
+    }
+
+    /// @brief G's average posture per target subtracted from its change (set_posture_centre()); empty: none.
+    const std::vector<std::vector<double>>& posture_centre() const noexcept { return info_.posture_centre; }
+
     /// @brief G on a network image [3, K, J] in [-1, 1] (float output, not quantised).
     /// @throws value_error when G produces a non-finite value.
     network_image<dynamic_keyframes> generate(const network_image<dynamic_keyframes>& net, std::size_t target) const
@@ -406,6 +431,14 @@ private:
             for (std::size_t ch = 0; ch < C; ++ch) {
                 for (std::size_t k = 0; k < keyframes(); ++k) r.change_mean[ch] += r.change[k * C + ch];
                 r.change_mean[ch] /= static_cast<double>(keyframes());
+            }
+            if (!info_.posture_centre.empty()) {
+                // G's posture about its own average for this target: the posture part loses it, the motion part is unchanged
+                const auto& centre = info_.posture_centre[r.target];
+                for (std::size_t ch = 0; ch < C; ++ch) {
+                    r.change_mean[ch] -= centre[ch];
+                    for (std::size_t k = 0; k < keyframes(); ++k) r.change[k * C + ch] -= centre[ch];
+                }
             }
             if (!info_.prior_posture.empty()) r.prior.assign(info_.prior_posture[r.target].begin(), info_.prior_posture[r.target].end());
         } else {
@@ -713,6 +746,12 @@ template <class = void>
 std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info,
                                                  kernels::weight_storage storage = kernels::weight_storage::native)
 {
+    // train_model() stores G's average posture after G's last step: a checkpoint from before it would be weighed by a
+    // gate chosen for the centred change with G's change as it is
+    if (info.options.is_object() && info.options.value("gate_centre", false) && info.options.value("gate_folds", 0) > 0 &&
+        info.posture_centre.empty())
+        throw value_error("transfer: checkpoint " + info.source + " was trained with --gate-centre but holds no gate.posture_centre: its training "
+                          "did not finish (resume it with train --resume)");
     return with_config(info.config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
         return std::make_unique<detail::emotion_model_impl<Config>>(f, info, storage);
     });
