@@ -693,3 +693,98 @@ TEST_CASE("refit_gate: a new gate around a trained G, inner models reused, G unt
     o3.lambda_id = 3;
     CHECK_THROWS_WITH_AS(refit_gate<hand_tiny>(clips, tiny_info(), o3, d), doctest::Contains("not trained with these options"), value_error);
 }
+
+TEST_CASE("G's posture about its own average (gate_centre): computed after G's last step, applied, refitted, refused when missing")
+{
+    const auto clips = toy_set();
+    const fs::path d = fresh_dir("handemo_gate_centre");
+    auto o = gate_options(30);
+    o.gate_centre = true;
+    CHECK(o.to_json().at("gate_centre") == true);
+    CHECK_FALSE(gate_options(30).to_json().contains("gate_centre"));  // written only when on: older options stay equal
+    CHECK(stargan::detail::options_without_gate(o.to_json()) == stargan::detail::options_without_gate(gate_options(30).to_json()));
+    train_model<hand_tiny>(clips, tiny_info(), o, d);
+    auto [f, info] = read_checkpoint(d / "checkpoint.safetensors");
+    REQUIRE(info.posture_centre.size() == 5);
+
+    // the stored centre is the mean over the neutral clips of G's change averaged over the keyframes, per target
+    auto raw_info = info;
+    raw_info.posture_centre.clear();
+    // (load_model() refuses a checkpoint trained with the option and no centre, below: the library's own code builds it so)
+    const auto raw = std::make_unique<stargan::detail::emotion_model_impl<hand_tiny>>(f, raw_info);
+    const std::size_t C = raw->joints() * 3;
+    std::vector<std::vector<double>> expect(5, std::vector<double>(C, 0.0));
+    double neutrals = 0;
+    for (const auto& c : clips) {
+        if (c.emotion != "neutral") continue;
+        neutrals += 1;
+        for (std::size_t t = 0; t < 5; ++t)
+            if (t != 2) {
+                const auto p = raw->parts(c.motion, tiny_info().domain_names[t]);
+                for (std::size_t ch = 0; ch < C; ++ch) expect[t][ch] += p.change_mean[ch];
+            }
+    }
+    double largest = 0;
+    for (std::size_t t = 0; t < 5; ++t)
+        for (std::size_t ch = 0; ch < C; ++ch) {
+            CHECK(info.posture_centre[t][ch] == doctest::Approx(expect[t][ch] / neutrals).epsilon(1e-12));
+            largest = std::max(largest, std::abs(info.posture_centre[t][ch]));
+        }
+    CHECK(largest > 1e-3);  // G's change is not zero after 30 steps, so the test can tell the centre from nothing
+    CHECK(std::all_of(info.posture_centre[2].begin(), info.posture_centre[2].end(), [](double v) { return v == 0.0; }));  // neutral
+    CHECK(posture_centre_of(*raw, clips, tiny_info()) == info.posture_centre);
+
+    // applied: the posture part loses the target's centre, the motion part is G's; the statistics setting is unchanged
+    const auto model = load_model(f, info);
+    const auto neutral = std::find_if(clips.begin(), clips.end(), [](const labelled_clip& c) { return c.emotion == "neutral"; });
+    REQUIRE(neutral != clips.end());
+    const clip& in = neutral->motion;
+    const auto pr = raw->parts(in, "angry"), pc = model->parts(in, "angry");
+    for (std::size_t ch = 0; ch < C; ++ch) {
+        CHECK(pc.change_mean[ch] == doctest::Approx(pr.change_mean[ch] - info.posture_centre[0][ch]).epsilon(1e-12));
+        for (std::size_t k = 0; k < 9; ++k)
+            CHECK(pc.change[k * C + ch] - pc.change_mean[ch] == doctest::Approx(pr.change[k * C + ch] - pr.change_mean[ch]).epsilon(1e-9));
+    }
+    CHECK(model->finish(in, pc, 0, 0, 1).angles == raw->finish(in, pr, 0, 0, 1).angles);
+    CHECK(max_abs_diff(model->finish(in, pc, 1, 1, 1), raw->finish(in, pr, 1, 1, 1)) > 1e-3);
+    CHECK(model->transfer(in, "angry").motion.angles ==
+          model->finish(in, pc, info.gate_posture[0], info.gate_motion[0], info.gate_prior[0]).angles);
+    CHECK_THROWS_WITH_AS(posture_centre_of(*model, clips, tiny_info()), doctest::Contains("already holds a posture centre"), value_error);
+
+    // set_posture_centre() refuses a wrong shape or a value that is not finite, and leaves the model as it was
+    auto m2 = load_model(f, info);
+    CHECK_THROWS_WITH_AS(m2->set_posture_centre(std::vector<std::vector<double>>(4, std::vector<double>(C, 0.0))),
+                         doctest::Contains("one row per domain"), value_error);
+    auto nan_centre = info.posture_centre;
+    nan_centre[1][3] = std::nan("");
+    CHECK_THROWS_WITH_AS(m2->set_posture_centre(nan_centre), doctest::Contains("not finite"), value_error);
+    CHECK(m2->posture_centre() == info.posture_centre);
+
+    // refit_gate(): without the option the centre goes, with it the same centre comes back (the same G)
+    auto off = o;
+    off.gate_centre = false;
+    refit_gate<hand_tiny>(clips, tiny_info(), off, d);
+    CHECK(read_checkpoint(d / "checkpoint.safetensors").second.posture_centre.empty());
+    refit_gate<hand_tiny>(clips, tiny_info(), o, d);
+    CHECK(read_checkpoint(d / "checkpoint.safetensors").second.posture_centre == info.posture_centre);
+
+    // a checkpoint trained with the option but saved before G's last step holds no centre: refused by load_model()
+    edit_metadata(d / "checkpoint.safetensors", [](nlohmann::json& j) { j["gate"].erase("posture_centre"); });
+    const std::string path = (d / "checkpoint.safetensors").string();
+    CHECK_THROWS_WITH_AS(load_model(d), doctest::Contains("holds no gate.posture_centre"), value_error);
+    CHECK_THROWS_WITH_AS(load_model(d), doctest::Contains(path.c_str()), value_error);
+    // a misshapen centre is refused on read, naming the field
+    edit_metadata(d / "checkpoint.safetensors", [&](nlohmann::json& j) {
+        auto rows = info.posture_centre;
+        rows.pop_back();
+        j["gate"]["posture_centre"] = rows;
+    });
+    CHECK_THROWS_WITH_AS(read_checkpoint(d / "checkpoint.safetensors"), doctest::Contains("gate posture_centre has 4 rows"), format_error);
+    edit_metadata(d / "checkpoint.safetensors", [&](nlohmann::json& j) {
+        auto rows = info.posture_centre;
+        rows[3][0] = 400;
+        j["gate"]["posture_centre"] = rows;
+    });
+    CHECK_THROWS_WITH_AS(read_checkpoint(d / "checkpoint.safetensors"), doctest::Contains("posture_centre of domain 'sad' has a value outside"),
+                         format_error);
+}

@@ -30,7 +30,9 @@
 // score on those pairs is not optimistic; the rule's checked score is the one above (the margin chosen by
 // gate_auto_margin is chosen on the same check, so the rule's side is, if anything, favoured).
 // (1, 1, 0) is G's whole change, as StarGAN; (0, 0, 0) leaves the input as it is, with the amplitude stage
-// and tempo. The final G is then trained on every training content and the gate (and the prior, from every
+// and tempo. With train_options::gate_centre, G's posture part is taken about its own average over the training
+// set's neutral takes (posture_centre_of(), each inner model's from its own training clips), so (1, 1, 1) is the
+// prior plus what G says is particular to the input, and (1, 1, 0) G's change about that average. The final G is then trained on every training content and the gate (and the prior, from every
 // training content) is stored in its checkpoint; transfer applies it (emotion_model::transfer).
 // Cost: gate_folds more trainings (each on fewer clips); train_model() runs them first, then the final one.
 #pragma once

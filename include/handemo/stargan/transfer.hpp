@@ -33,7 +33,9 @@ namespace handemo::stargan {
 /// without running G again.
 struct transfer_parts {
     handemo::keyframes<dynamic_keyframes> base;  ///< the input's keyframes in the model's (amplitude-normalised) space; decoded G output when not residual
-    std::vector<double> change;         ///< [K*C] G's change in degrees (residual models; empty otherwise)
+    /// [K*C] G's change in degrees (residual models; empty otherwise), less the target's row of the model's
+    /// posture centre at every keyframe when it has one (emotion_model::set_posture_centre())
+    std::vector<double> change;
     std::vector<double> change_mean;    ///< [C] its mean over the keyframes per channel (the posture part)
     std::vector<double> prior;          ///< [C] the target's posture prior in degrees (empty when the model has none)
     /// [J] the joint lag applied before the amplitude stage, target's minus source's, in keyframe intervals (empty
