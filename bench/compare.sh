@@ -171,11 +171,13 @@ if [ "$quick" = 1 ]; then
   export HANDEMO_BENCH_QUICK=1
   ref_quick=--quick conv_min=0.01 layer_min=0.01 ort_min=0
 fi
-# the G ONNX Runtime runs: the reference's paper and embedded G, exported once for every round
+# the G ONNX Runtime runs: the reference's paper and embedded G, exported once for every round, and the same G with its
+# convolution weights rounded to binary16 (--half-weights: the model handemo's binary16 rows run, in float for ONNX Runtime)
 if [ "$have_ort" = 1 ]; then
   echo "== ONNX Runtime: $ort_version; exporting G (reference_stargan.py --onnx, opset 13)"
   for cfg in paper embedded; do
     "$py" "$ref" --onnx "hand-$cfg" "$out/$cfg.onnx" || { echo "(export of hand-$cfg failed: ONNX Runtime columns n/a)"; have_ort=0; }
+    "$py" "$ref" --onnx "hand-$cfg" "$out/${cfg}_f16.onnx" --half-weights || echo "(export of hand-$cfg with binary16 weights failed)"
   done
 else
   echo "(ONNX Runtime $ort_version: ONNX Runtime columns n/a)"
@@ -209,6 +211,10 @@ for r in $(seq 1 "$rounds"); do
     echo "-- ONNX Runtime (onnxruntime-node, 1 thread)"
     node "$ort_runner" time "$out/paper.onnx" "paper(64,6)" 1,32 "$ort_min" | tee -a "$out/ort_$r.txt"
     node "$ort_runner" time "$out/embedded.onnx" "embedded(32,3)" 1,32 "$ort_min" | tee -a "$out/ort_$r.txt"
+    for cfg in paper embedded; do
+      [ -f "$out/${cfg}_f16.onnx" ] || continue
+      node "$ort_runner" time "$out/${cfg}_f16.onnx" "${cfg}_f16($([ $cfg = paper ] && echo 64,6 || echo 32,3))" 1,32 "$ort_min" | tee -a "$out/ort_$r.txt"
+    done
   fi
 done
 "$build/bench/bench_conv" --benchmark_filter='^(cd|packed/)' --benchmark_min_time=$layer_min \

@@ -75,7 +75,8 @@ void bm_infer(benchmark::State& st)
 
 /// G inference of a batch of B clips through one packed batch-1 generator (frozen_generator::infer_batch: each
 /// layer over the whole batch), one thread: the batched path of a folder transfer; clips/s as items per second.
-template <class Config, std::size_t B>
+/// storage: as bm_infer's.
+template <class Config, std::size_t B, kernels::weight_storage storage = kernels::weight_storage::native>
 void bm_infer_batch(benchmark::State& st)
 {
     static_assert(Config::batch == 1, "bm_infer_batch: a batch-1 configuration (the generator a transfer loads)");
@@ -83,7 +84,8 @@ void bm_infer_batch(benchmark::State& st)
     generator<float, cfg> g;
     rng gen(1);
     init_pytorch_default(g, gen);
-    const auto f = g.freeze();
+    const auto f = g.freeze(storage);
+    st.counters["weight_MB"] = double(f.weight_bytes()) / 1e6;
     typename frozen_generator<float, cfg>::workspace ws(f, B);
     constexpr std::size_t H = dims<cfg>::H, W = dims<cfg>::W, C = Config::domains;
     std::vector<float> x(B * 3 * H * W), lab(B * C, 0.f), out(x.size());
@@ -235,6 +237,8 @@ BENCHMARK_CAPTURE(bm_transfer, batch32, 32)->Name("stargan_transfer/embedded(32,
 BENCHMARK(bm_infer<hand_micro, true>)->Name("stargan_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_infer<hand_paper, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_infer<hand_embedded, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer_batch<hand_paper, 32, kernels::weight_storage::f16>)->Name("stargan_infer_f16/paper(64,6)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
+BENCHMARK(bm_infer_batch<hand_embedded, 32, kernels::weight_storage::f16>)->Name("stargan_infer_f16/embedded(32,3)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
 BENCHMARK(bm_infer<hand_paper, false>)->Name("stargan_infer_unpacked/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_infer<hand_embedded, false>)->Name("stargan_infer_unpacked/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));

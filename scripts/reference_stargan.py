@@ -30,6 +30,9 @@ Usage:
       SOURCE is a configuration name (its G with PyTorch's default initialisation after torch.manual_seed(0),
       the G the benchmark times) or a checkpoint / generator.safetensors written by handemo (load_generator).
       Prints `onnx <OUT.onnx>: <config>, H x W, C domains, P parameters`.
+  /usr/bin/python3 scripts/reference_stargan.py --onnx SOURCE OUT.onnx --half-weights
+      The same with every convolution weight rounded to IEEE binary16 first (Tensor.half(), stored back as float):
+      the model handemo runs with binary16 weights (weight_storage::f16), for ONNX Runtime in float.
 
 Needs Debian's python3-torch (./setup.sh --golden). Checkpoints are read with the plain-Python safetensors
 reader of scripts/make_golden.py (st_read); the module functions load_generator() and build() are what the
@@ -216,6 +219,19 @@ def generator_of(source):
     return g, info.get("config", "hand-embedded")
 
 
+def round_conv_weights_to_half(g):
+    """Rounds every convolution weight of G (4-d `.weight` parameters, the transposed convolutions' included) to IEEE
+    binary16 and back in place (Tensor.half(): to nearest, ties to even), as handemo's weight_storage::f16 stores them;
+    the instance norms' parameters stay float. Returns the number of values rounded."""
+    n = 0
+    with torch.no_grad():
+        for name, p in g.named_parameters():
+            if name.endswith(".weight") and p.dim() == 4:
+                p.copy_(p.half().float())
+                n += p.numel()
+    return n
+
+
 def write_onnx(g, config, path):
     """G of a configuration written to `path` as ONNX opset 13 with a dynamic batch axis (inputs x, c; output y).
     Returns (H, W, C)."""
@@ -235,11 +251,13 @@ def write_onnx(g, config, path):
 
 
 def main(argv):
-    if len(argv) == 3 and argv[0] == "--onnx":
+    if argv[:1] == ["--onnx"] and (len(argv) == 3 or (len(argv) == 4 and argv[3] == "--half-weights")):
         g, config = generator_of(argv[1])
+        half = len(argv) == 4 and round_conv_weights_to_half(g)
         h, w, domains = write_onnx(g, config, argv[2])
         params = sum(p.numel() for p in g.parameters())
-        print(f"onnx {argv[2]}: {config}, {h} x {w}, {domains} domains, {params} parameters")
+        print(f"onnx {argv[2]}: {config}, {h} x {w}, {domains} domains, {params} parameters"
+              + (f", {half} convolution weights rounded to binary16" if half else ""))
         return 0
     if len(argv) == 2 and argv[0] == "--params":
         g, d, _ = build(argv[1])

@@ -8,7 +8,10 @@ torch.manual_seed(0) (the G bench/compare.sh exports) is written as a safetensor
 exported to ONNX (opset 13); a batch of 5 zero-padded motion images with random angles in [-1, 1], one per
 target, goes through ONNX Runtime (bench/onnxruntime_bench.js run, the npm package onnxruntime-node) and through
 HELPER (golden_generator_output --batch: frozen_generator::infer_batch on the whole batch, and infer() one image
-at a time). Every output value of both handemo paths must be within 1e-5 of ONNX Runtime's.
+at a time). Every output value of both handemo paths must be within 1e-5 of ONNX Runtime's. Then the same with
+binary16 weights: ONNX Runtime runs the model exported with every convolution weight rounded to binary16
+(reference_stargan.py's round_conv_weights_to_half(), Tensor.half()), handemo loads the same float weights and
+rounds them itself (HELPER ... f16: weight_storage::f16), and both paths must again be within 1e-5.
 
 --plant weight runs the check with one weight of the exported ONNX model off by 1e-3 (main.0.weight[0, 0, 3, 3],
 the first convolution's centre tap; handemo loads the weights as they were) and inverts the exit code (0: the
@@ -19,6 +22,7 @@ in $HANDEMO_ORT_DIR/node_modules, default <repository>/build-ort). Runs itself a
 (Debian's python3-torch) when the interpreter it was started with has no torch.
 """
 import array
+import copy
 import json
 import os
 import shutil
@@ -64,6 +68,10 @@ def check_config(ref, torch, config, helper, runner, node, work, plant):
             g.state_dict()["main.0.weight"][0, 0, 3, 3] += 1e-3
     model = os.path.join(work, f"{config}.onnx")
     ref.write_onnx(g, config, model)
+    g_half = copy.deepcopy(g)
+    ref.round_conv_weights_to_half(g_half)
+    model_half = os.path.join(work, f"{config}_f16.onnx")
+    ref.write_onnx(g_half, config, model_half)
 
     torch.manual_seed(1)
     x = torch.zeros(BATCH, 3, h, w)
@@ -72,33 +80,43 @@ def check_config(ref, torch, config, helper, runner, node, work, plant):
     for n in range(BATCH):
         c[n, n % domains] = 1
     xs, cs = x.flatten().tolist(), c.flatten().tolist()
-    paths = {k: os.path.join(work, f"{config}_{k}") for k in ("x.f32", "c.f32", "batch.f32", "one.f32", "in.json", "out.json")}
+    errors, lines = [], []
+    for kind, onnx_model, extra in (("float", model, []), ("binary16", model_half, ["f16"])):
+        e, line = compare_paths(config, kind, onnx_model, extra, weights, xs, cs, h, w, helper, runner, node, work)
+        errors += e
+        lines.append(line)
+    return errors, "\n".join(l for l in lines if l)
+
+
+def compare_paths(config, kind, model, extra, weights, xs, cs, h, w, helper, runner, node, work):
+    """Errors of handemo's two paths against ONNX Runtime on `model` (empty: agreement), and a summary line."""
+    paths = {k: os.path.join(work, f"{config}_{kind}_{k}") for k in ("x.f32", "c.f32", "batch.f32", "one.f32", "in.json", "out.json")}
     write_f32(paths["x.f32"], xs)
     write_f32(paths["c.f32"], cs)
     run = subprocess.run([helper, "--batch", config, weights, paths["x.f32"], paths["c.f32"], str(BATCH), paths["batch.f32"],
-                          paths["one.f32"]], capture_output=True, text=True)
+                          paths["one.f32"]] + extra, capture_output=True, text=True)
     if run.returncode != 0:
-        return [f"{config}: {helper} exited {run.returncode}: {run.stderr.strip()}"], ""
+        return [f"{config} ({kind} weights): {helper} exited {run.returncode}: {run.stderr.strip()}"], ""
     with open(paths["in.json"], "w") as f:
         json.dump({"batch": BATCH, "x": xs, "c": cs}, f)
     run = subprocess.run([node, runner, "run", model, paths["in.json"], paths["out.json"]], capture_output=True, text=True)
     if run.returncode != 0:
-        return [f"{config}: onnxruntime_bench.js run exited {run.returncode}: {(run.stdout + run.stderr).strip()}"], ""
+        return [f"{config} ({kind} weights): onnxruntime_bench.js run exited {run.returncode}: {(run.stdout + run.stderr).strip()}"], ""
     with open(paths["out.json"]) as f:
         ort = json.load(f)["y"]
     errors, worst = [], {}
     for path in ("batch", "one"):
         mine = read_f32(paths[f"{path}.f32"])
         if len(mine) != len(ort):
-            errors.append(f"{config} {path}: {len(mine)} values, ONNX Runtime {len(ort)}")
+            errors.append(f"{config} ({kind} weights) {path}: {len(mine)} values, ONNX Runtime {len(ort)}")
             continue
         diffs = [abs(a - b) for a, b in zip(mine, ort)]
         i = max(range(len(diffs)), key=diffs.__getitem__)
         worst[path] = diffs[i]
         if not diffs[i] <= TOL:
-            errors.append(f"{config} through {'infer_batch' if path == 'batch' else 'infer'}: max |handemo - ONNX Runtime| "
+            errors.append(f"{config} ({kind} weights) through {'infer_batch' if path == 'batch' else 'infer'}: max |handemo - ONNX Runtime| "
                           f"{diffs[i]:.3g} > {TOL:g} (image {i // (3 * h * w)}, element {i % (3 * h * w)}: {mine[i]:.7g} against {ort[i]:.7g})")
-    line = (f"{config}, batch {BATCH}: max |handemo - ONNX Runtime| {worst.get('batch', float('nan')):.3g} (infer_batch), "
+    line = (f"{config}, {kind} weights, batch {BATCH}: max |handemo - ONNX Runtime| {worst.get('batch', float('nan')):.3g} (infer_batch), "
             f"{worst.get('one', float('nan')):.3g} (infer, one image at a time); tolerance {TOL:g}")
     return errors, line
 
