@@ -379,6 +379,18 @@ TEST_CASE("change gate rule: settings, the choice, the cross-check and the margi
         CHECK(set->motion(set->none()) == 0.0);
         CHECK(set->prior_weight(set->none()) == 0.0);
     }
+    // the prior kept whole (gate_prior_full): G's 25 (posture, motion) settings, each with the prior at weight 1;
+    // full() is (1, 1, 1), none() the statistics setting (0, 0, 1)
+    const gate_settings whole{true, true};
+    CHECK(whole.size() == 25);
+    for (std::size_t s = 0; s < whole.size(); ++s) CHECK(whole.prior_weight(s) == 1.0);
+    const std::size_t w = whole.index(1, 3, 0);
+    CHECK(whole.posture(w) == gate_grid[1]);
+    CHECK(whole.motion(w) == gate_grid[3]);
+    CHECK((whole.posture(whole.full()) == 1.0 && whole.motion(whole.full()) == 1.0));
+    CHECK(whole.statistics() == whole.none());
+    CHECK((whole.posture(whole.statistics()) == 0.0 && whole.motion(whole.statistics()) == 0.0 && whole.prior_weight(whole.statistics()) == 1.0));
+    CHECK(gate_settings{false, true}.prior_weight(3) == 0.0);  // no prior offered: no effect
 
     // with recognition, margin 0.1 (real clips recognised 2 of 2): setting 3 is the lowest RMSE among those
     // scored at least 0.9; setting 7 has a lower RMSE but is recognised too rarely
@@ -759,6 +771,14 @@ TEST_CASE("G's posture about its own average (gate_centre): computed after G's l
     nan_centre[1][3] = std::nan("");
     CHECK_THROWS_WITH_AS(m2->set_posture_centre(nan_centre), doctest::Contains("not finite"), value_error);
     CHECK(m2->posture_centre() == info.posture_centre);
+
+    // the prior kept whole (gate_prior_full): the refitted gate weighs the prior 1 for every emotion target
+    auto whole = o;
+    whole.gate_prior_full = true;
+    CHECK(whole.to_json().at("gate_prior_full") == true);
+    const auto gw = refit_gate<hand_tiny>(clips, tiny_info(), whole, d);
+    for (const auto& r : gw.rows) CHECK(r.prior == 1.0);
+    CHECK(read_checkpoint(d / "checkpoint.safetensors").second.posture_centre == info.posture_centre);
 
     // refit_gate(): without the option the centre goes, with it the same centre comes back (the same G)
     auto off = o;

@@ -19,7 +19,7 @@ struct train_overrides {
     std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
         lambda_delta, ema, augment;
     std::optional<int> n_critic, gate_folds;
-    std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, gate_centre, tempo_shrink, tempo_neighbours, lag;
+    std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, gate_centre, gate_prior_full, tempo_shrink, tempo_neighbours, lag;
     std::optional<double> gate_margin, gate_guard, gate_iters_scale;
     std::optional<std::string> range, tempo_basis, amplitude_anchor;
 };
@@ -99,6 +99,9 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "Change gate: weigh G's posture about its own average (G's mean change over the training set's neutral "
                     "takes per target, stored in the checkpoint), so that with the posture prior G adds only what is particular "
                     "to the input (handemo false)");
+    sub->add_option("--gate-prior-full", o.gate_prior_full,
+                    "Change gate: keep the posture prior at full weight and choose only G's posture and motion weights "
+                    "(25 settings instead of 125; the statistics setting stays among them) (handemo false)");
     sub->add_option("--gate-iters-scale", o.gate_iters_scale,
                     "Change gate: train its inner models for this share of --iters (in (0, 1]); they train on about half "
                     "of the training contents, so 0.5 gives them as many passes over their clips as the final G (handemo 1)");
@@ -153,6 +156,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.gate_guard = o.gate_guard.value_or(p.gate_guard);
     t.gate_iters_scale = o.gate_iters_scale.value_or(p.gate_iters_scale);
     t.gate_centre = o.gate_centre.value_or(p.gate_centre);
+    t.gate_prior_full = o.gate_prior_full.value_or(p.gate_prior_full);
     t.tempo_shrink = o.tempo_shrink.value_or(p.tempo_shrink);
     t.tempo_basis = o.tempo_basis.value_or(p.tempo_basis);
     t.tempo_neighbours = o.tempo_neighbours.value_or(p.tempo_neighbours);

@@ -210,7 +210,7 @@ namespace detail {
 inline nlohmann::json options_without_gate(nlohmann::json o)
 {
     if (o.is_object())
-        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "gate_centre", "gate_iters_scale", "tempo_shrink", "tempo_basis", "tempo_neighbours", "lag"}) o.erase(k);
+        for (const char* k : {"gate_folds", "gate_prior", "gate_margin", "gate_posterior", "gate_auto_margin", "gate_guard", "gate_centre", "gate_prior_full", "gate_iters_scale", "tempo_shrink", "tempo_basis", "tempo_neighbours", "lag"}) o.erase(k);
     return o;
 }
 
@@ -244,12 +244,15 @@ inline std::string g_difference(const checkpoint_info& ck, const train_options& 
 struct gate_settings {
     static constexpr std::size_t G = gate_grid.size();
     bool prior = false;
-    std::size_t P() const noexcept { return prior ? G : 1; }
+    /// the prior at full weight in every setting (train_options::gate_prior_full): G's weights alone are chosen;
+    /// full() is then (1, 1, 1) and none() (0, 0, 1), the statistics setting
+    bool prior_full = false;
+    std::size_t P() const noexcept { return prior && !prior_full ? G : 1; }
     std::size_t size() const noexcept { return G * G * P(); }
     std::size_t index(std::size_t a, std::size_t b, std::size_t c) const noexcept { return (a * G + b) * P() + c; }
     double posture(std::size_t s) const noexcept { return gate_grid[s / (G * P())]; }
     double motion(std::size_t s) const noexcept { return gate_grid[(s / P()) % G]; }
-    double prior_weight(std::size_t s) const noexcept { return prior ? gate_grid[s % P()] : 0.0; }
+    double prior_weight(std::size_t s) const noexcept { return prior ? (prior_full ? 1.0 : gate_grid[s % P()]) : 0.0; }
     /// G's whole change without the prior, (1, 1, 0), and no change, (0, 0, 0): gate_grid runs from 1 down to 0
     std::size_t full() const noexcept { return index(0, 0, P() - 1); }
     std::size_t none() const noexcept { return index(G - 1, G - 1, P() - 1); }
@@ -623,9 +626,9 @@ gate_fit fit_change_gate(const std::vector<labelled_clip>& clips, const config_i
         if (opt.progress_out)
             std::fprintf(opt.progress_out, "gate: %zu contents, fewer than the %zu groups the gate needs: G's whole change is used\n",
                          groups.contents.size(), F);
-        return gate_from_tallies({}, info, gate_settings{opt.gate_prior}, opt.gate_margin, false);
+        return gate_from_tallies({}, info, gate_settings{opt.gate_prior, opt.gate_prior_full}, opt.gate_margin, false);
     }
-    const gate_settings set{opt.gate_prior};
+    const gate_settings set{opt.gate_prior, opt.gate_prior_full};
     const bool use_emotion = opt.gate_margin > -1;  // margins in (-1, 0) ask for more than the real rate
     std::vector<std::vector<gate_tally>> tallies(F, std::vector<gate_tally>(info.domains, gate_tally::zeros(set.size())));
     const bool writer = writes_files(opt);

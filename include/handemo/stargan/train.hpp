@@ -125,6 +125,10 @@ struct train_options {
     /// of the emotion's average posture added; (0, 0, 1), the statistics setting, is unchanged. G is the same with or
     /// without it, so a stored model takes it by refit_gate(). No effect without the gate (gate_folds 0)
     bool gate_centre = false;
+    /// change gate: keep the posture prior at full weight, choosing only G's (posture, motion) weights (25 settings
+    /// instead of 125; gate_settings::prior_full): the statistics setting (0, 0, 1) stays among them. No effect
+    /// without gate_prior
+    bool gate_prior_full = false;
     /// change gate: the setting chosen per target is the lowest-RMSE one among those whose held-out outputs
     /// the independent emotion classifier (trained on the inner training clips) recognises at a rate no more
     /// than gate_margin below the real held-out clips' rate (a negative margin asks for more than it); when
@@ -206,6 +210,7 @@ struct train_options {
         if (gate_auto_margin) j["gate_auto_margin"] = true;  // written only when on: older checkpoints' options stay equal
         if (gate_guard >= 0) j["gate_guard"] = gate_guard;
         if (gate_centre) j["gate_centre"] = true;  // written only when on: older checkpoints' options stay equal
+        if (gate_prior_full) j["gate_prior_full"] = true;
         if (gate_iters_scale != 1.0) j["gate_iters_scale"] = gate_iters_scale;  // written only when not 1
         if (tempo_shrink) j["tempo_shrink"] = true;
         if (tempo_basis != "duration") j["tempo_basis"] = tempo_basis;  // written only when not the duration
