@@ -239,7 +239,8 @@ TEST_CASE("end to end: hand-tiny, two folds, report written")
     for (std::size_t i = 0; i < r.samples.size(); ++i) {
         const double d = std::abs(half.samples[i].rmse_real - r.samples[i].rmse_real);
         if (r.samples[i].method == "identity" || r.samples[i].method == "mean-offset") CHECK(d == 0);
-        if (r.samples[i].method == "stargan") moved = std::max(moved, d);
+        // G's own rows (the gate may give some targets the statistics setting, which no weight reaches)
+        if (r.samples[i].method == "stargan" || r.samples[i].method == "stargan-ungated") moved = std::max(moved, d);
     }
     CHECK(moved > 0);
     CHECK(moved < 0.05);  // degrees, on clips whose transfers are a few degrees from the real ones

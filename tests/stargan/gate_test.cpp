@@ -38,6 +38,8 @@ train_options first_gate_options(long iters)
     auto o = gate_options(iters);
     o.gate_prior = false;
     o.gate_margin = -1;
+    o.gate_centre = false;  // G's posture as G gives it
+    o.gate_prior_full = false;
     return o;
 }
 
@@ -68,6 +70,7 @@ TEST_CASE("change gate: (1, 1) is G's whole change, (0, 0) no change, and postur
     const auto clips = toy_set();
     const fs::path d = fresh_dir("handemo_gate_apply");
     auto o = gate_options(40);
+    o.gate_centre = false;  // a trainer on its own fits no gate and computes no centre (train_model() does both)
     trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(clips, tiny_info(), o), o);
     tr.run(d);
     auto model = load_model(d);
@@ -157,6 +160,9 @@ TEST_CASE("change gate: fitted on held-out training contents, stored in the chec
                 return std::string(inner_dir) == "inner1" ? c.content != "patting" : c.content == "patting";
             });
             inner->set_prior_posture(posture_prior<9>(inner_train, tiny_info(), inner->info().amplitude, inner->info().amplitude_anchor));
+            // and G's average posture over the inner training set's neutral takes (the preset's gate_centre)
+            REQUIRE(o.gate_centre);
+            inner->set_posture_centre(posture_centre_of(*inner, inner_train, tiny_info()));
             inner->set_gate(std::vector<double>(5, row.posture), std::vector<double>(5, row.motion), std::vector<double>(5, row.prior));
             const labelled_clip *in = nullptr, *real = nullptr;
             for (const auto& c : clips) {
@@ -706,15 +712,18 @@ TEST_CASE("refit_gate: a new gate around a trained G, inner models reused, G unt
     CHECK_THROWS_WITH_AS(refit_gate<hand_tiny>(clips, tiny_info(), o3, d), doctest::Contains("not trained with these options"), value_error);
 }
 
-TEST_CASE("G's posture about its own average (gate_centre): computed after G's last step, applied, refitted, refused when missing")
+TEST_CASE("G's posture about its own average (gate_centre): computed with every save, applied, refitted, refused when missing")
 {
     const auto clips = toy_set();
     const fs::path d = fresh_dir("handemo_gate_centre");
     auto o = gate_options(30);
     o.gate_centre = true;
     CHECK(o.to_json().at("gate_centre") == true);
-    CHECK_FALSE(gate_options(30).to_json().contains("gate_centre"));  // written only when on: older options stay equal
-    CHECK(stargan::detail::options_without_gate(o.to_json()) == stargan::detail::options_without_gate(gate_options(30).to_json()));
+    CHECK((handemo_options().gate_centre && handemo_options().gate_prior_full));  // the preset's, since their rule
+    auto plain = o;
+    plain.gate_centre = false;
+    CHECK_FALSE(plain.to_json().contains("gate_centre"));  // written only when on: older options stay equal
+    CHECK(stargan::detail::options_without_gate(o.to_json()) == stargan::detail::options_without_gate(plain.to_json()));
     train_model<hand_tiny>(clips, tiny_info(), o, d);
     auto [f, info] = read_checkpoint(d / "checkpoint.safetensors");
     REQUIRE(info.posture_centre.size() == 5);
@@ -788,7 +797,7 @@ TEST_CASE("G's posture about its own average (gate_centre): computed after G's l
     refit_gate<hand_tiny>(clips, tiny_info(), o, d);
     CHECK(read_checkpoint(d / "checkpoint.safetensors").second.posture_centre == info.posture_centre);
 
-    // a checkpoint trained with the option but saved before G's last step holds no centre: refused by load_model()
+    // a checkpoint trained with the option that holds no centre (a trainer run on its own) is refused by load_model()
     edit_metadata(d / "checkpoint.safetensors", [](nlohmann::json& j) { j["gate"].erase("posture_centre"); });
     const std::string path = (d / "checkpoint.safetensors").string();
     CHECK_THROWS_WITH_AS(load_model(d), doctest::Contains("holds no gate.posture_centre"), value_error);

@@ -269,6 +269,7 @@ TEST_CASE("residual G (handemo preset) is exactly the identity at initialisation
     o.iters = 10;
     o.threads = 1;
     o.progress_out = nullptr;
+    o.gate_centre = false;  // a trainer on its own fits no gate and computes no centre (train_model() does both)
     const auto data = prepare_data<hand_tiny>(clips, tiny_info(), o);
     CHECK(data.range.per_channel());
     trainer<hand_tiny> tr(tiny_info(), data, o);
@@ -387,6 +388,7 @@ TEST_CASE("end to end: where emotions are large offsets, transfer of an unseen c
     o.threads = 2;
     o.progress_out = nullptr;
     o.checkpoint_every = 10000;
+    o.gate_centre = false;  // a trainer on its own fits no gate and computes no centre (train_model() does both)
     const fs::path d = fresh_dir("handemo_e2e_offsets");
     trainer<hand_tiny> tr(tiny_info(), prepare_data<hand_tiny>(train, tiny_info(), o), o);
     tr.run(d);

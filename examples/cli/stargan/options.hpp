@@ -98,10 +98,10 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
     sub->add_option("--gate-centre", o.gate_centre,
                     "Change gate: weigh G's posture about its own average (G's mean change over the training set's neutral "
                     "takes per target, stored in the checkpoint), so that with the posture prior G adds only what is particular "
-                    "to the input (handemo false)");
+                    "to the input (handemo true)");
     sub->add_option("--gate-prior-full", o.gate_prior_full,
                     "Change gate: keep the posture prior at full weight and choose only G's posture and motion weights "
-                    "(25 settings instead of 125; the statistics setting stays among them) (handemo false)");
+                    "(25 settings instead of 125; the statistics setting stays among them) (handemo true)");
     sub->add_option("--gate-iters-scale", o.gate_iters_scale,
                     "Change gate: train its inner models for this share of --iters (in (0, 1]); they train on about half "
                     "of the training contents, so 0.5 gives them as many passes over their clips as the final G (handemo 1)");

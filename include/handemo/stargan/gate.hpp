@@ -760,14 +760,19 @@ std::unique_ptr<trainer<Config>> train_model(const std::vector<labelled_clip>& c
         data.prior_posture = opt.amplitude ? posture_prior<Config::keyframes>(clips, info, data.amplitude, data.amplitude_anchor)
                                            : posture_prior<Config::keyframes>(clips, info);
     auto tr = std::make_unique<trainer<Config>>(info, std::move(data), opt);
-    tr->run(out_dir, resume);
     if (opt.gate_centre && opt.gate_folds > 0) {
-        // G's average posture belongs to the weights of the last step: computed from them, then saved with them
-        const auto ck = parse_checkpoint(tr->checkpoint((out_dir / "checkpoint.safetensors").string()));
-        const detail::emotion_model_impl<Config> model(ck.first, ck.second);
-        tr->set_posture_centre(posture_centre_of(model, clips, info));
-        if (writes_files(opt)) tr->save(out_dir);
+        // G's average posture, computed from the weights of every save (the hook outlives this call: it keeps the
+        // neutral clips, all posture_centre_of() reads)
+        std::vector<labelled_clip> neutrals;
+        for (const auto& c : clips)
+            if (c.emotion == info.neutral) neutrals.push_back(c);
+        tr->set_posture_centre_hook([neutrals = std::move(neutrals), info](const safetensors_file& f) {
+            const auto ck = parse_checkpoint(f);
+            const detail::emotion_model_impl<Config> model(ck.first, ck.second);
+            return posture_centre_of(model, neutrals, info);
+        });
     }
+    tr->run(out_dir, resume);
     if (gate_out) *gate_out = std::move(g);
     return tr;
 }

@@ -38,6 +38,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -234,7 +235,8 @@ inline train_options paper_options() { return train_options{}; }
 /// adds a bounded change; an identity loss; a paired loss to the same take performed in the target emotion
 /// (the data sets are recorded in pairs: every content in every emotion); an EMA of G's weights for
 /// transfer (StarGAN v2); per-channel ranges wrapped against a reference angle; the learned amplitude
-/// factors, about the take's ends where the training set says so (amplitude_anchor "auto"); lambda_cls 5 (with 1, D's domain classifier stays at chance on the synthetic training set: the
+/// factors, about the take's ends where the training set says so (amplitude_anchor "auto"); a change gate with
+/// the posture prior kept whole and G's posture about its own average (gate_centre, gate_prior_full); lambda_cls 5 (with 1, D's domain classifier stays at chance on the synthetic training set: the
 /// gradient penalty dominates); n_critic 1 and 2000 iterations (G gets 2000 updates, not 400: with
 /// n_critic 5 G did not fit its training contents better than identity). Chosen from training-set numbers
 /// only: the seen-content diagnostic and an inner validation content inside the demo fold's training set
@@ -260,6 +262,8 @@ inline train_options handemo_options()
     o.gate_auto_margin = true;
     o.gate_posterior = true;
     o.gate_guard = 0.02;
+    o.gate_centre = true;
+    o.gate_prior_full = true;
     return o;
 }
 
@@ -1374,6 +1378,11 @@ public:
     /// names), range.json and log.csv into `out_dir`, each atomically.
     void save(const std::filesystem::path& out_dir)
     {
+        if (posture_centre_hook_) {
+            // G's average posture belongs to the weights being saved: computed from them before every save
+            data_.posture_centre.clear();
+            data_.posture_centre = posture_centre_hook_(checkpoint((out_dir / "checkpoint.safetensors").string()));
+        }
         const safetensors_file f = checkpoint((out_dir / "checkpoint.safetensors").string());
         write_safetensors(out_dir / "checkpoint.safetensors", f);
         save_parameters(out_dir / "generator.safetensors", inference_gen(),
@@ -1384,9 +1393,16 @@ public:
     }
 
     /// @brief The checkpoint save() writes, in memory (`source`: the file it is named as in error messages).
-    /// @brief Sets G's average posture per target that the next checkpoint() stores (train_model() computes it from
-    /// the G of the last step; a resumed run starts without one, as its G moves on).
+    /// @brief Sets G's average posture per target that the next checkpoint() stores (train_options::gate_centre).
     void set_posture_centre(std::vector<std::vector<double>> centre) { data_.posture_centre = std::move(centre); }
+
+    /// @brief Computes G's average posture before every save() (train_options::gate_centre): `hook` gets the
+    /// checkpoint of the weights being saved, without a centre, and returns the centre they are saved with, so that
+    /// every checkpoint a run leaves behind (a killed run's too) holds the centre of its own G. train_model() sets it.
+    void set_posture_centre_hook(std::function<std::vector<std::vector<double>>(const safetensors_file&)> hook)
+    {
+        posture_centre_hook_ = std::move(hook);
+    }
 
     safetensors_file checkpoint(const std::string& source)
     {
@@ -1662,6 +1678,7 @@ private:
     config_info info_;
     prepared_data data_;
     train_options opt_;
+    std::function<std::vector<std::vector<double>>(const safetensors_file&)> posture_centre_hook_;
     std::size_t shards_;  ///< parts of a batch (train_options::shards resolved)
     thread_pool pool_;  ///< runs the shards (or one tape's convolutions) and splits the optimiser's elements
     std::vector<std::unique_ptr<thread_pool>> shard_pools_;  ///< each shard's convolutions, with threads to spare

@@ -748,12 +748,12 @@ template <class = void>
 std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info,
                                                  kernels::weight_storage storage = kernels::weight_storage::native)
 {
-    // train_model() stores G's average posture after G's last step: a checkpoint from before it would be weighed by a
-    // gate chosen for the centred change with G's change as it is
+    // train_model() stores G's average posture with every save: a checkpoint without it would be weighed by a gate
+    // chosen for the centred change with G's change as it is
     if (info.options.is_object() && info.options.value("gate_centre", false) && info.options.value("gate_folds", 0) > 0 &&
         info.posture_centre.empty())
-        throw value_error("transfer: checkpoint " + info.source + " was trained with --gate-centre but holds no gate.posture_centre: its training "
-                          "did not finish (resume it with train --resume)");
+        throw value_error("transfer: checkpoint " + info.source + " was trained with --gate-centre but holds no gate.posture_centre (train_model() "
+                          "and handemo train store it with every save; a trainer run on its own does not: train it with gate_centre false)");
     return with_config(info.config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
         return std::make_unique<detail::emotion_model_impl<Config>>(f, info, storage);
     });
