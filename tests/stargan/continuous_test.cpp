@@ -56,6 +56,7 @@ public:
         info.gate_motion.assign(D, 1.0);
         info.gate_prior.assign(D, 1.0);
         info.prior_posture.assign(D, std::vector<double>(C, 0.0));
+        info.posture_centre.clear();  // the toy's change is its bend as it is (the shipped model's centre is its G's)
         for (std::size_t d = 0; d < D; ++d) {
             // the synthetic hand data's own styles: tempo and amplitude of the emotion, a posture of its own
             const auto st = style_of(emotion_from_string(info.domains[d]));

@@ -1016,31 +1016,22 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
         if (!(info.gate_prior[d] >= 0 && info.gate_prior[d] <= 1)) throw fail("gate prior of domain '" + info.domains[d] + "' is not in [0, 1]");
         any_prior |= info.gate_prior[d] != 0;
     }
-    if (any_prior || !info.prior_posture.empty()) {
+    // a [domains][joints*3] table of degrees in the gate's metadata: its shape and its values
+    const auto check_degrees = [&](const char* field, const std::vector<std::vector<double>>& table) {
         const std::size_t ch = info.range.joints * 3;
-        if (info.prior_posture.size() != info.domains.size())
-            throw fail("gate prior_posture has " + std::to_string(info.prior_posture.size()) + " rows for " + std::to_string(info.domains.size()) + " domains");
+        const std::string name = std::string("gate ") + field;
+        if (table.size() != info.domains.size())
+            throw fail(name + " has " + std::to_string(table.size()) + " rows for " + std::to_string(info.domains.size()) + " domains");
         for (std::size_t d = 0; d < info.domains.size(); ++d) {
-            if (info.prior_posture[d].size() != ch)
-                throw fail("gate prior_posture of domain '" + info.domains[d] + "' has " + std::to_string(info.prior_posture[d].size()) +
-                           " channels, expected joints*3 = " + std::to_string(ch));
-            for (double v : info.prior_posture[d])
-                if (!(std::abs(v) <= 360)) throw fail("gate prior_posture of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
+            if (table[d].size() != ch)
+                throw fail(name + " of domain '" + info.domains[d] + "' has " + std::to_string(table[d].size()) + " channels, expected joints*3 = " +
+                           std::to_string(ch));
+            for (double v : table[d])
+                if (!(std::abs(v) <= 360)) throw fail(name + " of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
         }
-    }
-    if (!info.posture_centre.empty()) {
-        const std::size_t ch = info.range.joints * 3;
-        if (info.posture_centre.size() != info.domains.size())
-            throw fail("gate posture_centre has " + std::to_string(info.posture_centre.size()) + " rows for " + std::to_string(info.domains.size()) +
-                       " domains");
-        for (std::size_t d = 0; d < info.domains.size(); ++d) {
-            if (info.posture_centre[d].size() != ch)
-                throw fail("gate posture_centre of domain '" + info.domains[d] + "' has " + std::to_string(info.posture_centre[d].size()) +
-                           " channels, expected joints*3 = " + std::to_string(ch));
-            for (double v : info.posture_centre[d])
-                if (!(std::abs(v) <= 360)) throw fail("gate posture_centre of domain '" + info.domains[d] + "' has a value outside [-360, 360] deg");
-        }
-    }
+    };
+    if (any_prior || !info.prior_posture.empty()) check_degrees("prior_posture", info.prior_posture);
+    if (!info.posture_centre.empty()) check_degrees("posture_centre", info.posture_centre);
     if (!info.lag.empty()) {
         if (info.lag.size() != info.domains.size())
             throw fail("lag has " + std::to_string(info.lag.size()) + " rows for " + std::to_string(info.domains.size()) + " domains");
