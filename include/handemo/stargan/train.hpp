@@ -1369,12 +1369,16 @@ public:
     /// names), range.json and log.csv into `out_dir`, each atomically.
     void save(const std::filesystem::path& out_dir)
     {
+        if (posture_centre_hook_) data_.posture_centre.clear();  // the hook reads the weights' checkpoint without a centre
+        safetensors_file f = checkpoint((out_dir / "checkpoint.safetensors").string());
         if (posture_centre_hook_) {
-            // G's average posture belongs to the weights being saved: computed from them before every save
-            data_.posture_centre.clear();
-            data_.posture_centre = posture_centre_hook_(checkpoint((out_dir / "checkpoint.safetensors").string()));
+            // G's average posture belongs to the weights being saved: computed from them, added to the same checkpoint
+            data_.posture_centre = posture_centre_hook_(f);
+            auto j = nlohmann::json::parse(f.metadata.at("handemo"));
+            j["gate"]["posture_centre"] = data_.posture_centre;
+            f.metadata["handemo"] = j.dump();
+            f.metadata["checksum"] = detail::checkpoint_checksum(f);
         }
-        const safetensors_file f = checkpoint((out_dir / "checkpoint.safetensors").string());
         write_safetensors(out_dir / "checkpoint.safetensors", f);
         save_parameters(out_dir / "generator.safetensors", inference_gen(),
                         {{"format", "pytorch-state-dict"}, {"config", info_.name}, {"step", std::to_string(step_)},
@@ -1382,10 +1386,6 @@ public:
         save_range(out_dir / "range.json", data_.range);
         write_file_atomic(out_dir / "log.csv", loss_log_csv(log_));
     }
-
-    /// @brief The checkpoint save() writes, in memory (`source`: the file it is named as in error messages).
-    /// @brief Sets G's average posture per target that the next checkpoint() stores (train_options::gate_centre).
-    void set_posture_centre(std::vector<std::vector<double>> centre) { data_.posture_centre = std::move(centre); }
 
     /// @brief Computes G's average posture before every save() (train_options::gate_centre): `hook` gets the
     /// checkpoint of the weights being saved, without a centre, and returns the centre they are saved with, so that
@@ -1395,6 +1395,7 @@ public:
         posture_centre_hook_ = std::move(hook);
     }
 
+    /// @brief The checkpoint save() writes, in memory (`source`: the file it is named as in error messages).
     safetensors_file checkpoint(const std::string& source)
     {
         safetensors_file f;

@@ -253,14 +253,7 @@ public:
     /// @throws value_error for a wrong size or a value that is not finite.
     void set_prior_posture(std::vector<std::vector<double>> prior)
     {
-        if (prior.size() != info_.domains.size())
-            throw value_error("transfer: a posture prior needs one row per domain (" + std::to_string(info_.domains.size()) + ")");
-        for (const auto& row : prior) {
-            if (row.size() != joints() * 3)
-                throw value_error("transfer: a posture prior row has " + std::to_string(row.size()) + " channels, expected " + std::to_string(joints() * 3));
-            for (double v : row)
-                if (!std::isfinite(v)) throw value_error("transfer: a posture prior value is not finite");
-        }
+        check_degree_table(prior, "posture prior");
         info_.prior_posture = std::move(prior);
     }
 
@@ -273,15 +266,7 @@ public:
     {
         if (!centre.empty()) {
             if (!residual()) throw value_error("transfer: a posture centre needs a residual model (" + info_.config + " is not)");
-            if (centre.size() != info_.domains.size())
-                throw value_error("transfer: a posture centre needs one row per domain (" + std::to_string(info_.domains.size()) + ")");
-            for (const auto& row : centre) {
-                if (row.size() != joints() * 3)
-                    throw value_error("transfer: a posture centre row has " + std::to_string(row.size()) + " channels, expected " +
-                                      std::to_string(joints() * 3));
-                for (double v : row)
-                    if (!std::isfinite(v)) throw value_error("transfer: a posture centre value is not finite");
-            }
+            check_degree_table(centre, "posture centre");
         }
         info_.posture_centre = std::move(centre);
     }
@@ -387,6 +372,20 @@ public:
     }
 
 private:
+    /// A [domains][joints*3] table of finite degrees (set_prior_posture(), set_posture_centre()), named `what` in errors.
+    void check_degree_table(const std::vector<std::vector<double>>& table, const char* what) const
+    {
+        if (table.size() != info_.domains.size())
+            throw value_error(std::string("transfer: a ") + what + " needs one row per domain (" + std::to_string(info_.domains.size()) + ")");
+        for (const auto& row : table) {
+            if (row.size() != joints() * 3)
+                throw value_error(std::string("transfer: a ") + what + " row has " + std::to_string(row.size()) + " channels, expected " +
+                                  std::to_string(joints() * 3));
+            for (double v : row)
+                if (!std::isfinite(v)) throw value_error(std::string("transfer: a ") + what + " value is not finite");
+        }
+    }
+
     /// parts_into() up to G: the input's keyframes in the model's space, its network image in s.net, the target.
     void parts_before_generator(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws,
                                 transfer_parts& r) const
