@@ -238,15 +238,19 @@ print()
 print("| config | batch | handemo | ONNX Runtime | handemo throughput / ONNX Runtime's | handemo clips/s | ONNX Runtime clips/s |")
 print("|---|---|---|---|---|---|---|")
 # the binary16 rows: both engines run the weights rounded to binary16 (reference_stargan.py --onnx --half-weights), handemo
-# storing them as binary16 (stargan_infer_f16/), ONNX Runtime as the float values they are
+# storing them as binary16 (stargan_infer_f16/), ONNX Runtime as the float values they are; the Winograd rows: handemo's
+# residual convolutions by Winograd's F(3x2, 3x3) (stargan_infer_winograd/, conv_algorithm::winograd) against the same
+# ONNX Runtime rows as the first two configs (the same float weights)
 for cfg, keys, kind, ort_cfg in (("paper", ("paper", "(64,"), "stargan_infer/", "paper"),
                                  ("embedded", ("embedded", "(32,"), "stargan_infer/", "embedded"),
                                  ("paper, binary16 weights", ("paper", "(64,"), "stargan_infer_f16/", "paper_f16"),
-                                 ("embedded, binary16 weights", ("embedded", "(32,"), "stargan_infer_f16/", "embedded_f16")):
+                                 ("embedded, binary16 weights", ("embedded", "(32,"), "stargan_infer_f16/", "embedded_f16"),
+                                 ("paper, handemo's residual convolutions by Winograd", ("paper", "(64,"), "stargan_infer_winograd/", "paper"),
+                                 ("embedded, handemo's residual convolutions by Winograd", ("embedded", "(32,"), "stargan_infer_winograd/", "embedded")):
     for batch in (1, 32):
         b = star_bench(keys, kind, f"/b{batch}")
         ot = ort.get((ort_cfg, batch), {})
-        if ort_cfg.endswith("_f16") and not b and not ot:
+        if (ort_cfg.endswith("_f16") or "winograd" in kind) and not b:
             continue
         o_med = statistics.median(ot.values()) if ot else None
         o_rng = fmt_range(list(ot.values()))
@@ -294,6 +298,28 @@ for cfg, keys in (("paper", ("paper", "(64,")), ("embedded", ("embedded", "(32,"
         print(f"| {cfg} | {label} | {fmt_flop(flop)} | {fmt_b(b)} | {f'{gfl:.1f}' if gfl else 'n/a'} | "
               f"{f'{gfl / peak:.0%}' if gfl and peak else 'n/a'}{rng} |")
 print()
+# Winograd's residual convolutions: the same G's FLOPs (direct convolution) per second, beside the FLOPs the call
+# performs (its GEMMs' multiply-adds in place of the direct ones)
+wrows = [(cfg, batch, star_bench(keys, "stargan_infer_winograd/", f"/b{batch}"))
+         for cfg, keys in (("paper", ("paper", "(64,")), ("embedded", ("embedded", "(32,"))) for batch in (1, 32)]
+if any(b for _, _, b in wrows):
+    print("G inference with the residual convolutions by Winograd's F(3x2, 3x3) (`conv_algorithm::winograd`): the G's FLOPs "
+          "per second as above (a share above 100% is more than the direct convolution can do), and the FLOPs it performs:")
+    print()
+    print("| config | batch | handemo | against the direct row | G's FLOPs per second (share of the peak) | FLOPs performed per call | performed per second (share of the peak) |")
+    print("|---|---|---|---|---|---|---|")
+    for cfg, batch, b in wrows:
+        if not b:
+            continue
+        keys = ("paper", "(64,") if cfg == "paper" else ("embedded", "(32,")
+        d = star_bench(keys, "stargan_infer/", f"/b{batch}")
+        vs = f"{seconds(d) / seconds(b):.2f}x faster" if d else "n/a"
+        flop, perf = b.get("FLOP"), b.get("performed_FLOP")
+        g1 = flop / seconds(b) / 1e9 if flop else None
+        g2 = perf / seconds(b) / 1e9 if perf else None
+        share = lambda g: f"{g:.1f} ({g / peak:.0%})" if g and peak else (f"{g:.1f}" if g else "n/a")
+        print(f"| {cfg} | {batch} | {fmt_b(b)} | {vs} | {share(g1)} | {fmt_flop(perf)} | {share(g2)} |")
+    print()
 # the iteration the product trains (handemo preset: a fourth pass of G for the identity term, EMA, augmentation)
 pre_rows = [(name, star_bench((key,), "stargan_train_preset/", "threads:1"))
             for name, key in (("hand-embedded", "preset/embedded("), ("body-embedded", "preset/body-embedded("))]

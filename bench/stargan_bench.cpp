@@ -7,7 +7,10 @@
 // 2-thread step with the memory system's contention). Every benchmark but the pair has a FLOP counter (the FLOPs of one
 // call, stargan/flops.hpp: inference 2 x the multiply-adds G performs per image (frozen_generator's without the first
 // layer's label channels, which it adds as precomputed maps); the training step pass by pass, the
-// gradient penalty's double backward included) and GFLOP/s = FLOP / time.
+// gradient penalty's double backward included) and GFLOP/s = FLOP / time. The rows stargan_infer_winograd/ run the
+// frozen generator with the residual convolutions by Winograd's F(3x2, 3x3) (kernels::conv_algorithm::winograd):
+// their FLOP and GFLOP/s count the same direct-convolution FLOPs as the other rows (what G computes, however it is
+// computed), and performed_FLOP what the multiplications of their GEMMs and of the other layers are.
 // HANDEMO_BENCH_QUICK=1 in the environment runs every benchmark for 0.01 s instead of its minimum time: a check
 // that the program runs end to end, not a measurement.
 #include <handemo/motion/synth.hpp>
@@ -47,16 +50,29 @@ void flop_counters(benchmark::State& st, double flop)
     st.counters["GFLOP/s"] = benchmark::Counter(flop, benchmark::Counter::kIsIterationInvariantRate, benchmark::Counter::kIs1000);
 }
 
+/// The counter performed_FLOP of a frozen generator's call on `images` images: frozen_generator_flops() with the
+/// residual convolutions' direct multiply-adds replaced by those of their Winograd GEMMs (when it has them).
+template <class Config, class Frozen>
+void performed_counter(benchmark::State& st, const Frozen& f, std::size_t images)
+{
+    double flop = frozen_generator_flops<Config>();
+    for (const auto& w : f.winograd_convolutions()) flop += 2 * (w.macs_per_image() - w.geometry().macs() / w.geometry().batch);
+    st.counters["performed_FLOP"] = flop * double(images);
+}
+
 /// frozen: frozen_generator (weights packed once, the path of transfer and the CLI); else generator::infer.
-/// storage: the frozen generator's weight storage (kernels::weight_storage::f16: binary16 panels).
-template <class Config, bool frozen, kernels::weight_storage storage = kernels::weight_storage::native>
+/// storage: the frozen generator's weight storage (kernels::weight_storage::f16: binary16 panels). algorithm: its
+/// residual convolutions' (kernels::conv_algorithm::winograd: Winograd's).
+template <class Config, bool frozen, kernels::weight_storage storage = kernels::weight_storage::native,
+          kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct>
 void bm_infer(benchmark::State& st)
 {
     generator<float, Config> g;
     rng gen(1);
     init_pytorch_default(g, gen);
-    const auto f = g.freeze(storage);
+    const auto f = g.freeze(storage, algorithm);
     st.counters["weight_MB"] = double(f.weight_bytes()) / 1e6;
+    performed_counter<Config>(st, f, 1);
     typename generator<float, Config>::workspace ws;
     typename frozen_generator<float, Config>::workspace fws(f);
     constexpr std::size_t H = dims<Config>::H, W = dims<Config>::W, C = Config::domains;
@@ -75,8 +91,9 @@ void bm_infer(benchmark::State& st)
 
 /// G inference of a batch of B clips through one packed batch-1 generator (frozen_generator::infer_batch: each
 /// layer over the whole batch), one thread: the batched path of a folder transfer; clips/s as items per second.
-/// storage: as bm_infer's.
-template <class Config, std::size_t B, kernels::weight_storage storage = kernels::weight_storage::native>
+/// storage, algorithm: as bm_infer's.
+template <class Config, std::size_t B, kernels::weight_storage storage = kernels::weight_storage::native,
+          kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct>
 void bm_infer_batch(benchmark::State& st)
 {
     static_assert(Config::batch == 1, "bm_infer_batch: a batch-1 configuration (the generator a transfer loads)");
@@ -84,8 +101,9 @@ void bm_infer_batch(benchmark::State& st)
     generator<float, cfg> g;
     rng gen(1);
     init_pytorch_default(g, gen);
-    const auto f = g.freeze(storage);
+    const auto f = g.freeze(storage, algorithm);
     st.counters["weight_MB"] = double(f.weight_bytes()) / 1e6;
+    performed_counter<cfg>(st, f, B);
     typename frozen_generator<float, cfg>::workspace ws(f, B);
     constexpr std::size_t H = dims<cfg>::H, W = dims<cfg>::W, C = Config::domains;
     std::vector<float> x(B * 3 * H * W), lab(B * C, 0.f), out(x.size());
@@ -239,6 +257,10 @@ BENCHMARK(bm_infer<hand_paper, true, kernels::weight_storage::f16>)->Name("starg
 BENCHMARK(bm_infer<hand_embedded, true, kernels::weight_storage::f16>)->Name("stargan_infer_f16/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_infer_batch<hand_paper, 32, kernels::weight_storage::f16>)->Name("stargan_infer_f16/paper(64,6)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
 BENCHMARK(bm_infer_batch<hand_embedded, 32, kernels::weight_storage::f16>)->Name("stargan_infer_f16/embedded(32,3)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
+BENCHMARK(bm_infer<hand_paper, true, kernels::weight_storage::native, kernels::conv_algorithm::winograd>)->Name("stargan_infer_winograd/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer<hand_embedded, true, kernels::weight_storage::native, kernels::conv_algorithm::winograd>)->Name("stargan_infer_winograd/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
+BENCHMARK(bm_infer_batch<hand_paper, 32, kernels::weight_storage::native, kernels::conv_algorithm::winograd>)->Name("stargan_infer_winograd/paper(64,6)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
+BENCHMARK(bm_infer_batch<hand_embedded, 32, kernels::weight_storage::native, kernels::conv_algorithm::winograd>)->Name("stargan_infer_winograd/embedded(32,3)/b32")->Unit(benchmark::kMicrosecond)->MinTime(min_time(2.0));
 BENCHMARK(bm_infer<hand_paper, false>)->Name("stargan_infer_unpacked/paper(64,6)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_infer<hand_embedded, false>)->Name("stargan_infer_unpacked/embedded(32,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));
 BENCHMARK(bm_infer_micro)->Name("micro_infer/hand-micro(8,3)/b1")->Unit(benchmark::kMicrosecond)->MinTime(min_time(1.0));

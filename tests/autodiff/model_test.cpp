@@ -338,3 +338,65 @@ TEST_CASE("stargan: gradient check of a small generator, discriminator and WGAN-
         }, 1e-6, 1e-9, 60, 1e-5, [&] { store_grads(d, ps); });
     }
 }
+
+TEST_CASE("stargan: the frozen generator with Winograd residual convolutions: the direct one's output, a batch's bits")
+{
+    // conv_algorithm::winograd replaces the residual blocks' 3x3 convolutions (3 x 6 pixels at 4 conv_dim channels)
+    // by kernels::winograd_conv3x3: the same G up to the sums' rounding, and infer_batch still gives each image the
+    // bits of infer() on it alone. On a target without SIMD (where winograd_conv3x3 takes no geometry) it is direct.
+    using cfg = with_batch<hand_embedded, 1>;
+    constexpr std::size_t per = 3 * 12 * 24, C = 5, B = 6;
+    generator<float, cfg> g;
+    randomise(g, 11, 0.1);
+    const auto direct = g.freeze(), wino = g.freeze(kernels::weight_storage::native, kernels::conv_algorithm::winograd);
+    CHECK(direct.algorithm() == kernels::conv_algorithm::direct);
+    CHECK(direct.winograd_convolutions().empty());
+    if (!kernels::detail::has_simd) {
+        CHECK(wino.algorithm() == kernels::conv_algorithm::direct);
+        return;
+    }
+    REQUIRE(wino.algorithm() == kernels::conv_algorithm::winograd);
+    CHECK(wino.winograd_convolutions().size() == 2 * hand_embedded::res_blocks);
+    CHECK(wino.convolutions().size() == direct.convolutions().size() - 2 * hand_embedded::res_blocks);
+    CHECK(wino.weight_bytes() > direct.weight_bytes());
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::vector<float> x(B * per), lab(B * C, 0.f), yd(x.size()), yw(x.size()), y1(per);
+    for (auto& v : x) v = u(rng);
+    for (std::size_t n = 0; n < B; ++n) lab[n * C + (n * 2) % C] = 1;
+    frozen_generator<float, cfg>::workspace wd(direct, B), ww(wino, B), one(wino);
+    direct.infer_batch(x.data(), lab.data(), yd.data(), B, wd);
+    wino.infer_batch(x.data(), lab.data(), yw.data(), B, ww);
+    // against the same G in double precision: Winograd's error at most twice the direct kernels'
+    generator<double, cfg> gd;
+    {
+        std::vector<std::vector<float>> values;
+        g.for_each_parameter([&](std::string_view, std::span<float> v, std::span<float>, std::span<const std::size_t>) {
+            values.emplace_back(v.begin(), v.end());
+        });
+        std::size_t k = 0;
+        gd.for_each_parameter([&](std::string_view, std::span<double> v, std::span<double>, std::span<const std::size_t>) {
+            std::copy(values[k].begin(), values[k].end(), v.begin());
+            ++k;
+        });
+    }
+    std::vector<double> xd(x.begin(), x.end()), ld(lab.begin(), lab.end()), truth(x.size());
+    decltype(gd)::workspace gws;
+    for (std::size_t n = 0; n < B; ++n) gd.infer(xd.data() + n * per, ld.data() + n * C, truth.data() + n * per, gws);
+    double err_direct = 0, err_wino = 0, apart = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        err_direct = std::max(err_direct, std::abs(double(yd[i]) - truth[i]));
+        err_wino = std::max(err_wino, std::abs(double(yw[i]) - truth[i]));
+        apart = std::max(apart, double(std::abs(yd[i] - yw[i])));
+    }
+    CAPTURE(err_direct);
+    CAPTURE(err_wino);
+    CHECK(apart > 0);  // another order of the sums
+    CHECK(err_wino <= 2 * err_direct);
+    CHECK(err_wino < 2e-5);
+    for (std::size_t n = 0; n < B; ++n) {
+        wino.infer(x.data() + n * per, lab.data() + n * C, y1.data(), one);
+        CAPTURE(n);
+        CHECK(std::equal(y1.begin(), y1.end(), yw.begin() + std::ptrdiff_t(n * per)));
+    }
+}

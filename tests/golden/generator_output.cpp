@@ -6,12 +6,13 @@
 // Usage: golden_generator_output <checkpoint.safetensors>
 //
 // A second mode feeds the agreement test with ONNX Runtime (tests/golden/onnx_test.py):
-//   golden_generator_output --batch CONFIG G.safetensors X.f32 C.f32 BATCH Y_BATCH.f32 Y_ONE.f32 [f16]
+//   golden_generator_output --batch CONFIG G.safetensors X.f32 C.f32 BATCH Y_BATCH.f32 Y_ONE.f32 [f16|winograd]
 // loads the G parameters (PyTorch names, no prefix) of hand-embedded or hand-paper, reads BATCH images x
 // [BATCH, 3, H, W] and one-hot labels [BATCH, C] (little-endian float32), and writes G(x, c) computed by
 // frozen_generator::infer_batch on the whole batch (Y_BATCH) and by infer() one image at a time (Y_ONE).
 // With `f16` the frozen generator stores its convolution weights as binary16 (kernels::weight_storage::f16),
-// rounding the float weights it loaded itself.
+// rounding the float weights it loaded itself; with `winograd` it computes the residual convolutions by Winograd's
+// F(3x2, 3x3) (kernels::conv_algorithm::winograd; an error where the target has no such path).
 #include <handemo/stargan/configs.hpp>
 #include <handemo/stargan/train.hpp>
 
@@ -68,7 +69,7 @@ void write_floats(const char* path, const std::vector<float>& v)
 
 /// The --batch mode for one configuration.
 template <stargan_config Base>
-void run_batch(char** arg, kernels::weight_storage storage)
+void run_batch(char** arg, kernels::weight_storage storage, kernels::conv_algorithm algorithm)
 {
     using cfg = with_batch<Base, 1>;
     generator<float, cfg> g;
@@ -76,7 +77,9 @@ void run_batch(char** arg, kernels::weight_storage storage)
     const std::size_t batch = std::stoul(arg[3]), per = 3 * dims<cfg>::H * dims<cfg>::W, C = Base::domains;
     if (batch == 0) throw value_error("golden_generator_output: batch 0");
     const auto x = read_floats(arg[1], batch * per), c = read_floats(arg[2], batch * C);
-    const auto f = g.freeze(storage);
+    const auto f = g.freeze(storage, algorithm);
+    if (f.algorithm() != algorithm)
+        throw value_error(std::string("golden_generator_output: this target has no ") + kernels::conv_algorithm_name(algorithm) + " path");
     typename frozen_generator<float, cfg>::workspace ws(f, batch), one(f);
     std::vector<float> y(batch * per), y1(batch * per);
     f.infer_batch(x.data(), c.data(), y.data(), batch, ws);
@@ -89,12 +92,14 @@ void run_batch(char** arg, kernels::weight_storage storage)
 
 int main(int argc, char** argv)
 {
-    if ((argc == 9 || (argc == 10 && std::string(argv[9]) == "f16")) && std::string(argv[1]) == "--batch") {
+    if ((argc == 9 || (argc == 10 && (std::string(argv[9]) == "f16" || std::string(argv[9]) == "winograd"))) &&
+        std::string(argv[1]) == "--batch") {
         try {
-            const std::string config = argv[2];
-            const auto storage = argc == 10 ? kernels::weight_storage::f16 : kernels::weight_storage::native;
-            if (config == "hand-embedded") run_batch<hand_embedded>(argv + 3, storage);
-            else if (config == "hand-paper") run_batch<hand_paper>(argv + 3, storage);
+            const std::string config = argv[2], mode = argc == 10 ? argv[9] : "";
+            const auto storage = mode == "f16" ? kernels::weight_storage::f16 : kernels::weight_storage::native;
+            const auto algorithm = mode == "winograd" ? kernels::conv_algorithm::winograd : kernels::conv_algorithm::direct;
+            if (config == "hand-embedded") run_batch<hand_embedded>(argv + 3, storage, algorithm);
+            else if (config == "hand-paper") run_batch<hand_paper>(argv + 3, storage, algorithm);
             else throw value_error("golden_generator_output: configuration " + config + ", expected hand-embedded or hand-paper");
         } catch (const std::exception& e) {
             std::fprintf(stderr, "golden_generator_output: %s\n", e.what());
@@ -104,7 +109,7 @@ int main(int argc, char** argv)
     }
     if (argc != 2) {
         std::fprintf(stderr, "usage: golden_generator_output <checkpoint.safetensors>\n"
-                             "       golden_generator_output --batch CONFIG G.safetensors X.f32 C.f32 BATCH Y_BATCH.f32 Y_ONE.f32 [f16]\n");
+                             "       golden_generator_output --batch CONFIG G.safetensors X.f32 C.f32 BATCH Y_BATCH.f32 Y_ONE.f32 [f16|winograd]\n");
         return 2;
     }
     try {

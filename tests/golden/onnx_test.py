@@ -11,7 +11,9 @@ HELPER (golden_generator_output --batch: frozen_generator::infer_batch on the wh
 at a time). Every output value of both handemo paths must be within 1e-5 of ONNX Runtime's. Then the same with
 binary16 weights: ONNX Runtime runs the model exported with every convolution weight rounded to binary16
 (reference_stargan.py's round_conv_weights_to_half(), Tensor.half()), handemo loads the same float weights and
-rounds them itself (HELPER ... f16: weight_storage::f16), and both paths must again be within 1e-5.
+rounds them itself (HELPER ... f16: weight_storage::f16), and both paths must again be within 1e-5. Then the float
+model again with handemo's residual convolutions by Winograd's F(3x2, 3x3) (HELPER ... winograd:
+conv_algorithm::winograd), both paths within 1e-5.
 
 --plant weight runs the check with one weight of the exported ONNX model off by 1e-3 (main.0.weight[0, 0, 3, 3],
 the first convolution's centre tap; handemo loads the weights as they were) and inverts the exit code (0: the
@@ -81,7 +83,8 @@ def check_config(ref, torch, config, helper, runner, node, work, plant):
         c[n, n % domains] = 1
     xs, cs = x.flatten().tolist(), c.flatten().tolist()
     errors, lines = [], []
-    for kind, onnx_model, extra in (("float", model, []), ("binary16", model_half, ["f16"])):
+    for kind, onnx_model, extra in (("float weights", model, []), ("binary16 weights", model_half, ["f16"]),
+                                    ("float weights, handemo's residual convolutions by Winograd", model, ["winograd"])):
         e, line = compare_paths(config, kind, onnx_model, extra, weights, xs, cs, h, w, helper, runner, node, work)
         errors += e
         lines.append(line)
@@ -90,33 +93,34 @@ def check_config(ref, torch, config, helper, runner, node, work, plant):
 
 def compare_paths(config, kind, model, extra, weights, xs, cs, h, w, helper, runner, node, work):
     """Errors of handemo's two paths against ONNX Runtime on `model` (empty: agreement), and a summary line."""
-    paths = {k: os.path.join(work, f"{config}_{kind}_{k}") for k in ("x.f32", "c.f32", "batch.f32", "one.f32", "in.json", "out.json")}
+    tag = "".join(ch if ch.isalnum() else "_" for ch in kind)
+    paths = {k: os.path.join(work, f"{config}_{tag}_{k}") for k in ("x.f32", "c.f32", "batch.f32", "one.f32", "in.json", "out.json")}
     write_f32(paths["x.f32"], xs)
     write_f32(paths["c.f32"], cs)
     run = subprocess.run([helper, "--batch", config, weights, paths["x.f32"], paths["c.f32"], str(BATCH), paths["batch.f32"],
                           paths["one.f32"]] + extra, capture_output=True, text=True)
     if run.returncode != 0:
-        return [f"{config} ({kind} weights): {helper} exited {run.returncode}: {run.stderr.strip()}"], ""
+        return [f"{config} ({kind}): {helper} exited {run.returncode}: {run.stderr.strip()}"], ""
     with open(paths["in.json"], "w") as f:
         json.dump({"batch": BATCH, "x": xs, "c": cs}, f)
     run = subprocess.run([node, runner, "run", model, paths["in.json"], paths["out.json"]], capture_output=True, text=True)
     if run.returncode != 0:
-        return [f"{config} ({kind} weights): onnxruntime_bench.js run exited {run.returncode}: {(run.stdout + run.stderr).strip()}"], ""
+        return [f"{config} ({kind}): onnxruntime_bench.js run exited {run.returncode}: {(run.stdout + run.stderr).strip()}"], ""
     with open(paths["out.json"]) as f:
         ort = json.load(f)["y"]
     errors, worst = [], {}
     for path in ("batch", "one"):
         mine = read_f32(paths[f"{path}.f32"])
         if len(mine) != len(ort):
-            errors.append(f"{config} ({kind} weights) {path}: {len(mine)} values, ONNX Runtime {len(ort)}")
+            errors.append(f"{config} ({kind}) {path}: {len(mine)} values, ONNX Runtime {len(ort)}")
             continue
         diffs = [abs(a - b) for a, b in zip(mine, ort)]
         i = max(range(len(diffs)), key=diffs.__getitem__)
         worst[path] = diffs[i]
         if not diffs[i] <= TOL:
-            errors.append(f"{config} ({kind} weights) through {'infer_batch' if path == 'batch' else 'infer'}: max |handemo - ONNX Runtime| "
+            errors.append(f"{config} ({kind}) through {'infer_batch' if path == 'batch' else 'infer'}: max |handemo - ONNX Runtime| "
                           f"{diffs[i]:.3g} > {TOL:g} (image {i // (3 * h * w)}, element {i % (3 * h * w)}: {mine[i]:.7g} against {ort[i]:.7g})")
-    line = (f"{config}, {kind} weights, batch {BATCH}: max |handemo - ONNX Runtime| {worst.get('batch', float('nan')):.3g} (infer_batch), "
+    line = (f"{config}, {kind}, batch {BATCH}: max |handemo - ONNX Runtime| {worst.get('batch', float('nan')):.3g} (infer_batch), "
             f"{worst.get('one', float('nan')):.3g} (infer, one image at a time); tolerance {TOL:g}")
     return errors, line
 

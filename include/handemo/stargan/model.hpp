@@ -15,6 +15,7 @@
 #include <handemo/kernels/activation.hpp>
 #include <handemo/kernels/norm.hpp>
 #include <handemo/kernels/packed.hpp>
+#include <handemo/kernels/winograd.hpp>
 #include <handemo/tensor/aligned.hpp>
 #include <handemo/tensor/shape.hpp>
 
@@ -440,10 +441,12 @@ public:
     }
 
     /// @brief A snapshot of the weights packed for fast repeated inference (see frozen_generator).
-    /// storage f16: the convolution weights rounded to binary16 (kernels::weight_storage).
-    frozen_generator<T, Config> freeze(kernels::weight_storage storage = kernels::weight_storage::native) const
+    /// storage f16: the convolution weights rounded to binary16 (kernels::weight_storage). algorithm winograd:
+    /// the residual 3x3 convolutions by Winograd's F(3x3, 3x3) (kernels::conv_algorithm; faster on batches).
+    frozen_generator<T, Config> freeze(kernels::weight_storage storage = kernels::weight_storage::native,
+                                       kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct) const
     {
-        return frozen_generator<T, Config>(*this, storage);
+        return frozen_generator<T, Config>(*this, storage, algorithm);
     }
 
     /// @brief Multiply-adds of one forward pass (for GFLOP/s counters).
@@ -487,17 +490,26 @@ public:
     /// @brief Packs the weights of g (and copies its norm parameters and residual flag). storage f16: every
     /// convolution weight rounded to binary16 (kernels::weight_storage; half the bytes per inference where
     /// the kernels widen binary16 natively), the norm parameters and activations staying in T.
+    /// algorithm winograd: the residual blocks' 3x3 convolutions by kernels::winograd_conv3x3 (where it takes
+    /// their geometry: a SIMD type and a multiple of the SIMD width of channels), the tiles of up to its group()
+    /// images per GEMM: about 2x the direct kernel's throughput on a batch, slower at batch 1 (docs/engine.md,
+    /// "Winograd"). Its results differ from direct's in the last bits; infer() and infer_batch() of one frozen
+    /// generator still give an image the same bits.
     /// @throws value_error with weight_storage::f16 when a weight does not fit binary16 (naming it).
-    explicit frozen_generator(const generator_type& g, kernels::weight_storage storage = kernels::weight_storage::native)
+    explicit frozen_generator(const generator_type& g, kernels::weight_storage storage = kernels::weight_storage::native,
+                              kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct)
         : residual_(g.residual_)
     {
         const auto geo = generator_type::geometries();
+        const bool winograd = algorithm == kernels::conv_algorithm::winograd && kernels::winograd_conv3x3<T>::supported(geo[3]);
         std::size_t k = 0;
         auto conv = [&](std::size_t i, bool transposed) {
             const T* w = g.p_.value(k);
             try {
-                convs_.push_back(transposed ? kernels::packed_conv<T>::conv_transpose2d(geo[i], w, storage)
-                                            : kernels::packed_conv<T>::conv2d(geo[i], w, storage));
+                if (i == 3 && winograd) wino_.emplace_back(geo[i], w, storage);
+                else
+                    convs_.push_back(transposed ? kernels::packed_conv<T>::conv_transpose2d(geo[i], w, storage)
+                                                : kernels::packed_conv<T>::conv2d(geo[i], w, storage));
             } catch (const value_error& e) {
                 throw value_error("frozen_generator: parameter " + g.p_.entry(k).name + ": " + e.what());
             }
@@ -524,6 +536,7 @@ public:
         {
             std::size_t s = 1;
             for (const auto& c : f.convs_) s = std::max(s, c.scratch_size());
+            for (const auto& c : f.wino_) s = std::max(s, c.scratch_size());
             scratch_ = aligned_buffer<T>(s);
         }
         /// @brief The most images one infer_batch() call with this workspace takes.
@@ -552,10 +565,18 @@ public:
         run(x, label, out, images, ws);
     }
 
-    /// @brief The packed convolutions in network order (conv7, down1, down2, 2R residual convs, up1, up2, conv7).
-    /// The first is the 7x7 convolution over the image's 3 channels only: the label's C constant channels
-    /// reach its output through label_maps().
+    /// @brief The packed convolutions in network order (conv7, down1, down2, 2R residual convs, up1, up2, conv7;
+    /// with conv_algorithm::winograd the residual convs are in winograd_convolutions() instead). The first is the
+    /// 7x7 convolution over the image's 3 channels only: the label's C constant channels reach its output
+    /// through label_maps().
     const std::vector<kernels::packed_conv<T>>& convolutions() const noexcept { return convs_; }
+    /// @brief The residual blocks' 2R convolutions with conv_algorithm::winograd (empty with direct).
+    const std::vector<kernels::winograd_conv3x3<T>>& winograd_convolutions() const noexcept { return wino_; }
+    /// @brief The algorithm of the residual convolutions: winograd when it was asked for and takes their geometry.
+    kernels::conv_algorithm algorithm() const noexcept
+    {
+        return wino_.empty() ? kernels::conv_algorithm::direct : kernels::conv_algorithm::winograd;
+    }
     /// @brief What the first convolution adds for label channel k at value 1, [C, cd, H, W]: the convolution of
     /// a plane of ones (zero-padded as the image) with that channel's weights. It depends on the pixel only
     /// near the image's border, where the 7x7 window reaches the padding.
@@ -567,6 +588,7 @@ public:
     {
         std::size_t b = 0;
         for (const auto& c : convs_) b += c.weight_bytes();
+        for (const auto& c : wino_) b += c.weight_bytes();
         return b;
     }
 
@@ -609,8 +631,11 @@ private:
     void run(const T* x, const T* label, T* out, std::size_t images, workspace& ws) const
     {
         T* s = ws.scratch_.data();
-        std::size_t kc = 0, kn = 0;
-        auto conv = [&](std::size_t, const T* in, T* o, std::size_t n) { convs_[kc++].forward(in, nullptr, o, s, n); };
+        std::size_t kc = 0, kn = 0, kw = 0;
+        auto conv = [&](std::size_t i, const T* in, T* o, std::size_t n) {
+            if (i == 3 && !wino_.empty()) wino_[kw++].forward(in, nullptr, o, s, n);
+            else convs_[kc++].forward(in, nullptr, o, s, n);
+        };
         auto norm = [&](T* v, int n, int ch, int m, bool with_relu) {
             const auto& [gamma, beta] = norms_[kn++];
             for (int b = 0; b < n; ++b)
@@ -634,6 +659,7 @@ private:
     bool residual_;
     std::vector<T> label_maps_;
     std::vector<kernels::packed_conv<T>> convs_;
+    std::vector<kernels::winograd_conv3x3<T>> wino_;
     std::vector<std::pair<std::vector<T>, std::vector<T>>> norms_;
 };
 
