@@ -36,6 +36,16 @@ inline void add_inference_weights_option(CLI::App* sub, kernels::weight_storage&
         ->default_str(kernels::weight_storage_name(w));
 }
 
+/// @brief Adds --conv direct|winograd: how G computes its residual 3x3 convolutions (kernels::conv_algorithm).
+inline void add_conv_algorithm_option(CLI::App* sub, kernels::conv_algorithm& a, const std::string& what)
+{
+    sub->add_option_function<std::string>(
+           "--conv", [&a](const std::string& name) { a = name == "winograd" ? kernels::conv_algorithm::winograd : kernels::conv_algorithm::direct; },
+           "direct | winograd: " + what)
+        ->check(CLI::IsMember({"direct", "winograd"}))
+        ->default_str(kernels::conv_algorithm_name(a));
+}
+
 /// @brief Adds the preset and every hyper-parameter to `sub`; `t` receives the run options (threads).
 inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_overrides& o)
 {

@@ -73,6 +73,7 @@ struct transfer_cli {
     std::size_t frames = 0, threads = 0;
     bool detail = false;
     kernels::weight_storage weights = kernels::weight_storage::native;
+    kernels::conv_algorithm conv = kernels::conv_algorithm::direct;
     // the continuous target: a point, a path over a duration, or a curve file
     std::optional<double> valence, arousal, duration;
     std::string path, curve, circumplex;
@@ -334,7 +335,10 @@ inline void run_folder(const transfer_cli& o, const stargan::emotion_model& mode
     bar.finish();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "transfer: " << files.size() - failed.size() << " of " << files.size() << " files of " << o.in << " -> " << target.title << " -> "
-              << o.out << " (" << threads << " threads, " << (batched ? "G on batches of " + std::to_string(batch) + " files, " : std::string())
+              << o.out << " (" << threads << " threads, "
+              << (batched ? "G on batches of " + std::to_string(batch) + " files" +
+                                (model.conv_algorithm() == kernels::conv_algorithm::winograd ? " (residual convolutions by Winograd), " : ", ")
+                          : std::string())
               << static_cast<double>(files.size()) / std::max(seconds, 1e-9) << " files/s)\n";
     if (!failed.empty()) {
         std::string names;
@@ -353,7 +357,7 @@ inline void run_transfer(const transfer_cli& o)
     if (o.model.empty())
         std::cout << "transfer: no --model given: using the shipped hand model " << model_path
                   << " (trained on handemo's synthetic hand emotions, not on real captures)\n";
-    const auto model = load_model(model_path, o.weights);
+    const auto model = load_model(model_path, o.weights, o.conv);
     const auto& info = model->info();
     const transfer_target target = target_of(o, *model);
     if (is_folder(o.in)) {
@@ -481,5 +485,9 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     handemo::cli::add_inference_weights_option(sub, o->weights,
                                                "G's convolution weights as trained, or rounded to IEEE binary16 (half the "
                                                "bytes per inference; README, Performance)");
+    handemo::cli::add_conv_algorithm_option(sub, o->conv,
+                                            "how G computes its residual 3x3 convolutions: directly, or by Winograd's F(3x2, 3x3) "
+                                            "(faster on a folder's batches; the motion differs from direct's in the last bits; "
+                                            "docs/engine.md)");
     sub->callback([o] { handemo::cli::transfer_cmd::run_transfer(*o); });
 }};

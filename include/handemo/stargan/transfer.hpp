@@ -128,6 +128,8 @@ public:
         return ws;
     }
     const checkpoint_info& info() const noexcept { return info_; }
+    /// @brief How G computes its residual convolutions (load_model()'s algorithm; direct where winograd takes no geometry).
+    virtual kernels::conv_algorithm conv_algorithm() const noexcept { return kernels::conv_algorithm::direct; }
     std::size_t joints() const noexcept { return info_.range.joints; }
     std::size_t keyframes() const noexcept { return info_.range.keyframes; }
 
@@ -652,7 +654,8 @@ public:
     using cfg = with_batch<Base, 1>;
     static constexpr std::size_t H = dims<cfg>::H, W = dims<cfg>::W, K = Base::keyframes, J = Base::joints;
     emotion_model_impl(const safetensors_file& f, checkpoint_info info,
-                       kernels::weight_storage storage = kernels::weight_storage::native)
+                       kernels::weight_storage storage = kernels::weight_storage::native,
+                       kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct)
         : emotion_model(std::move(info))
     {
         if (info_.range.keyframes != K || info_.range.joints != J)
@@ -673,7 +676,7 @@ public:
         // weights packed once for every transfer of this model (g itself is not kept); a weight binary16
         // cannot hold (storage f16) is refused naming the checkpoint and the parameter
         try {
-            frozen_.emplace(g, storage);
+            frozen_.emplace(g, storage, algorithm);
         } catch (const value_error& e) {
             throw value_error("checkpoint: " + f.source + ": " + e.what());
         }
@@ -732,6 +735,8 @@ private:
         for (std::size_t i = 0; i < count; ++i) crop_image(s->out.data() + i * per, H, W, out[i], K, J);
     }
 
+    kernels::conv_algorithm conv_algorithm() const noexcept override { return frozen_->algorithm(); }
+
     std::optional<frozen_generator<float, cfg>> frozen_;
 };
 
@@ -739,13 +744,16 @@ private:
 
 /// @brief Builds a model from a verified checkpoint (parse_checkpoint / read_checkpoint). storage f16: G's
 /// convolution weights rounded to binary16 for inference (kernels::weight_storage; README "Performance").
+/// algorithm winograd: G's residual convolutions by Winograd's F(3x2, 3x3) (kernels::conv_algorithm; faster on the
+/// batches of transfer_batch, the results differ from direct's in the last bits).
 /// @throws format_error when a field does not fit the configuration (domain or joint count, image size,
 ///         missing or misshapen tensors), value_error (unknown configuration; with f16, a weight binary16
 ///         cannot hold).
 /// A template only so that it is compiled where it is called (see with_config()).
 template <class = void>
 std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const checkpoint_info& info,
-                                                 kernels::weight_storage storage = kernels::weight_storage::native)
+                                                 kernels::weight_storage storage = kernels::weight_storage::native,
+                                                 kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct)
 {
     // train_model() stores G's average posture with every save: a checkpoint without it would be weighed by a gate
     // chosen for the centred change with G's change as it is
@@ -754,21 +762,23 @@ std::unique_ptr<emotion_model> load_model(const safetensors_file& f, const check
         throw value_error("transfer: checkpoint " + info.source + " was trained with --gate-centre but holds no gate.posture_centre (train_model() "
                           "and handemo train store it with every save; a trainer run on its own does not: train it with gate_centre false)");
     return with_config(info.config, [&]<stargan_config Config>(const config_info&) -> std::unique_ptr<emotion_model> {
-        return std::make_unique<detail::emotion_model_impl<Config>>(f, info, storage);
+        return std::make_unique<detail::emotion_model_impl<Config>>(f, info, storage, algorithm);
     });
 }
 
-/// @brief Loads a model from a checkpoint file, or from a training output folder holding one.
+/// @brief Loads a model from a checkpoint file, or from a training output folder holding one (storage, algorithm:
+/// as above).
 /// @throws io_error, format_error (corrupted, truncated, foreign file), value_error (unknown configuration).
 /// A template only so that it is compiled where it is called (see with_config()).
 template <class = void>
 std::unique_ptr<emotion_model> load_model(const std::filesystem::path& path,
-                                                 kernels::weight_storage storage = kernels::weight_storage::native)
+                                                 kernels::weight_storage storage = kernels::weight_storage::native,
+                                                 kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct)
 {
     const auto file = checkpoint_file(path);
     // No structured binding here: clang 14 cannot capture one in a lambda (C++20's P1091 came in clang 16).
     const auto loaded = read_checkpoint(file);
-    return load_model(loaded.first, loaded.second, storage);
+    return load_model(loaded.first, loaded.second, storage, algorithm);
 }
 
 }  // namespace handemo::stargan
