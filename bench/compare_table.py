@@ -262,9 +262,10 @@ for cfg, keys, kind, ort_cfg in (("paper", ("paper", "(64,"), "stargan_infer/", 
         print(f"| {cfg} | {batch} | {fmt_b(b)} | {fmt_t(o_med)}{o_rng} | {ratio_s} | {h_cps} | {o_cps} |")
 print()
 
-tr_rows = [(label, star_bench(("embedded",), "stargan_transfer/", suffix))
-           for label, suffix in (("clip by clip (transfer() with a workspace)", "one_at_a_time"),
-                                 ("in batches of 32 (transfer_batch)", "batch32"))]
+tr_rows = [(label, star_bench(("embedded",), "stargan_transfer/", suffix, exclude))
+           for label, suffix, exclude in (("clip by clip (transfer() with a workspace)", "one_at_a_time", None),
+                                          ("in batches of 32 (transfer_batch)", "batch32", "winograd"),
+                                          ("in batches of 32, residual convolutions by Winograd (--conv winograd)", "batch32_winograd", None))]
 if any(b for _, b in tr_rows):
     print("Transfer of 32 clips with the shipped hand-embedded model (keyframes, G, spline), 1 thread:")
     print()
