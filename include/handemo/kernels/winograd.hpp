@@ -138,39 +138,48 @@ inline void wg_axpy(B& acc, bool& first, double c, const B& v) noexcept
     else acc = xsimd::fma(B(T(c)), v, acc);
 }
 
+/// out(a, b) = (L x R^T)[a][b] for the RI x CI vectors x(i, j), a < RO, b < CO: the 2-D transform of one tile
+/// with the compile-time matrices L (RO x RI) and R (CO x CI), as a 1-D transform of each column, then of each row.
+template <class T, int RO, int RI, int CO, int CI, class M1, class M2, class In, class Out>
+inline void wg_transform_2d(const M1& l, const M2& r, In&& x, Out&& out) noexcept
+{
+    using B = simd_t<T>;
+    B t[RO][CI];
+    HANDEMO_UNROLL_TILE
+    for (int j = 0; j < CI; ++j) {
+        B col[RI];
+        HANDEMO_UNROLL_TILE
+        for (int i = 0; i < RI; ++i) col[i] = x(i, j);
+        HANDEMO_UNROLL_TILE
+        for (int a = 0; a < RO; ++a) {
+            bool first = true;
+            t[a][j] = B(T(0));
+            HANDEMO_UNROLL_TILE
+            for (int i = 0; i < RI; ++i) wg_axpy(t[a][j], first, l[std::size_t(a)][std::size_t(i)], col[i]);
+        }
+    }
+    HANDEMO_UNROLL_TILE
+    for (int a = 0; a < RO; ++a)
+        HANDEMO_UNROLL_TILE
+        for (int b = 0; b < CO; ++b) {
+            B acc(T(0));
+            bool first = true;
+            HANDEMO_UNROLL_TILE
+            for (int j = 0; j < CI; ++j) wg_axpy(acc, first, r[std::size_t(b)][std::size_t(j)], t[a][j]);
+            out(a, b, acc);
+        }
+}
+
 /// V[(a*NW + b) * v_point] = (B_h^T d B_w)[a][b] for one input tile d of NH x NW vectors (one vector of input
 /// channels each) at d + i*d_row + j*d_col.
 template <class T, int MH, int MW>
 inline void wg_input_tile(const T* d, std::ptrdiff_t d_row, std::ptrdiff_t d_col, T* v, std::ptrdiff_t v_point) noexcept
 {
     using B = simd_t<T>;
-    constexpr auto& h = winograd_matrices<MH>;
-    constexpr auto& w = winograd_matrices<MW>;
     constexpr int NH = MH + 2, NW = MW + 2;
-    B t[NH][NW];
-    HANDEMO_UNROLL_TILE
-    for (int j = 0; j < NW; ++j) {
-        B col[NH];
-        HANDEMO_UNROLL_TILE
-        for (int i = 0; i < NH; ++i) col[i] = B::load_aligned(d + i * d_row + j * d_col);
-        HANDEMO_UNROLL_TILE
-        for (int a = 0; a < NH; ++a) {
-            bool first = true;
-            t[a][j] = B(T(0));
-            HANDEMO_UNROLL_TILE
-            for (int i = 0; i < NH; ++i) wg_axpy(t[a][j], first, h.bt[std::size_t(a)][std::size_t(i)], col[i]);
-        }
-    }
-    HANDEMO_UNROLL_TILE
-    for (int a = 0; a < NH; ++a)
-        HANDEMO_UNROLL_TILE
-        for (int b = 0; b < NW; ++b) {
-            B acc(T(0));
-            bool first = true;
-            HANDEMO_UNROLL_TILE
-            for (int j = 0; j < NW; ++j) wg_axpy(acc, first, w.bt[std::size_t(b)][std::size_t(j)], t[a][j]);
-            acc.store_aligned(v + (a * NW + b) * v_point);
-        }
+    wg_transform_2d<T, NH, NH, NW, NW>(
+        winograd_matrices<MH>.bt, winograd_matrices<MW>.bt, [&](int i, int j) { return B::load_aligned(d + i * d_row + j * d_col); },
+        [&](int a, int b, const B& r) { r.store_aligned(v + (a * NW + b) * v_point); });
 }
 
 /// out[i*o_row + j*o_col] = (A_h^T m A_w)[i][j] for the NH x NW transform-point vectors at m + (a*NW + b)*m_point.
@@ -178,33 +187,10 @@ template <class T, int MH, int MW>
 inline void wg_output_tile(const T* m, std::ptrdiff_t m_point, T* out, std::ptrdiff_t o_row, std::ptrdiff_t o_col) noexcept
 {
     using B = simd_t<T>;
-    constexpr auto& h = winograd_matrices<MH>;
-    constexpr auto& w = winograd_matrices<MW>;
     constexpr int NH = MH + 2, NW = MW + 2;
-    B t[MH][NW];
-    HANDEMO_UNROLL_TILE
-    for (int b = 0; b < NW; ++b) {
-        B col[NH];
-        HANDEMO_UNROLL_TILE
-        for (int a = 0; a < NH; ++a) col[a] = B::load_aligned(m + (a * NW + b) * m_point);
-        HANDEMO_UNROLL_TILE
-        for (int i = 0; i < MH; ++i) {
-            bool first = true;
-            t[i][b] = B(T(0));
-            HANDEMO_UNROLL_TILE
-            for (int a = 0; a < NH; ++a) wg_axpy(t[i][b], first, h.at[std::size_t(i)][std::size_t(a)], col[a]);
-        }
-    }
-    HANDEMO_UNROLL_TILE
-    for (int i = 0; i < MH; ++i)
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < MW; ++j) {
-            B acc(T(0));
-            bool first = true;
-            HANDEMO_UNROLL_TILE
-            for (int b = 0; b < NW; ++b) wg_axpy(acc, first, w.at[std::size_t(j)][std::size_t(b)], t[i][b]);
-            acc.store_aligned(out + i * o_row + j * o_col);
-        }
+    wg_transform_2d<T, MH, NH, MW, NW>(
+        winograd_matrices<MH>.at, winograd_matrices<MW>.at, [&](int a, int b) { return B::load_aligned(m + (a * NW + b) * m_point); },
+        [&](int i, int j, const B& r) { r.store_aligned(out + i * o_row + j * o_col); });
 }
 
 /// Calls f.template operator()<MH, MW>() for the runtime tile (mh, mw), each 2 or 3.
