@@ -13,13 +13,13 @@
 // infinity; m = 2 stops at -1): with E_k the n x k matrix whose row i is (1, p_i, p_i^2, ...) (the row of
 // infinity (0, ..., 0, 1)), the correlation y = A^T [(G g) (.) (B^T d)] has A^T = E_m^T, G = E_3 and
 // B^T = E_n^-T (the transposition principle applied to the polynomial product of Toom-Cook). Each row of B^T
-// is scaled to largest magnitude 1 and G's row by the inverse. In binary32 these transforms keep the error of
-// the direct sum's (tests/kernels/winograd_test.cpp holds them to it against a double-precision convolution).
+// is scaled to largest magnitude 1 and G's row by the inverse. In binary32 these transforms keep the error within a
+// few times the direct sum's (tests/kernels/winograd_test.cpp holds them to it against a double-precision convolution).
 //
 // Where: batched inference (stargan::frozen_generator with conv_algorithm::winograd), where the tiles of many
-// images share each block of transformed weights. At batch 1 the transformed weights (20/9 of the direct panels'
-// bytes: 68 MB for the paper G) are streamed for three tiles each, and the direct weight-stationary kernel is
-// as fast or faster (docs/engine.md, "Winograd for batches").
+// images share each block of transformed weights. The transformed weights are 20/9 of the direct panels' bytes
+// (68 MB for the paper G): at batch 1 the paper G streams them for three tiles each and is no faster than with the
+// direct weight-stationary kernel; the embedded G's (9 MB) stay in the L3 (docs/performance.md).
 #pragma once
 
 #include <algorithm>
@@ -39,8 +39,8 @@
 namespace handemo::kernels {
 
 /// @brief How stargan::frozen_generator computes its 3x3 stride-1 (residual) convolutions.
-/// - direct: the weight-stationary kernel of packed_conv, every image alone (fastest at batch 1).
-/// - winograd: winograd_conv3x3, the tiles of a group of images per GEMM (fastest on batches; the sums in
+/// - direct: the weight-stationary kernel of packed_conv, every image alone; the default.
+/// - winograd: winograd_conv3x3, the tiles of a group of images per GEMM (faster on batches; the sums in
 ///   another order, so the results differ from direct's in the last bits, about as much as two orders of the
 ///   direct sum differ).
 enum class conv_algorithm { direct, winograd };

@@ -442,7 +442,7 @@ public:
 
     /// @brief A snapshot of the weights packed for fast repeated inference (see frozen_generator).
     /// storage f16: the convolution weights rounded to binary16 (kernels::weight_storage). algorithm winograd:
-    /// the residual 3x3 convolutions by Winograd's F(3x3, 3x3) (kernels::conv_algorithm; faster on batches).
+    /// the residual 3x3 convolutions by Winograd's minimal filtering (kernels::conv_algorithm; faster on batches).
     frozen_generator<T, Config> freeze(kernels::weight_storage storage = kernels::weight_storage::native,
                                        kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct) const
     {
@@ -492,9 +492,9 @@ public:
     /// the kernels widen binary16 natively), the norm parameters and activations staying in T.
     /// algorithm winograd: the residual blocks' 3x3 convolutions by kernels::winograd_conv3x3 (where it takes
     /// their geometry: a SIMD type and a multiple of the SIMD width of channels), the tiles of up to its group()
-    /// images per GEMM: about 2x the direct kernel's throughput on a batch, slower at batch 1 (docs/engine.md,
-    /// "Winograd"). Its results differ from direct's in the last bits; infer() and infer_batch() of one frozen
-    /// generator still give an image the same bits.
+    /// images per GEMM: 1.4-1.7x the direct path's throughput at batch 32 where measured, no slower at batch 1
+    /// (docs/performance.md). Its results differ from direct's in the last bits; infer() and infer_batch() of one
+    /// frozen generator still give an image the same bits.
     /// @throws value_error with weight_storage::f16 when a weight does not fit binary16 (naming it).
     explicit frozen_generator(const generator_type& g, kernels::weight_storage storage = kernels::weight_storage::native,
                               kernels::conv_algorithm algorithm = kernels::conv_algorithm::direct)
