@@ -101,7 +101,7 @@ public:
     void forward(const T* x, const T* bias_or_null, T* y, T* scratch, std::size_t images) const noexcept
     {
         if (!ws_) return fallback(x, bias_or_null, y, scratch, int(images));
-        T* acc = align(scratch);
+        T* acc = align_up(scratch);
         T* xp = acc + acc_elements_;
         const std::size_t x_per = std::size_t(in_c_) * in_h_ * in_w_, y_per = std::size_t(out_c_) * out_h_ * out_w_;
         const std::size_t HWp = std::size_t(Hp_) * Wp_;
@@ -276,12 +276,6 @@ private:
         }
     }
 
-    /// The first tensor_alignment-aligned element of p (the tiles are loaded and stored aligned).
-    static T* align(T* p) noexcept
-    {
-        const auto a = reinterpret_cast<std::uintptr_t>(p);
-        return reinterpret_cast<T*>((a + tensor_alignment - 1) / tensor_alignment * tensor_alignment);
-    }
 
     conv_geometry g_{};
     bool transposed_ = false, ws_ = false;

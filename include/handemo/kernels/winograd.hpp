@@ -25,7 +25,6 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
-#include <cstdint>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -41,8 +40,8 @@ namespace handemo::kernels {
 /// @brief How stargan::frozen_generator computes its 3x3 stride-1 (residual) convolutions.
 /// - direct: the weight-stationary kernel of packed_conv, every image alone; the default.
 /// - winograd: winograd_conv3x3, the tiles of a group of images per GEMM (faster on batches; the sums in
-///   another order, so the results differ from direct's in the last bits, about as much as two orders of the
-///   direct sum differ).
+///   another order, so the results differ from direct's in the last bits: within a few times the direct sum's
+///   rounding error, docs/engine.md).
 enum class conv_algorithm { direct, winograd };
 
 /// @brief "direct" or "winograd".
@@ -50,7 +49,7 @@ inline const char* conv_algorithm_name(conv_algorithm a) noexcept { return a == 
 
 namespace detail {
 
-constexpr double wg_abs(double v) noexcept { return v < 0 ? -v : v; }
+constexpr double winograd_abs(double v) noexcept { return v < 0 ? -v : v; }
 
 /// The 1-D transform matrices of F(M, 3) (see the file's comment), n = M + 2 points.
 template <int M>
@@ -89,7 +88,7 @@ constexpr winograd_1d<M> make_winograd_1d() noexcept
     for (int c = 0; c < n; ++c) {
         int piv = c;
         for (int i = c + 1; i < n; ++i)
-            if (wg_abs(aug[std::size_t(i)][std::size_t(c)]) > wg_abs(aug[std::size_t(piv)][std::size_t(c)])) piv = i;
+            if (winograd_abs(aug[std::size_t(i)][std::size_t(c)]) > winograd_abs(aug[std::size_t(piv)][std::size_t(c)])) piv = i;
         std::swap(aug[std::size_t(c)], aug[std::size_t(piv)]);
         const double d = aug[std::size_t(c)][std::size_t(c)];
         for (int j = 0; j < 2 * n; ++j) aug[std::size_t(c)][std::size_t(j)] /= d;
@@ -104,7 +103,7 @@ constexpr winograd_1d<M> make_winograd_1d() noexcept
     // scale each row of B^T to largest magnitude 1, G's row by the inverse
     for (int a = 0; a < n; ++a) {
         double s = 0;
-        for (int j = 0; j < n; ++j) s = std::max(s, wg_abs(r.bt[std::size_t(a)][std::size_t(j)]));
+        for (int j = 0; j < n; ++j) s = std::max(s, winograd_abs(r.bt[std::size_t(a)][std::size_t(j)]));
         for (int j = 0; j < n; ++j) r.bt[std::size_t(a)][std::size_t(j)] /= s;
         for (int k = 0; k < 3; ++k) r.g[std::size_t(a)][std::size_t(k)] *= s;
     }
@@ -113,7 +112,7 @@ constexpr winograd_1d<M> make_winograd_1d() noexcept
     for (auto& row : r.bt)
         for (auto& v : row) {
             const double h = double(static_cast<long long>(v * 2 + (v < 0 ? -0.5 : 0.5))) / 2;
-            if (wg_abs(v - h) < 1e-12) v = h;
+            if (winograd_abs(v - h) < 1e-12) v = h;
         }
     return r;
 }
@@ -124,7 +123,7 @@ inline constexpr winograd_1d<M> winograd_matrices = make_winograd_1d<M>();
 /// acc (+)= c * v for a coefficient known at compile time once the caller's loops are unrolled: nothing for 0,
 /// an add or a subtract for +-1. first: acc is not yet set.
 template <class B>
-inline void wg_axpy(B& acc, bool& first, double c, const B& v) noexcept
+inline void winograd_axpy(B& acc, bool& first, double c, const B& v) noexcept
 {
     using T = typename B::value_type;
     if (c == 0.0) return;
@@ -141,7 +140,7 @@ inline void wg_axpy(B& acc, bool& first, double c, const B& v) noexcept
 /// out(a, b) = (L x R^T)[a][b] for the RI x CI vectors x(i, j), a < RO, b < CO: the 2-D transform of one tile
 /// with the compile-time matrices L (RO x RI) and R (CO x CI), as a 1-D transform of each column, then of each row.
 template <class T, int RO, int RI, int CO, int CI, class M1, class M2, class In, class Out>
-inline void wg_transform_2d(const M1& l, const M2& r, In&& x, Out&& out) noexcept
+inline void winograd_transform_2d(const M1& l, const M2& r, In&& x, Out&& out) noexcept
 {
     using B = simd_t<T>;
     B t[RO][CI];
@@ -155,7 +154,7 @@ inline void wg_transform_2d(const M1& l, const M2& r, In&& x, Out&& out) noexcep
             bool first = true;
             t[a][j] = B(T(0));
             HANDEMO_UNROLL_TILE
-            for (int i = 0; i < RI; ++i) wg_axpy(t[a][j], first, l[std::size_t(a)][std::size_t(i)], col[i]);
+            for (int i = 0; i < RI; ++i) winograd_axpy(t[a][j], first, l[std::size_t(a)][std::size_t(i)], col[i]);
         }
     }
     HANDEMO_UNROLL_TILE
@@ -165,7 +164,7 @@ inline void wg_transform_2d(const M1& l, const M2& r, In&& x, Out&& out) noexcep
             B acc(T(0));
             bool first = true;
             HANDEMO_UNROLL_TILE
-            for (int j = 0; j < CI; ++j) wg_axpy(acc, first, r[std::size_t(b)][std::size_t(j)], t[a][j]);
+            for (int j = 0; j < CI; ++j) winograd_axpy(acc, first, r[std::size_t(b)][std::size_t(j)], t[a][j]);
             out(a, b, acc);
         }
 }
@@ -173,29 +172,29 @@ inline void wg_transform_2d(const M1& l, const M2& r, In&& x, Out&& out) noexcep
 /// V[(a*NW + b) * v_point] = (B_h^T d B_w)[a][b] for one input tile d of NH x NW vectors (one vector of input
 /// channels each) at d + i*d_row + j*d_col.
 template <class T, int MH, int MW>
-inline void wg_input_tile(const T* d, std::ptrdiff_t d_row, std::ptrdiff_t d_col, T* v, std::ptrdiff_t v_point) noexcept
+inline void winograd_input_tile(const T* d, std::ptrdiff_t d_row, std::ptrdiff_t d_col, T* v, std::ptrdiff_t v_point) noexcept
 {
     using B = simd_t<T>;
     constexpr int NH = MH + 2, NW = MW + 2;
-    wg_transform_2d<T, NH, NH, NW, NW>(
+    winograd_transform_2d<T, NH, NH, NW, NW>(
         winograd_matrices<MH>.bt, winograd_matrices<MW>.bt, [&](int i, int j) { return B::load_aligned(d + i * d_row + j * d_col); },
         [&](int a, int b, const B& r) { r.store_aligned(v + (a * NW + b) * v_point); });
 }
 
 /// out[i*o_row + j*o_col] = (A_h^T m A_w)[i][j] for the NH x NW transform-point vectors at m + (a*NW + b)*m_point.
 template <class T, int MH, int MW>
-inline void wg_output_tile(const T* m, std::ptrdiff_t m_point, T* out, std::ptrdiff_t o_row, std::ptrdiff_t o_col) noexcept
+inline void winograd_output_tile(const T* m, std::ptrdiff_t m_point, T* out, std::ptrdiff_t o_row, std::ptrdiff_t o_col) noexcept
 {
     using B = simd_t<T>;
     constexpr int NH = MH + 2, NW = MW + 2;
-    wg_transform_2d<T, MH, NH, MW, NW>(
+    winograd_transform_2d<T, MH, NH, MW, NW>(
         winograd_matrices<MH>.at, winograd_matrices<MW>.at, [&](int a, int b) { return B::load_aligned(m + (a * NW + b) * m_point); },
         [&](int i, int j, const B& r) { r.store_aligned(out + i * o_row + j * o_col); });
 }
 
 /// Calls f.template operator()<MH, MW>() for the runtime tile (mh, mw), each 2 or 3.
 template <class F>
-inline void wg_with_tile(int mh, int mw, F&& f)
+inline void winograd_with_tile(int mh, int mw, F&& f)
 {
     if (mh == 3) {
         if (mw == 3) f.template operator()<3, 3>();
@@ -259,7 +258,7 @@ public:
         panels_ = (g.out_channels + mr_ - 1) / mr_;
         panel_elements_ = detail::ws_packed_elements<T>(g.out_channels, g.in_channels);
         u_ = aligned_buffer<T>(panel_elements_ * std::size_t(points_));
-        detail::wg_with_tile(mh_, mw_, [&]<int MH, int MW>() { transform_weights<MH, MW>(w); });
+        detail::winograd_with_tile(mh_, mw_, [&]<int MH, int MW>() { transform_weights<MH, MW>(w); });
         koff_.resize(std::size_t(g.in_channels));
         for (int c = 0; c < g.in_channels; ++c) koff_[std::size_t(c)] = c;
         // scratch: V [points][tiles][in], M [points][panels][tiles][MR], the padded transposed image
@@ -295,10 +294,10 @@ public:
     /// of the call, so image n of a batch gets the bits a call on that image alone gets.
     void forward(const T* x, const T* bias_or_null, T* y, T* scratch, std::size_t images) const noexcept
     {
-        detail::wg_with_tile(mh_, mw_, [&]<int MH, int MW>() { run<MH, MW>(x, bias_or_null, y, scratch, images); });
+        detail::winograd_with_tile(mh_, mw_, [&]<int MH, int MW>() { run<MH, MW>(x, bias_or_null, y, scratch, images); });
     }
 
-    /// @brief Images per GEMM by default: chosen by measurement (docs/engine.md, "Winograd").
+    /// @brief Images per GEMM by default: chosen by measurement (docs/engine.md, "Winograd for batches").
     static constexpr int group_default = 16;
 
 private:
@@ -346,7 +345,7 @@ private:
         const int ci = g_.in_channels, co = g_.out_channels, H = g_.in_h, W = g_.in_w;
         const int Wp = tw_ * MW + 2, Wo = tw_ * MW, cp = panels_ * mr_;
         const std::size_t tiles_max = std::size_t(group_) * th_ * tw_, HW = std::size_t(H) * W;
-        T* v = align(scratch);
+        T* v = align_up(scratch);
         T* m = v + v_elements_;
         T* xt = m + m_elements_;
         T* yt = xt + x_elements_;
@@ -363,7 +362,7 @@ private:
                         const std::ptrdiff_t q = std::ptrdiff_t(n) * th_ * tw_ + ti * tw_ + tj;
                         const T* d = xt + (std::size_t(ti * MH) * Wp + tj * MW) * ci;
                         for (int c0 = 0; c0 < ci; c0 += L)
-                            detail::wg_input_tile<T, MH, MW>(d + c0, std::ptrdiff_t(Wp) * ci, ci, v + q * ci + c0, v_point);
+                            detail::winograd_input_tile<T, MH, MW>(d + c0, std::ptrdiff_t(Wp) * ci, ci, v + q * ci + c0, v_point);
                     }
             }
             // one GEMM per transform point: M[p][panel][tile][MR] = sum_c U[p][panel][c][MR] V[p][tile][c]
@@ -393,7 +392,7 @@ private:
                         T* out = yt + (std::size_t(ti * MH) * Wo + tj * MW) * cp;
                         for (int pn = 0; pn < panels_; ++pn)
                             for (int l = 0; l < mr_; l += L)
-                                detail::wg_output_tile<T, MH, MW>(m + (std::ptrdiff_t(pn) * tiles_max + q) * mr_ + l, m_point,
+                                detail::winograd_output_tile<T, MH, MW>(m + (std::ptrdiff_t(pn) * tiles_max + q) * mr_ + l, m_point,
                                                                   out + pn * mr_ + l, std::ptrdiff_t(Wo) * cp, cp);
                     }
                 transpose_out(yt, Wo, cp, bias, y + (first + n) * std::size_t(co) * HW);
@@ -458,12 +457,6 @@ private:
             const T b = bias ? bias[o] : T(0);
             for (int p = 0; p < HW; ++p) y[std::ptrdiff_t(o) * HW + p] = yt[(std::ptrdiff_t(p / W) * Wo + p % W) * cp + o] + b;
         }
-    }
-
-    static T* align(T* p) noexcept
-    {
-        const auto a = reinterpret_cast<std::uintptr_t>(p);
-        return reinterpret_cast<T*>((a + tensor_alignment - 1) / tensor_alignment * tensor_alignment);
     }
 
     conv_geometry g_{};

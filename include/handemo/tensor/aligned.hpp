@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <new>
@@ -11,6 +12,16 @@ namespace handemo {
 
 /// @brief Alignment of every tensor buffer, in bytes.
 inline constexpr std::size_t tensor_alignment = 64;
+
+/// @brief The first tensor_alignment-aligned element at or after p: where a kernel starts the tiles it loads and
+/// stores aligned in a scratch buffer given with any alignment (whose size counts tensor_alignment / sizeof(T)
+/// elements more for it).
+template <class T>
+T* align_up(T* p) noexcept
+{
+    const auto a = reinterpret_cast<std::uintptr_t>(p);
+    return reinterpret_cast<T*>((a + tensor_alignment - 1) / tensor_alignment * tensor_alignment);
+}
 
 namespace detail {
 

@@ -23,6 +23,7 @@
 
 #include <handemo/core/half.hpp>
 #include <handemo/kernels/detail/conv_simd.hpp>
+#include <handemo/tensor/aligned.hpp>
 
 #if defined(__aarch64__) && defined(__ARM_NEON)
 #include <arm_neon.h>
@@ -581,7 +582,7 @@ inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T*
 {
     const ws_scratch_layout<T> lay(g);
     const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad;
-    T* wp = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(scratch) + 63) / 64 * 64);
+    T* wp = align_up(scratch);
     T* acc = wp + lay.panels;
     T* sum = acc + std::size_t(lay.group) * lay.tiles;
     T* xp = sum + std::size_t(lay.group) * lay.tiles;
@@ -769,7 +770,7 @@ inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, 
     const wg_scratch_layout<T> lay(g);
     const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
     const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, co = g.out_channels;
-    T* sums = reinterpret_cast<T*>((reinterpret_cast<std::uintptr_t>(scratch) + 63) / 64 * 64);
+    T* sums = align_up(scratch);
     T* vb = sums + lay.sums;
     int* koff = reinterpret_cast<int*>(vb + lay.block);
     T* xp = vb + lay.block + lay.offsets;
