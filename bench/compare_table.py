@@ -265,9 +265,11 @@ print()
 tr_rows = [(label, star_bench(("embedded",), "stargan_transfer/", suffix, exclude))
            for label, suffix, exclude in (("clip by clip (transfer() with a workspace)", "one_at_a_time", None),
                                           ("in batches of 32 (transfer_batch)", "batch32", "winograd"),
-                                          ("in batches of 32, residual convolutions by Winograd (--conv winograd)", "batch32_winograd", None))]
+                                          ("in batches of 32, residual convolutions by Winograd (--conv winograd)", "batch32_winograd", None),
+                                          ("the shipped gates (statistics for sad: G not run), in batches of 32", "shipped_gates", None))]
 if any(b for _, b in tr_rows):
-    print("Transfer of 32 clips with the shipped hand-embedded model (keyframes, G, spline), 1 thread:")
+    print("Transfer of 32 clips to sad with the shipped hand-embedded model, 1 thread: keyframes, G, spline, its gate set to "
+          "keep G's change; in the last row its own gates, which weigh G's change 0 for sad:")
     print()
     print("| path | 32 clips | per clip | clips/s |")
     print("|---|---|---|---|")

@@ -119,6 +119,13 @@ expect_error_matches("--detail adds full-rate motion")
 run_ok(transfer_bmp transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion angry --out ${WORK_DIR}/angry.bmp)
 run_ok(transfer_img transfer --model ${M} --in ${WORK_DIR}/angry.bmp --emotion happy --out ${WORK_DIR}/happy.bvh
        --like ${D}/hand_pointing_neutral_0.bvh)
+# image in, image out: the same steps (transfer_keyframes()), a K x J image written
+run_ok(transfer_img_img transfer --model ${M} --in ${WORK_DIR}/angry.bmp --emotion sad --from angry --out ${WORK_DIR}/sad_img.png)
+if(NOT EXISTS ${WORK_DIR}/sad_img.png)
+  message(FATAL_ERROR "transfer of a motion image to a .png wrote nothing")
+endif()
+run_fail(img_emotion transfer --model ${M} --in ${WORK_DIR}/angry.bmp --emotion bored --out ${WORK_DIR}/x.png)
+expect_error_matches("bored")
 run_ok(info_out info ${WORK_DIR}/sad.bvh)
 
 # the README's 10-line example (examples/transfer.cpp) on the same model

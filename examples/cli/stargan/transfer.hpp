@@ -381,17 +381,18 @@ inline void run_transfer(const transfer_cli& o)
         throw value_error("transfer: a continuous target blends full-rate motions: --in and --out must be .bvh files (" +
                           (in_image ? o.in : o.out) + " is a motion image)");
     if (in_image) {
-        const std::size_t target_domain = model->domain(o.emotion);
+        // the image's keyframes (Eq. 6) through every step a BVH input's keyframes take (transfer_keyframes())
         const auto px = from_image<dynamic_keyframes>(read_image(o.in), model->joints(), model->keyframes(), o.in);
-        const auto gen = model->translate(px, target_domain);
+        const std::optional<std::string_view> from = o.from.empty() ? std::nullopt : std::optional<std::string_view>(o.from);
+        if (!out_image && o.like.empty())
+            throw value_error("transfer: a BVH output from an image input needs --like REF.bvh (skeleton, fps, frames)");
+        const auto kf = model->transfer_keyframes(decode(px, info.range), o.emotion, from);
         if (out_image) {
-            (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(gen));
+            (has_ext(o.out, ".png") ? write_png : write_bmp)(o.out, to_image(encode(kf, info.range)));
         } else {
-            if (o.like.empty()) throw value_error("transfer: a BVH output from an image input needs --like REF.bvh (skeleton, fps, frames)");
             const clip ref = read_bvh(o.like);
             model->check_skeleton(ref.skel);
-            auto kf = decode(gen, info.range);
-            const double tempo = o.from.empty() ? model->tempo(o.emotion) : model->tempo(o.emotion, o.from);
+            const double tempo = model->tempo(o.emotion, from);
             const std::size_t n = o.frames ? o.frames : model->output_frames(ref.frames, tempo);
             write_bvh(o.out, reconstruct(kf, ref.skel, n, ref.fps));
         }
@@ -449,7 +450,8 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
     sub->add_option("--model", o->model,
                     "Model folder or checkpoint.safetensors written by 'handemo train' (default: the shipped hand model, trained on "
                     "handemo's synthetic hand emotions)");
-    sub->add_option("--in", o->in, "Input motion: .bvh, a K x J motion image .bmp/.png, or a folder (its .bvh files)")->required();
+    sub->add_option("--in", o->in, "Input motion: .bvh, a K x J motion image .bmp/.png (its keyframes, Eq. 6, take the same steps as a BVH's), or a folder "
+                                      "(its .bvh files)")->required();
     sub->add_option("--emotion", o->emotion, "Target emotion (a domain of the model, e.g. angry); or one of the continuous targets below");
     sub->add_option("--valence", o->valence, "Continuous target: valence of a point of the circumplex (with --arousal; V^2 + A^2 <= 1)");
     sub->add_option("--arousal", o->arousal, "Continuous target: arousal of the point (with --valence)");
@@ -471,7 +473,8 @@ static handemo::cli::add_command reg_transfer{50, [](CLI::App& app) {
                     "With a continuous target: how the labels' tempo and amplitude factors are blended between their points, linear "
                     "or geometric (in log space: halfway to a label twice as slow is sqrt(2) times as slow); default linear");
     sub->add_option("--out", o->out,
-                    "Output: .bvh (full-rate motion), .bmp/.png (motion image), a folder for a folder --in, or .html for --grid")->required();
+                    "Output: .bvh (full-rate motion), .bmp/.png (the output's motion image: the keyframes the .bvh would pass through), "
+                    "a folder for a folder --in, or .html for --grid")->required();
     sub->add_option("--threads", o->threads, "Threads for a folder --in, sharing the one loaded model (default: the machine's cores)");
     sub->add_option("--hand", o->hand, "Which hand of the capture to transfer with a hand model: left or right (needed when it has two)")
         ->check(CLI::IsMember({"left", "right"}));

@@ -45,14 +45,18 @@ struct transfer_parts {
     double amplitude = 1, tempo = 1;    ///< the target's excursion scale (applied after the change) and tempo factor
     std::size_t frames = 0;             ///< output frame count
     double fps = 0;
-    keyframe_pixels<dynamic_keyframes> image;
+    keyframe_pixels<dynamic_keyframes> image;  ///< G's own output image (Eq. 3 pixels); empty when G was not run (run_generator false)
     std::size_t clamped_values = 0;
+    /// whether G ran: a transfer whose gate weighs G's whole change 0 for the target (the statistics setting) skips it
+    bool run_generator = true;
 };
 
 /// @brief The result of one transfer.
 struct transfer_result {
     clip motion;                      ///< the full-rate output clip
-    keyframe_pixels<dynamic_keyframes> image;  ///< the generated K x J motion image (Eq. 3 pixels)
+    /// the output's K x J motion image: the keyframes `motion` passes through, by Eq. 3 (what G itself produced,
+    /// before the gate, the posture prior, the joint lag and the amplitude stage, is transfer_parts::image)
+    keyframe_pixels<dynamic_keyframes> image;
     std::size_t clamped_values = 0;   ///< input keyframe angles outside [p_min, p_max] (clamped by Eq. 3)
     double tempo = 1.0;               ///< duration factor applied
     double amplitude = 1.0;           ///< excursion factor applied (1 unless the model learned amplitudes)
@@ -352,22 +356,27 @@ public:
         if (ws.capacity() == 0) ws = make_batch_workspace(1);
         for (std::size_t first = 0; first < in.size(); first += ws.capacity()) {
             const std::size_t count = std::min(ws.capacity(), in.size() - first);
+            std::size_t with_g = 0;  // the clips whose transfer needs G (gate_uses_generator()), first in x_, y_
             for (std::size_t i = 0; i < count; ++i) {
                 workspace::scratch& s = *ws.clips_[i].get();
                 parts_before_generator(in[first + i], target, source, ws.clips_[i], s.parts);
+                if (!gate_uses_generator(s.parts.target)) continue;
                 s.gen.count_ = s.net.count_;
                 s.gen.joints = s.net.joints;
                 s.gen.data.resize(s.net.data.size());
-                ws.x_[i] = s.net.data.data();
-                ws.y_[i] = s.gen.data.data();
-                ws.targets_[i] = s.parts.target;
+                ws.x_[with_g] = s.net.data.data();
+                ws.y_[with_g] = s.gen.data.data();
+                ws.targets_[with_g] = s.parts.target;
+                ++with_g;
             }
-            run_generator_batch(ws.x_.data(), ws.targets_.data(), ws.y_.data(), count, *ws.g_);
+            if (with_g) run_generator_batch(ws.x_.data(), ws.targets_.data(), ws.y_.data(), with_g, *ws.g_);
             for (std::size_t i = 0; i < count; ++i) {
                 workspace::scratch& s = *ws.clips_[i].get();
-                for (float v : s.gen.data)
-                    if (!std::isfinite(v)) throw value_error("transfer: model " + info_.source + ": the generator produced a non-finite value (corrupted weights?)");
-                parts_after_generator(in[first + i], target, source, s, s.parts);
+                const bool g = gate_uses_generator(s.parts.target);
+                if (g)
+                    for (float v : s.gen.data)
+                        if (!std::isfinite(v)) throw value_error("transfer: model " + info_.source + ": the generator produced a non-finite value (corrupted weights?)");
+                parts_after_generator(in[first + i], target, source, s, s.parts, g);
                 finish_transfer(in[first + i], target, source, s, out[first + i]);
             }
         }
@@ -396,8 +405,15 @@ private:
         in.validate("transfer: input");
         if (!ws.get()) ws = make_workspace();
         workspace::scratch& s = *ws.get();
+        extract_keyframes_into<dynamic_keyframes>(in, r.base, s.unwrapped, keyframes());
+        keyframes_before_generator(target, source, s, r);
+    }
+
+    /// parts_before_generator() from the input's keyframes, already in r.base.
+    void keyframes_before_generator(std::string_view target, std::optional<std::string_view> source, workspace::scratch& s,
+                                    transfer_parts& r) const
+    {
         auto& kf = r.base;
-        extract_keyframes_into<dynamic_keyframes>(in, kf, s.unwrapped, keyframes());
         const bool amp = amplitude_stage();
         // a model trained with the amplitude stage works in the amplitude-normalised space (prepare_data)
         const double a_src = info_.amplitude[domain(source ? *source : std::string_view(info_.neutral))];
@@ -410,18 +426,39 @@ private:
         r.target = domain(target);
     }
 
-    /// parts_into() after G (its output in s.gen): the change or the decoded keyframes, amplitude, tempo, length.
+    /// parts_into() after G (its output in s.gen when `ran`): the change or the decoded keyframes, amplitude, tempo, length.
     void parts_after_generator(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace::scratch& s,
-                               transfer_parts& r) const
+                               transfer_parts& r, bool ran = true) const
+    {
+        keyframes_after_generator(source, s, r, ran);
+        r.tempo = tempo(in, target, source);
+        r.frames = output_frames(in.frames, r.tempo);
+        r.fps = in.fps;
+    }
+
+    /// parts_after_generator() but the tempo and the length, which read the input clip. Without G (`ran` false, a
+    /// residual model only) the parts hold no change and no image.
+    void keyframes_after_generator(std::optional<std::string_view> source, workspace::scratch& s, transfer_parts& r, bool ran) const
     {
         auto& kf = r.base;
         const std::size_t C = joints() * 3;
         const bool amp = amplitude_stage();
-        from_network_into(s.gen, r.image);
+        r.run_generator = ran;
         r.change.clear();
         r.change_mean.clear();
         r.prior.clear();
-        if (residual()) {
+        if (ran)
+            from_network_into(s.gen, r.image);
+        else
+            r.image.values.clear();
+        if (!ran) {
+            // what a run of G fills, sized as it would size it: a later transfer that runs G allocates nothing
+            s.gen.data.resize(s.net.data.size());
+            r.image.values.reserve(s.net.data.size());
+            r.change.reserve(kf.angles.size());
+            r.change_mean.reserve(C);
+            if (!info_.prior_posture.empty()) r.prior.assign(info_.prior_posture[r.target].begin(), info_.prior_posture[r.target].end());
+        } else if (residual()) {
             // angle-space residual: input angles + G's change (network units x degrees per unit of the channel)
             const std::size_t plane = keyframes() * joints();
             r.change.resize(kf.angles.size());
@@ -450,15 +487,20 @@ private:
         lag_of(r.target, source, r.lag);
         // back from the normalised space: the target's excursions (net: amplitude[target] / amplitude[source])
         r.amplitude = amp ? info_.amplitude[r.target] : 1.0;
-        r.tempo = tempo(in, target, source);
-        r.frames = output_frames(in.frames, r.tempo);
-        r.fps = in.fps;
+    }
+
+    /// Whether transfer() needs G for target domain `t`: not when the model is residual and its gate weighs both
+    /// parts of G's change 0 for `t` (the statistics setting), since combine() then adds none of it.
+    bool gate_uses_generator(std::size_t t) const noexcept
+    {
+        return !residual() || info_.gate_posture[t] != 0.0 || info_.gate_motion[t] != 0.0;
     }
 
 public:
     /// @brief The output keyframes of `p` with a change gate (posture, motion, prior weights; see set_gate()), then
     /// the joint lag and the amplitude stage. (1, 1, 0) is G's whole change, (0, 0, 0) the input with the lag and the
-    /// amplitude stage. Not residual: G's output.
+    /// amplitude stage. Not residual: G's output. G's change is left out where both its weights are 0, and is
+    /// absent from parts made without G (transfer_parts::run_generator false).
     handemo::keyframes<dynamic_keyframes> combine(const transfer_parts& p, double posture, double motion, double prior) const
     {
         handemo::keyframes<dynamic_keyframes> out;
@@ -470,8 +512,8 @@ public:
     void combine_into(const transfer_parts& p, double posture, double motion, double prior, handemo::keyframes<dynamic_keyframes>& out) const
     {
         out = p.base;
-        if (!p.change.empty()) {
-            const std::size_t C = joints() * 3;
+        const std::size_t C = joints() * 3;
+        if (!p.change.empty() && (posture != 0.0 || motion != 0.0)) {
             if (posture == 1.0 && motion == 1.0) {
                 for (std::size_t i = 0; i < p.change.size(); ++i) out.angles[i] += p.change[i];
             } else {
@@ -482,10 +524,10 @@ public:
                         out.angles[k * C + ch] += posture * m + motion * (p.change[k * C + ch] - m);
                     }
             }
-            if (prior != 0.0 && !p.prior.empty())
-                for (std::size_t k = 0; k < keyframes(); ++k)
-                    for (std::size_t ch = 0; ch < C; ++ch) out.angles[k * C + ch] += prior * p.prior[ch];
         }
+        if (prior != 0.0 && !p.prior.empty())
+            for (std::size_t k = 0; k < keyframes(); ++k)
+                for (std::size_t ch = 0; ch < C; ++ch) out.angles[k * C + ch] += prior * p.prior[ch];
         if (!p.lag.empty()) shift_joints(out, p.lag);
         if (p.amplitude != 1.0) scale_keyframe_excursions(out, p.amplitude, info_.amplitude_anchor);
     }
@@ -522,6 +564,7 @@ public:
         if (!lag.empty()) shift_joints(kf, lag);
         if (amp && info_.amplitude[t] != 1.0) scale_keyframe_excursions(kf, info_.amplitude[t], info_.amplitude_anchor);
         transfer_result r;
+        encode_into(kf, info_.range, r.image);
         r.tempo = tempo(in, target, source);
         r.amplitude = amp ? amplitude(target, source) : 1.0;
         r.amplitude_anchor = info_.amplitude_anchor;
@@ -554,8 +597,40 @@ public:
     {
         if (!ws.get()) ws = make_workspace();
         workspace::scratch& s = *ws.get();
-        parts_into(in, target, source, ws, s.parts);
+        parts_before_generator(in, target, source, ws, s.parts);
+        const bool g = gate_uses_generator(s.parts.target);
+        if (g) generate_into(s.net, s.parts.target, ws, s.gen);
+        parts_after_generator(in, target, source, s, s.parts, g);
         finish_transfer(in, target, source, s, out);
+    }
+
+    /// @brief transfer() of an input given by its keyframes alone (the model's K x J, in degrees; a motion image
+    /// decoded by Eq. 6, for one): the output's keyframes, before the spline. The same steps as transfer() (the
+    /// amplitude stage, G, the model's gate, the posture prior, the joint lag); the output lasts tempo(target,
+    /// source) times the input (no clip to read tempo neighbours from).
+    /// @throws shape_error for keyframes of another count or joint count; value_error for an angle that is not
+    ///         finite or an unknown emotion.
+    handemo::keyframes<dynamic_keyframes> transfer_keyframes(const handemo::keyframes<dynamic_keyframes>& kf, std::string_view target,
+                                                            std::optional<std::string_view> source = {}) const
+    {
+        if (kf.count() != keyframes() || kf.joints != joints() || kf.angles.size() != keyframes() * joints() * 3)
+            throw shape_error("transfer: model " + info_.source + ": keyframes are " + std::to_string(kf.count()) + "x" +
+                              std::to_string(kf.joints) + " (keyframes x joints), the model expects " + std::to_string(keyframes()) +
+                              "x" + std::to_string(joints()));
+        for (std::size_t i = 0; i < kf.angles.size(); ++i)
+            if (!std::isfinite(kf.angles[i]))
+                throw value_error("transfer: keyframe " + std::to_string(i / (joints() * 3)) + ", joint '" +
+                                  info_.joint_names[(i / 3) % joints()] + "': angle is not finite");
+        workspace ws = make_workspace();
+        workspace::scratch& s = *ws.get();
+        s.parts.base = kf;
+        keyframes_before_generator(target, source, s, s.parts);
+        const bool g = gate_uses_generator(s.parts.target);
+        if (g) generate_into(s.net, s.parts.target, ws, s.gen);
+        keyframes_after_generator(source, s, s.parts, g);
+        const std::size_t t = s.parts.target;
+        combine_into(s.parts, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], s.out_keys);
+        return s.out_keys;
     }
 
 private:
@@ -568,7 +643,7 @@ private:
         combine_into(p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], s.out_keys);
         reconstruct_into(s.out_keys, in.skel, p.frames, in.fps, out.motion);
         out.clamped_values = p.clamped_values;
-        out.image = p.image;
+        encode_into(s.out_keys, info_.range, out.image);
         out.amplitude = amplitude_stage() ? amplitude(target, source) : 1.0;
         out.amplitude_anchor = info_.amplitude_anchor;
         out.tempo = p.tempo;
