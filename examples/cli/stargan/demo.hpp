@@ -150,7 +150,7 @@ inline void run_demo(demo_cli& o)
     std::cout << "demo 4/4: wrote\n"
               << "  " << outdir.string() << "/" << mname << "_<emotion>.bvh   transferred motions (open in Blender or three.js)\n"
               << "  " << outdir.string() << "/" << mname << "_<emotion>_detail.bvh   the same with the detail layer (transfer --detail)\n"
-              << "  " << outdir.string() << "/" << mname << "_<emotion>.bmp   generated motion images (Eq. 3)\n"
+              << "  " << outdir.string() << "/" << mname << "_<emotion>.bmp   the transfers' motion images (their keyframes, Eq. 3)\n"
               << "  " << (outdir / "filmstrip.png").string() << "   angry | happy | input (neutral) | sad | fearful\n"
               << "  " << (outdir / "filmstrip_real.png").string() << "   the real clips of those emotions, for comparison\n"
 #ifdef HANDEMO_HAVE_GIF
