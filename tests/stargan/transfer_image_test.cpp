@@ -163,6 +163,14 @@ TEST_CASE("G runs only for a target whose gate keeps some of its change")
         const clip old = sound.finish(in, p, 0, 0, 1);
         CHECK(std::memcmp(old.angles.data(), b.motion.angles.data(), old.angles.size() * sizeof(double)) == 0);
     }
+    // angles outside the model's range reach G clamped: reported where G runs, not where it does not
+    clip wide = in;
+    const std::size_t J3 = wide.skel.size() * 3;
+    for (std::size_t f = 0; f < wide.frames; ++f) wide.angles[f * J3 + 15] += 90.0;
+    const auto wide_parts = sound.parts(wide, "sad");
+    REQUIRE(wide_parts.clamped_values > 0);
+    CHECK(sound.transfer(wide, "sad").clamped_values == 0);
+    CHECK(sound.transfer(wide, ck.second.neutral).clamped_values == wide_parts.clamped_values);
     // parts() always runs G (the gate's fit needs its change), and a gate that keeps some of G's change runs it
     CHECK_THROWS_WITH_AS(broken.parts(in, "sad"), doctest::Contains("non-finite"), value_error);
     auto g_gate = std::vector<double>(D, 0.0);

@@ -413,8 +413,12 @@ inline void run_transfer(const transfer_cli& o)
     else
         write_bvh(o.out, cr.motion, cr.retargeted ? -1 : 6);
     if (r.clamped_values)
-        std::cerr << "transfer: warning: " << r.clamped_values << " keyframe angles of " << o.in << " lie outside the model's range ["
-                  << info.range.p_min << ", " << info.range.p_max << "] and were clamped by Eq. 3\n";
+        std::cerr << "transfer: warning: " << r.clamped_values << " keyframe angles of " << o.in
+                  << " lie outside the model's range ("
+                  << (info.range.per_channel() ? std::string("the training data's, per channel")
+                                               : "[" + std::to_string(info.range.p_min) + ", " + std::to_string(info.range.p_max) + "]")
+                  << ") and reached G clamped by Eq. 3"
+                  << (model->residual() ? " (the output adds G's change to the unclamped angles)" : " (the output is G's image)") << "\n";
     std::string weights;
     if (target.point) {  // the labels the point blends, in the model's domain order
         const auto w = target.control->weights(target.point->first, target.point->second);

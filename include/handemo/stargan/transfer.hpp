@@ -57,7 +57,9 @@ struct transfer_result {
     /// the output's K x J motion image: the keyframes `motion` passes through, by Eq. 3 (what G itself produced,
     /// before the gate, the posture prior, the joint lag and the amplitude stage, is transfer_parts::image)
     keyframe_pixels<dynamic_keyframes> image;
-    std::size_t clamped_values = 0;   ///< input keyframe angles outside [p_min, p_max] (clamped by Eq. 3)
+    /// input keyframe angles outside the model's range, which G saw clamped by Eq. 3 (0 when G did not run; a
+    /// residual model adds G's change to the unclamped angles)
+    std::size_t clamped_values = 0;
     double tempo = 1.0;               ///< duration factor applied
     double amplitude = 1.0;           ///< excursion factor applied (1 unless the model learned amplitudes)
     /// what the excursions were scaled about (the model's anchor, checkpoint_info::amplitude_anchor)
@@ -642,7 +644,7 @@ private:
         const std::size_t t = p.target;
         combine_into(p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], s.out_keys);
         reconstruct_into(s.out_keys, in.skel, p.frames, in.fps, out.motion);
-        out.clamped_values = p.clamped_values;
+        out.clamped_values = p.run_generator ? p.clamped_values : 0;
         encode_into(s.out_keys, info_.range, out.image);
         out.amplitude = amplitude_stage() ? amplitude(target, source) : 1.0;
         out.amplitude_anchor = info_.amplitude_anchor;
