@@ -5,6 +5,7 @@
 #include <handemo/motion/codec.hpp>
 #include <handemo/motion/synth.hpp>
 #include <handemo/stargan/configs.hpp>
+#include <handemo/stargan/continuous.hpp>
 #include <handemo/stargan/transfer.hpp>
 
 #include <cmath>
@@ -163,6 +164,17 @@ TEST_CASE("G runs only for a target whose gate keeps some of its change")
         const clip old = sound.finish(in, p, 0, 0, 1);
         CHECK(std::memcmp(old.angles.data(), b.motion.angles.data(), old.angles.size() * sizeof(double)) == 0);
     }
+    // the continuous control blends the labels' gated transfers: between two labels whose gates keep none of G's
+    // change it needs no G either (the point halfway from angry's direction to sad's, about neutral)
+    const auto table = load_circumplex(std::filesystem::path(HANDEMO_SOURCE_DIR) / "data" / "rcm" / "circumplex.json");
+    const continuous_control sound_dial(sound, table), broken_dial(broken, table);
+    const auto& pa = table.at("angry");
+    const auto& ps = table.at("sad");
+    const double v = 0.5 * (pa.valence + ps.valence), a = 0.5 * (pa.arousal + ps.arousal);
+    const auto w = sound_dial.weights(v, a);
+    REQUIRE(w[sound.domain(ck.second.neutral)] == 0.0);  // no weight on neutral, whose gate runs G
+    CHECK(broken_dial.transfer(in, v, a).motion.angles == sound_dial.transfer(in, v, a).motion.angles);
+    CHECK_THROWS_WITH_AS(broken_dial.transfer(in, 0.0, 0.0), doctest::Contains("non-finite"), value_error);  // neutral's point
     // angles outside the model's range reach G clamped: reported where G runs, not where it does not
     clip wide = in;
     const std::size_t J3 = wide.skel.size() * 3;

@@ -81,7 +81,7 @@ struct label_keyframes {
     std::vector<handemo::keyframes<dynamic_keyframes>> keys;  ///< [domains]; empty for a label not computed
     std::vector<bool> computed;                               ///< [domains]
     std::size_t source = 0;                                   ///< the input's domain
-    std::size_t clamped_values = 0;                           ///< input keyframe angles Eq. 3 clamped
+    std::size_t clamped_values = 0;                           ///< input keyframe angles G saw clamped by Eq. 3 (0: G not run)
     std::vector<double> tempo;  ///< [domains] the input's tempo factors (emotion_model::input_tempo())
 };
 
@@ -129,16 +129,17 @@ public:
         const std::size_t D = info.domains.size();
         out.keys.resize(D);
         out.computed.assign(D, false);
+        out.clamped_values = 0;
         out.source = model_->domain(source ? *source : std::string_view(info.neutral));
         out.tempo = model_->input_tempo(in);
         transfer_parts p;
         for (std::size_t d = 0; d < D; ++d) {
             if (!needed.empty() && needed[d] == 0) continue;
-            model_->parts_into(in, info.domains[d], source, ws, p);
+            model_->gated_parts_into(in, info.domains[d], source, ws, p);  // G only where the gate keeps some of its change
             p.amplitude = 1.0;  // the amplitude stage comes after the blend
             model_->combine_into(p, info.gate_posture[d], info.gate_motion[d], info.gate_prior.empty() ? 0.0 : info.gate_prior[d], out.keys[d]);
             out.computed[d] = true;
-            out.clamped_values = p.clamped_values;
+            if (p.run_generator) out.clamped_values = p.clamped_values;
         }
     }
 

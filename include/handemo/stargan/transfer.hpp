@@ -345,6 +345,20 @@ public:
         parts_after_generator(in, target, source, s, r);
     }
 
+    /// @brief parts_into() for the model's own gate: G runs only when the target's gate weighs some of its change
+    /// (a residual model's statistics setting weighs none; transfer_parts::run_generator says whether it ran). What
+    /// transfer() and the continuous control combine with the model's gate, the same bits as parts_into().
+    void gated_parts_into(const clip& in, std::string_view target, std::optional<std::string_view> source, workspace& ws,
+                          transfer_parts& r) const
+    {
+        if (!ws.get()) ws = make_workspace();
+        workspace::scratch& s = *ws.get();
+        parts_before_generator(in, target, source, ws, r);
+        const bool g = gate_uses_generator(r.target);
+        if (g) generate_into(s.net, r.target, ws, s.gen);
+        parts_after_generator(in, target, source, s, r, g);
+    }
+
     /// @brief transfer() of many clips to one target, with G run on batches of ws.capacity() clips (each layer over
     /// the batch before the next: frozen_generator::infer_batch), one thread. out[i] is what transfer(in[i], target,
     /// source) gives, bit for bit: G computes every image of a batch as it computes it alone.
@@ -599,10 +613,7 @@ public:
     {
         if (!ws.get()) ws = make_workspace();
         workspace::scratch& s = *ws.get();
-        parts_before_generator(in, target, source, ws, s.parts);
-        const bool g = gate_uses_generator(s.parts.target);
-        if (g) generate_into(s.net, s.parts.target, ws, s.gen);
-        parts_after_generator(in, target, source, s, s.parts, g);
+        gated_parts_into(in, target, source, ws, s.parts);
         finish_transfer(in, target, source, s, out);
     }
 
