@@ -97,6 +97,21 @@ if(NOT last_output MATCHES "G on batches of 2 files \\(residual convolutions by 
 endif()
 expect_single_transfers(${WORK_DIR}/batch_wino winograd FILES hand_pointing_neutral_0 hand_gripping_neutral_0 hand_crawling_neutral_0
                         OPTIONS --conv winograd)
+# the shipped model (no --model): its gate for sad keeps none of G's change, so neither a file's transfer nor a
+# folder's runs G, and both say so; the folder's file is the bytes of the file's transfer
+run_ok(shipped_one transfer --in ${D}/hand_pointing_neutral_0.bvh --emotion sad --out ${WORK_DIR}/shipped_one.bvh)
+if(NOT last_output MATCHES "G not run: the gate keeps none of its change")
+  message(FATAL_ERROR "transfer with the shipped model did not say that G was not run: ${last_output}")
+endif()
+run_ok(shipped_folder transfer --in ${WORK_DIR}/batch_in --emotion sad --out ${WORK_DIR}/shipped_out --threads 2)
+if(NOT last_output MATCHES "G not run: the gate of sad keeps none of its change")
+  message(FATAL_ERROR "transfer of a folder with the shipped model did not say that G was not run: ${last_output}")
+endif()
+file(READ ${WORK_DIR}/shipped_one.bvh shipped_single)
+file(READ ${WORK_DIR}/shipped_out/hand_pointing_neutral_0.bvh shipped_batched)
+if(NOT shipped_single STREQUAL shipped_batched)
+  message(FATAL_ERROR "transfer of a folder with the shipped model wrote another motion than transfer of the file")
+endif()
 run_fail(bad_conv transfer --model ${M} --in ${D}/hand_pointing_neutral_0.bvh --emotion sad --out ${WORK_DIR}/x.bvh --conv fft)
 expect_error_matches("--conv")
 file(WRITE ${WORK_DIR}/batch_in/broken.bvh "HIERARCHY\nROOT hand\n{\n")

@@ -336,9 +336,11 @@ inline void run_folder(const transfer_cli& o, const stargan::emotion_model& mode
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "transfer: " << files.size() - failed.size() << " of " << files.size() << " files of " << o.in << " -> " << target.title << " -> "
               << o.out << " (" << threads << " threads, "
-              << (batched ? "G on batches of " + std::to_string(batch) + " files" +
-                                (model.conv_algorithm() == kernels::conv_algorithm::winograd ? " (residual convolutions by Winograd), " : ", ")
-                          : std::string())
+              << (batched && !model.uses_generator(o.emotion)
+                      ? "G not run: the gate of " + o.emotion + " keeps none of its change, "
+                  : batched ? "G on batches of " + std::to_string(batch) + " files" +
+                                  (model.conv_algorithm() == kernels::conv_algorithm::winograd ? " (residual convolutions by Winograd), " : ", ")
+                            : std::string())
               << static_cast<double>(files.size()) / std::max(seconds, 1e-9) << " files/s)\n";
     if (!failed.empty()) {
         std::string names;
@@ -441,8 +443,10 @@ inline void run_transfer(const transfer_cli& o)
             lag = b;
         }
     }
+    const bool no_g = !target.point && !target.curve && !o.emotion.empty() && !model->uses_generator(o.emotion);
     std::cout << "transfer: " << o.in << " (" << in.frames << " frames) -> " << target.title << " (tempo x" << r.tempo << ", "
-              << cr.motion.frames << " frames" << (o.detail ? ", with detail" : "") << lag << weights << ") -> " << o.out << "\n";
+              << cr.motion.frames << " frames" << (o.detail ? ", with detail" : "") << lag << weights
+              << (no_g ? ", G not run: the gate keeps none of its change" : "") << ") -> " << o.out << "\n";
     if (!o.filmstrip.empty()) write_path_filmstrip(o, target, in, co);
 }
 

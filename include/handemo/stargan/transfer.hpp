@@ -505,12 +505,18 @@ private:
         r.amplitude = amp ? info_.amplitude[r.target] : 1.0;
     }
 
-    /// Whether transfer() needs G for target domain `t`: not when the model is residual and its gate weighs both
-    /// parts of G's change 0 for `t` (the statistics setting), since combine() then adds none of it.
     bool gate_uses_generator(std::size_t t) const noexcept
     {
         return !residual() || info_.gate_posture[t] != 0.0 || info_.gate_motion[t] != 0.0;
     }
+
+public:
+    /// @brief Whether transfer() to `target` runs G: not when the model is residual and its gate weighs both parts
+    /// of G's change 0 for the target (the statistics setting), since none of it would reach the output.
+    /// @throws value_error for an unknown emotion.
+    bool uses_generator(std::string_view target) const { return gate_uses_generator(domain(target)); }
+
+private:
 
 public:
     /// @brief The output keyframes of `p` with a change gate (posture, motion, prior weights; see set_gate()), then
