@@ -246,3 +246,53 @@ TEST_CASE("conv kernels match the reference on random geometries with many chann
     check_every_route(routes, tested);  // the title's claim: every dispatch route was taken
     CHECK(routes.backward_weight_ws > 0);
 }
+
+TEST_CASE("backward-weight by parts of output channels: every weight the bits of one pass")
+{
+    // conv2d_backward_weight_parts() cuts a pass into parts of output channels (the autodiff's threads take one
+    // each): each part, run on gy's channels of the part, must give the whole pass's weights bit for bit, so that a
+    // training's bits do not depend on its thread count. The generator's and discriminator's layers of the
+    // embedded, body and paper configurations, at the per-shard and whole batches.
+    const std::vector<hk::conv_geometry> layers = {
+        {16, 8, 9, 24, 32, 7, 7, 1, 3},    {16, 32, 9, 24, 64, 4, 4, 2, 1},  {16, 64, 5, 12, 128, 4, 4, 2, 1},
+        {16, 128, 3, 6, 128, 3, 3, 1, 1},  {8, 128, 3, 6, 128, 3, 3, 1, 1},  {16, 3, 9, 24, 64, 4, 4, 2, 1},
+        {16, 128, 3, 6, 256, 4, 4, 2, 1},  {16, 256, 2, 3, 1, 3, 3, 1, 1},   {8, 64, 9, 24, 64, 4, 4, 2, 1},
+        {16, 256, 3, 6, 256, 3, 3, 1, 1},  {8, 10, 9, 24, 64, 7, 7, 1, 3},   {16, 64, 9, 24, 3, 7, 7, 1, 3}};
+    std::mt19937 rng(5);
+    int split = 0;
+    for (const auto& g : layers) {
+        CAPTURE(describe(g));
+        const auto x = cast<float>(random_values(g.x_size(), rng)), gy = cast<float>(random_values(g.y_size(), rng));
+        std::vector<float> whole(g.w_size(), 0.5f), s(hk::conv2d_scratch_size<float>(g) + 16);
+        hk::conv2d_backward_weight<float>(g, x.data(), gy.data(), whole.data(), s.data());
+        for (const int most : {2, 3, 4}) {
+            const int parts = hk::conv2d_backward_weight_parts<float>(g, most);
+            CAPTURE(most);
+            CHECK(parts >= 1);
+            CHECK(parts <= most);
+            if (parts == 1) continue;
+            ++split;
+            std::vector<float> cut(g.w_size(), 0.5f);
+            const std::size_t pix = std::size_t(g.out_h()) * g.out_w(), wk = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
+            int covered = 0;
+            for (int k = 0; k < parts; ++k) {
+                const auto [o0, o1] = hk::conv2d_backward_weight_part<float>(g, parts, k);
+                CHECK(o0 == covered);
+                covered = o1;
+                hk::conv_geometry gp = g;
+                gp.out_channels = o1 - o0;
+                std::vector<float> gyp(gp.y_size()), sp(hk::conv2d_scratch_size<float>(gp) + 16);
+                for (int n = 0; n < g.batch; ++n)
+                    std::copy_n(gy.begin() + std::ptrdiff_t((std::size_t(n) * g.out_channels + o0) * pix), std::size_t(gp.out_channels) * pix,
+                                gyp.begin() + std::ptrdiff_t(std::size_t(n) * gp.out_channels * pix));
+                hk::conv2d_backward_weight<float>(gp, x.data(), gyp.data(), cut.data() + std::size_t(o0) * wk, sp.data());
+            }
+            CHECK(covered == g.out_channels);
+            CHECK(std::equal(cut.begin(), cut.end(), whole.begin()));  // bit for bit (no NaN here)
+        }
+    }
+    CHECK(split >= 10);  // most layers do split
+    // a pass whose channels fill no two parts of 16 is not cut
+    CHECK(hk::conv2d_backward_weight_parts<float>({16, 64, 9, 24, 3, 7, 7, 1, 3}, 4) == 1);
+    CHECK(hk::conv2d_backward_weight_parts<float>({16, 8, 9, 24, 16, 7, 7, 1, 3}, 2) == 1);
+}

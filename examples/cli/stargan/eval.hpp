@@ -97,8 +97,9 @@ static handemo::cli::add_command reg_eval{55, [](CLI::App& app) {
                   "(when only the change gate's options differ, the gate is fitted again from the stored inner models)");
     handemo::cli::add_train_options(sub, t, o->ov);
     sub->add_option("--jobs", o->opt.jobs,
-                    "Trainings at once, each with --threads threads (1 when --threads is 0): above 1 every model is trained first, "
-                    "the folds then scored one by one; the models are bit for bit those of --jobs 1")
+                    "Trainings at once, each with --threads threads (1 when --threads is 0), the last to start with --jobs times as "
+                    "many: above 1 every model is trained first, the folds then scored one by one; the models are bit for bit "
+                    "those of --jobs 1")
         ->capture_default_str()
         ->check(CLI::Range(std::size_t{1}, std::size_t{64}));
     if (!handemo::cli::mpi().group)  // built without MPI: --mpi says why it is absent

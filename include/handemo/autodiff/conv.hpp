@@ -30,11 +30,23 @@ conv_geometry geometry_of(const node<T>& n)
     return n.template params<conv_geometry>();
 }
 
-/// Number of batch chunks to run in parallel (1 without a pool).
+/// Number of batch chunks to run in parallel (1 without a pool): the most, up to the pool's size, whose every chunk
+/// the kernels compute with the whole batch's bits (kernels::conv2d_batch_part_keeps_bits()), so that the result
+/// does not depend on the thread count.
 template <class T>
 int chunks(tape<T>& t, const conv_geometry& g) noexcept
 {
-    return t.pool() ? std::max(1, std::min<int>(g.batch, int(t.pool()->size()))) : 1;
+    if (!t.pool()) return 1;
+    for (int P = std::max(1, std::min<int>(g.batch, int(t.pool()->size()))); P > 1; --P) {
+        bool same = true;
+        for (int c = 0; c < P && same; ++c) {
+            conv_geometry gc = g;
+            gc.batch = int(long(g.batch) * (c + 1) / P) - int(long(g.batch) * c / P);
+            same = ck::conv2d_batch_part_keeps_bits<T>(g, gc);
+        }
+        if (same) return P;
+    }
+    return 1;
 }
 
 /// Runs f(geometry of a batch chunk, first sample, chunk index) for every chunk; scratch per chunk.
@@ -93,20 +105,40 @@ void conv_bwd_data(tape<T>& t, const conv_geometry& g, const T* gy, const T* w, 
         ck::conv2d_backward_data<T>(gc, gy + n0 * ys, w, gx + n0 * xs, s, panels);
     });
 }
-// gw += sum_n x[n] (*) gy[n]; per-chunk accumulators reduced in chunk order (deterministic).
+// gw += sum_n x[n] (*) gy[n], split over the pool by output channels, never by samples
+// (kernels::conv2d_backward_weight_parts()): each weight is summed by one thread in the order of one pass, so the
+// bits do not depend on the thread count. A geometry no split keeps the bits of runs on one thread.
 template <class T>
 void conv_bwd_weight(tape<T>& t, const conv_geometry& g, const T* x, const T* gy, T* gw)
 {
-    const std::size_t xs = std::size_t(g.in_channels) * g.in_h * g.in_w;
-    const std::size_t ys = std::size_t(g.out_channels) * g.out_h() * g.out_w();
-    const int P = chunks(t, g);
-    const std::size_t ws = g.w_size();
-    T* acc = P > 1 ? t.alloc_zero(ws * (P - 1)) : nullptr;
-    for_batch_chunks(t, g, [&](const conv_geometry& gc, int n0, int c, T* s) {
-        ck::conv2d_backward_weight<T>(gc, x + n0 * xs, gy + n0 * ys, c == 0 ? gw : acc + ws * (c - 1), s);
+    const int P = t.pool() ? ck::conv2d_backward_weight_parts<T>(g, int(t.pool()->size())) : 1;
+    if (P == 1) {
+        const std::size_t ss = ck::conv2d_scratch_size<T>(g);
+        ck::conv2d_backward_weight<T>(g, x, gy, gw, ss ? t.scratch(ss) : nullptr);
+        return;
+    }
+    // per part: gy's channels of the part, image by image, then the kernel's scratch (each 64-byte aligned)
+    const std::size_t pix = std::size_t(g.out_h()) * g.out_w(), wk = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
+    constexpr std::size_t round = 64 / sizeof(T);
+    const auto up = [](std::size_t n) { return (n + round - 1) / round * round; };
+    std::size_t per = 0;
+    for (int k = 0; k < P; ++k) {
+        const auto [o0, o1] = ck::conv2d_backward_weight_part<T>(g, P, k);
+        conv_geometry gp = g;
+        gp.out_channels = o1 - o0;
+        per = std::max(per, up(gp.y_size()) + up(ck::conv2d_scratch_size<T>(gp)));
+    }
+    T* base = t.scratch(per * std::size_t(P));
+    t.pool()->parallel_for(0, P, [&](int k) {
+        const auto [o0, o1] = ck::conv2d_backward_weight_part<T>(g, P, k);
+        conv_geometry gp = g;
+        gp.out_channels = o1 - o0;
+        T* gyp = base + per * std::size_t(k);
+        for (int n = 0; n < g.batch; ++n)
+            std::memcpy(gyp + std::size_t(n) * gp.out_channels * pix, gy + (std::size_t(n) * g.out_channels + std::size_t(o0)) * pix,
+                        sizeof(T) * std::size_t(gp.out_channels) * pix);
+        ck::conv2d_backward_weight<T>(gp, x, gyp, gw + std::size_t(o0) * wk, gyp + up(gp.y_size()));
     });
-    for (int c = 1; c < P; ++c)
-        for (std::size_t i = 0; i < ws; ++i) gw[i] += acc[ws * (c - 1) + i];
 }
 // dst += src
 template <class T>

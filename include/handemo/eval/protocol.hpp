@@ -376,12 +376,26 @@ void train_fold_model(const std::vector<labelled_clip>& train, const stargan::co
                       plot_losses_svg(stargan::loss_log_csv(tr.log()), {.title = "eval " + info.name + ": fold without " + held}));
 }
 
+/// The options of a training on `slots` job slots (training_job::run_on_slots): `slots` times the threads, the
+/// shards the options resolve to on their own threads kept, so the same bits (a training's bits depend on its
+/// shards, not on its threads: stargan::train_options::shards). Unchanged for one slot, for all cores (threads 0)
+/// and for a training shared between processes.
+template <stargan::stargan_config Config>
+stargan::train_options on_slots(stargan::train_options o, std::size_t slots)
+{
+    if (slots <= 1 || o.threads == 0 || o.exchange) return o;
+    if (o.shards == 0) o.shards = o.threads == 1 ? 1 : stargan::trainer<Config>::max_shards();
+    o.threads = static_cast<unsigned>(o.threads * slots);
+    return o;
+}
+
 /// @brief Trains every model the folds need, opt.jobs at a time (schedule.hpp): the change gates' inner models
 /// (the shared plan's, or each fold's own), then each fold's final G once its inner models exist (its gate is
 /// fitted around them, reused). With opt.reuse_models a fold whose checkpoint exists is left to the fold loop,
 /// and only the inner models of a stored gate fitted with other groups are trained here. Each training runs with
-/// train.threads threads (1 when that is 0 and opt.jobs > 1) and no progress bar of its own; one line per finished
-/// training. With a group of several processes, each trains its share of every wave (run_training_waves()).
+/// train.threads threads (1 when that is 0 and opt.jobs > 1), the last to start with opt.jobs times as many and the
+/// same bits (on_slots()), and no progress bar of its own; one line per finished training. With a group of several
+/// processes, each trains its share of every wave (run_training_waves()).
 /// @return per fold, the seconds its final G took (-1: left to the fold loop, reused)
 template <stargan::stargan_config Config, std::size_t K>
 std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const stargan::config_info& info, const eval_options& opt,
@@ -459,24 +473,24 @@ std::vector<double> train_all(const std::vector<prepared_clip<K>>& all, const st
         for (const auto& c : contents)
             if (std::any_of(inner_train[i].begin(), inner_train[i].end(), [&](const labelled_clip& x) { return x.content == c; }))
                 names += (names.empty() ? "" : ", ") + c;
-        jobs.push_back({"gate model " + inner_dirs[i].lexically_relative(out_dir).string() + " (on " + names + ")",
-                        [&, i] {
+        jobs.push_back({"gate model " + inner_dirs[i].lexically_relative(out_dir).string() + " (on " + names + ")", {}, {}, 0,
+                        inner_dirs[i] / "checkpoint.safetensors", [&, i](std::size_t slots) {
                             bool reused = false;
-                            stargan::detail::inner_gate_model<Config>(inner_train[i], info, inner_opts[i], inner_dirs[i], true, "", reused);
-                        },
-                        {}, 0, inner_dirs[i] / "checkpoint.safetensors"});
+                            stargan::detail::inner_gate_model<Config>(inner_train[i], info, on_slots<Config>(inner_opts[i], slots),
+                                                                      inner_dirs[i], true, "", reused);
+                        }});
     }
     for (std::size_t fi = 0; fi < folds.size(); ++fi) {
         auto& f = fj[fi];
         if (f.stored) continue;
         std::vector<std::size_t> after = fold_inner[fi];
         final_job[fi] = jobs.size();
-        jobs.push_back({"fold without " + f.held, [&, fi] {
+        jobs.push_back({"fold without " + f.held, {}, std::move(after), 0, f.dir / "checkpoint.safetensors", [&, fi](std::size_t slots) {
                             auto& g = fj[fi];
                             // its inner models were trained by the jobs it waits on
-                            train_fold_model<Config>(g.train, info, g.to, g.held, g.dir, g.sum, g.plan ? &*g.plan : nullptr, true);
-                        },
-                        std::move(after), 0, f.dir / "checkpoint.safetensors"});
+                            train_fold_model<Config>(g.train, info, on_slots<Config>(g.to, slots), g.held, g.dir, g.sum,
+                                                     g.plan ? &*g.plan : nullptr, true);
+                        }});
     }
     const std::size_t processes = opt.group ? opt.group->ranks() : 1;
     const std::string where = processes > 1 ? " on each of " + std::to_string(processes) + " processes" : "";

@@ -180,11 +180,15 @@ struct training_job {
     std::vector<std::size_t> after;  ///< jobs that must be done first
     double seconds = 0;              ///< how long run() took
     std::filesystem::path output;    ///< the file run() leaves (in a group, every process checks it after the job's wave)
+    /// when set, called instead of run() with the job slots the job may use: 1, or every slot for the last job to
+    /// start (no job is left for the other slots, whose jobs are ending); a job whose result does not depend on
+    /// its thread count can take that many times its threads
+    std::function<void(std::size_t)> run_on_slots = {};
 };
 
 /// @brief Runs `jobs_list` with up to `jobs` at once, each job only after those it names in `after`, printing a
-/// line with the count done and an ETA after each. The first error stops handing out jobs; it is rethrown once
-/// the running ones end.
+/// line with the count done and an ETA after each. The last job to start is offered all `jobs` slots
+/// (training_job::run_on_slots). The first error stops handing out jobs; it is rethrown once the running ones end.
 /// @throws value_error for a job waiting on itself or on a later or unknown job (the list must be in an order
 /// that can run); the first error of a job otherwise.
 inline void run_training_jobs(std::vector<training_job>& jobs_list, std::size_t jobs, std::FILE* progress_out, const std::string& what)
@@ -210,7 +214,7 @@ inline void run_training_jobs(std::vector<training_job>& jobs_list, std::size_t 
     };
     auto worker = [&] {
         for (;;) {
-            std::size_t i = 0;
+            std::size_t i = 0, slots = 1;
             {
                 std::unique_lock lock(m);
                 std::optional<std::size_t> pick;
@@ -222,10 +226,14 @@ inline void run_training_jobs(std::vector<training_job>& jobs_list, std::size_t 
                 if (error || !pick) return;
                 i = *pick;
                 started[i] = 1;
+                slots = std::all_of(started.begin(), started.end(), [](char s) { return s != 0; }) ? std::max<std::size_t>(jobs, 1) : 1;
             }
             const auto t0 = std::chrono::steady_clock::now();
             try {
-                jobs_list[i].run();
+                if (jobs_list[i].run_on_slots)
+                    jobs_list[i].run_on_slots(slots);
+                else
+                    jobs_list[i].run();
             } catch (...) {
                 std::lock_guard lock(m);
                 if (!error) error = std::current_exception();
@@ -322,7 +330,8 @@ inline void run_training_waves(std::vector<training_job>& jobs_list, dist::proce
                          w + 1, waves, in_wave.size(), R, mine.size(), me, jobs),
                 std::fflush(progress_out);
         std::vector<training_job> share;  // what waits on earlier waves is done: their barrier has passed
-        for (std::size_t i : mine) share.push_back({jobs_list[i].label, jobs_list[i].run, {}, 0, jobs_list[i].output});
+        for (std::size_t i : mine)
+            share.push_back({jobs_list[i].label, jobs_list[i].run, {}, 0, jobs_list[i].output, jobs_list[i].run_on_slots});
         run_training_jobs(share, jobs, progress_out, what + " (wave " + std::to_string(w + 1) + ")");
         std::vector<double> seconds(in_wave.size(), 0.0), all(in_wave.size() * R);
         for (std::size_t k = 0; k < mine.size(); ++k)

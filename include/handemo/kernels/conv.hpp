@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <type_traits>
+#include <utility>
 
 #include <handemo/kernels/detail/conv_simd.hpp>
 #include <handemo/kernels/detail/packed_conv.hpp>
@@ -193,6 +194,54 @@ void conv2d_backward_weight(const conv_geometry& g, const T* x, const T* gy, T* 
 {
     if constexpr (detail::fast_type<T>) detail::backward_weight_any(g, x, gy, gw, scratch);
     else reference::conv2d_backward_weight(g, x, gy, gw, scratch);
+}
+
+/// @brief Output channels [first, second) of part k of `parts` of a backward-weight pass of geometry g
+/// (conv2d_backward_weight_parts()): consecutive runs of whole SIMD vectors, the last part taking the rest.
+template <class T>
+std::pair<int, int> conv2d_backward_weight_part(const conv_geometry& g, int parts, int k) noexcept
+{
+    const int L = detail::simd_lanes<T>, vectors = g.out_channels / L;
+    const auto at = [&](int i) { return i >= parts ? g.out_channels : vectors * i / parts * L; };
+    return {at(k), at(k + 1)};
+}
+
+/// @brief Into how many parts of output channels (at most `most`) a backward-weight pass of geometry g can be cut
+/// with every weight's sum the same bits as in one pass: each part is the same pass over its channels
+/// (conv2d_backward_weight() with gy's channels of the part), so each weight is summed by one call in one order.
+/// That holds where the whole and every part take the weight-stationary path, whose per-weight order does not
+/// depend on the channel count (tested part by part against the whole); 1 elsewhere.
+template <class T>
+int conv2d_backward_weight_parts(const conv_geometry& g, int most) noexcept
+{
+    if constexpr (!detail::fast_type<T>) return 1;
+    else {
+        if (most < 2 || !detail::use_backward_weight_ws<T>(g)) return 1;
+        for (int p = std::min(most, g.out_channels / std::max(16, detail::simd_lanes<T>)); p > 1; --p) {
+            bool same = true;
+            for (int k = 0; k < p && same; ++k) {
+                const auto [o0, o1] = conv2d_backward_weight_part<T>(g, p, k);
+                conv_geometry gp = g;
+                gp.out_channels = o1 - o0;
+                same = o1 - o0 >= 16 && detail::use_backward_weight_ws<T>(gp);
+            }
+            if (same) return p;
+        }
+        return 1;
+    }
+}
+
+/// @brief Whether the forward and backward-data passes of a batch `part` of geometry g give each image the bits the
+/// whole batch's pass gives it. Each image's sums run in one order on every path; what the batch changes is the
+/// path: the dot-product path serves at most dot_max_pixels pixels of the batch, so a smaller part can take it
+/// where the whole batch does not (forward, and backward-data through its flipped forward pass).
+template <class T>
+bool conv2d_batch_part_keeps_bits(const conv_geometry& g, const conv_geometry& part) noexcept
+{
+    if constexpr (!detail::fast_type<T>) return true;
+    else
+        return detail::use_dot_forward<T>(g) == detail::use_dot_forward<T>(part) &&
+               detail::use_dot_forward<T>(detail::flipped_geometry(g)) == detail::use_dot_forward<T>(detail::flipped_geometry(part));
 }
 
 /// @brief gb += dL/db.  dL/db[o] = sum_{n,i,j} gy[n,o,i,j]
