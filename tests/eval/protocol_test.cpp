@@ -776,6 +776,29 @@ TEST_CASE("training jobs: a job starts only after those it waits on; the first e
     CHECK_THROWS_WITH_AS(run_training_jobs(failing, 2, nullptr, "test"), doctest::Contains("planted failure"), value_error);
     CHECK(ran_after_error == 0);
 
+    // the last job to start is offered every slot, the others one; a job without run_on_slots runs run()
+    std::vector<std::size_t> slots(5, 0);
+    std::atomic<int> plain{0};
+    std::vector<training_job> offered;
+    for (std::size_t i = 0; i < 4; ++i)
+        offered.push_back({"job " + std::to_string(i), {}, {}, 0, {}, [&, i](std::size_t s) {
+                               std::this_thread::sleep_for(std::chrono::milliseconds(10));
+                               slots[i] = s;
+                           }});
+    offered.push_back({"plain", [&] { ++plain; }, {3}, 0});
+    run_training_jobs(offered, 3, nullptr, "test");
+    CHECK(slots[0] == 1);
+    CHECK(slots[1] == 1);
+    CHECK(slots[2] == 1);
+    CHECK(slots[3] == 1);
+    CHECK(plain == 1);
+    std::vector<training_job> last;
+    for (std::size_t i = 0; i < 3; ++i) last.push_back({"job " + std::to_string(i), {}, {}, 0, {}, [&, i](std::size_t s) { slots[i] = s; }});
+    run_training_jobs(last, 2, nullptr, "test");
+    CHECK(slots[0] == 1);
+    CHECK(slots[1] == 1);
+    CHECK(slots[2] == 2);
+
     std::vector<training_job> backwards;
     backwards.push_back({"waits on a later job", [] {}, {1}, 0});
     backwards.push_back({"later", [] {}, {}, 0});

@@ -55,8 +55,8 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
         ->capture_default_str();
     sub->add_option("--threads", t.threads, "Worker threads (0: all cores)")->capture_default_str();
     sub->add_option("--shards", t.shards,
-                    "Data-parallel parts of a batch: 2 = two halves, each on its own thread (the same result on 1, 2 or 3 "
-                    "threads); 1 = the whole batch on one tape; 0 = 1 on one thread, else 2")
+                    "Data-parallel parts of a batch: 2 = two halves, each on its own thread; 1 = the whole batch on one tape; "
+                    "0 = 1 on one thread, else 2. The result depends on it, not on the thread count")
         ->check(CLI::Range(0, 2))
         ->capture_default_str();
     sub->add_option("--lr", o.lr, "Learning rate of both G and D (overrides --g-lr and --d-lr)");

@@ -131,7 +131,7 @@ static handemo::cli::add_command reg_train{40, [](CLI::App& app) {
     sub->add_option("--config", o->config, "hand-embedded | hand-paper | body-embedded | hand-micro | hand-tiny")->capture_default_str();
     sub->add_option("--iters", t.iters, "D iterations (G every --n-critic)")->capture_default_str();
     sub->add_option("--exclude-content", o->exclude, "Leave this content (motion type) out of training; repeatable");
-    sub->add_option("--seed", t.seed, "Random seed; the same seed and threads (or --shards 2 and up to 3 threads) give bitwise the same weights")->capture_default_str();
+    sub->add_option("--seed", t.seed, "Random seed; the same seed and shards (--shards) give bitwise the same weights on any thread count")->capture_default_str();
     sub->add_flag("--resume", o->resume, "Continue from MODEL/checkpoint.safetensors");
     if (handemo::cli::mpi().start)
         sub->add_flag("--mpi", o->mpi,

@@ -80,7 +80,7 @@ struct train_options {
     unsigned threads = 0;       ///< 0: all cores
     /// data-parallel parts of a batch (trainer::train_step): 2 halves on their own tapes and threads, or 1 (the
     /// whole batch on one tape, its convolutions split over the threads); 0: 1 on one thread, else 2. The
-    /// result depends on it (float sums in another order), not on the thread count for 2 (up to 3 threads).
+    /// result depends on it (float sums in another order), not on the thread count (autodiff/conv.hpp).
     std::size_t shards = 0;
     long checkpoint_every = 500;
     long log_every = 10;
