@@ -96,26 +96,37 @@ TEST_CASE("a tiny StarGAN learns: D's classification loss falls on a toy set")
         for (double v : r.values) CHECK(std::isfinite(v));
 }
 
+namespace {
+/// 24 random images of configuration Cfg with labels cycling over its domains (8 contents), tempo and amplitude 1.
+template <class Cfg>
+prepared_data random_images_data(unsigned seed)
+{
+    using tr_t = trainer<Cfg>;
+    prepared_data data;
+    data.H = tr_t::H, data.W = tr_t::W, data.K = Cfg::keyframes, data.J = Cfg::joints, data.domains = Cfg::domains;
+    std::mt19937 r(seed);
+    std::uniform_real_distribution<float> u(-1, 1);
+    constexpr std::size_t count = 24;
+    data.images.resize(count * 3 * tr_t::H * tr_t::W);
+    for (auto& v : data.images) v = u(r);
+    for (std::size_t m = 0; m < count; ++m) {
+        data.labels.push_back(int(m % Cfg::domains));
+        data.contents.push_back("c" + std::to_string(m / Cfg::domains));
+        data.sources.push_back("random" + std::to_string(m));
+    }
+    data.tempo.assign(Cfg::domains, 1.0);
+    data.amplitude.assign(Cfg::domains, 1.0);
+    return data;
+}
+}  // namespace
+
 TEST_CASE("training with the tapes' panel cache gives the bits of packing at every convolution (1 and 2 shards)")
 {
     // hand-embedded's layers take the weight-stationary kernel (the tiny config's channels fill no vector), so G's
     // and D's panels are packed: once per phase with the cache, G's kept from the D phase for the G phase
     using cfg = hand_embedded;
     using tr_t = trainer<cfg>;
-    prepared_data data;
-    data.H = tr_t::H, data.W = tr_t::W, data.K = cfg::keyframes, data.J = cfg::joints, data.domains = cfg::domains;
-    std::mt19937 r(3);
-    std::uniform_real_distribution<float> u(-1, 1);
-    constexpr std::size_t count = 24;
-    data.images.resize(count * 3 * tr_t::H * tr_t::W);
-    for (auto& v : data.images) v = u(r);
-    for (std::size_t m = 0; m < count; ++m) {
-        data.labels.push_back(int(m % cfg::domains));
-        data.contents.push_back("c" + std::to_string(m / cfg::domains));
-        data.sources.push_back("random" + std::to_string(m));
-    }
-    data.tempo.assign(cfg::domains, 1.0);
-    data.amplitude.assign(cfg::domains, 1.0);
+    const prepared_data data = random_images_data<cfg>(3);
     const auto info = make_info<cfg>("hand-embedded", hand_domains(), "neutral");
     for (const std::size_t shards : {1, 2}) {
         CAPTURE(shards);
@@ -207,20 +218,7 @@ TEST_CASE("training's bits do not depend on its thread count for a given number 
     // hand-embedded's layers are wide enough to be cut (the tiny configuration's are not).
     using cfg = hand_embedded;
     using tr_t = trainer<cfg>;
-    prepared_data data;
-    data.H = tr_t::H, data.W = tr_t::W, data.K = cfg::keyframes, data.J = cfg::joints, data.domains = cfg::domains;
-    std::mt19937 r(7);
-    std::uniform_real_distribution<float> u(-1, 1);
-    constexpr std::size_t count = 24;
-    data.images.resize(count * 3 * tr_t::H * tr_t::W);
-    for (auto& v : data.images) v = u(r);
-    for (std::size_t m = 0; m < count; ++m) {
-        data.labels.push_back(int(m % cfg::domains));
-        data.contents.push_back("c" + std::to_string(m / cfg::domains));
-        data.sources.push_back("random" + std::to_string(m));
-    }
-    data.tempo.assign(cfg::domains, 1.0);
-    data.amplitude.assign(cfg::domains, 1.0);
+    const prepared_data data = random_images_data<cfg>(7);
     const auto info = make_info<cfg>("hand-embedded", hand_domains(), "neutral");
     auto run = [&](unsigned threads, std::size_t shards) {
         auto o = quiet(2);
