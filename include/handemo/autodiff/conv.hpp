@@ -121,18 +121,20 @@ void conv_bwd_weight(tape<T>& t, const conv_geometry& g, const T* x, const T* gy
     const std::size_t pix = std::size_t(g.out_h()) * g.out_w(), wk = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
     constexpr std::size_t round = 64 / sizeof(T);
     const auto up = [](std::size_t n) { return (n + round - 1) / round * round; };
-    std::size_t per = 0;
-    for (int k = 0; k < P; ++k) {
+    const auto part = [&](int k) {  // part k's first channel and geometry
         const auto [o0, o1] = ck::conv2d_backward_weight_part<T>(g, P, k);
         conv_geometry gp = g;
         gp.out_channels = o1 - o0;
+        return std::pair{o0, gp};
+    };
+    std::size_t per = 0;
+    for (int k = 0; k < P; ++k) {
+        const conv_geometry gp = part(k).second;
         per = std::max(per, up(gp.y_size()) + up(ck::conv2d_scratch_size<T>(gp)));
     }
     T* base = t.scratch(per * std::size_t(P));
     t.pool()->parallel_for(0, P, [&](int k) {
-        const auto [o0, o1] = ck::conv2d_backward_weight_part<T>(g, P, k);
-        conv_geometry gp = g;
-        gp.out_channels = o1 - o0;
+        const auto [o0, gp] = part(k);
         T* gyp = base + per * std::size_t(k);
         for (int n = 0; n < g.batch; ++n)
             std::memcpy(gyp + std::size_t(n) * gp.out_channels * pix, gy + (std::size_t(n) * g.out_channels + std::size_t(o0)) * pix,

@@ -137,7 +137,7 @@ public:
             if (!needed.empty() && needed[d] == 0) continue;
             model_->gated_parts_into(in, info.domains[d], source, ws, p);  // G only where the gate keeps some of its change
             p.amplitude = 1.0;  // the amplitude stage comes after the blend
-            model_->combine_into(p, info.gate_posture[d], info.gate_motion[d], info.gate_prior.empty() ? 0.0 : info.gate_prior[d], out.keys[d]);
+            model_->combine_gated_into(p, out.keys[d]);
             out.computed[d] = true;
             if (p.run_generator) out.clamped_values = p.clamped_values;
         }

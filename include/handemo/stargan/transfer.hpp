@@ -345,6 +345,13 @@ public:
         parts_after_generator(in, target, source, s, r);
     }
 
+    /// @brief combine_into() with the model's own gate for the parts' target (info().gate_posture, gate_motion, gate_prior).
+    void combine_gated_into(const transfer_parts& p, handemo::keyframes<dynamic_keyframes>& out) const
+    {
+        const std::size_t t = p.target;
+        combine_into(p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], out);
+    }
+
     /// @brief parts_into() for the model's own gate: G runs only when the target's gate weighs some of its change
     /// (a residual model's statistics setting weighs none; transfer_parts::run_generator says whether it ran). What
     /// transfer() and the continuous control combine with the model's gate, the same bits as parts_into().
@@ -354,9 +361,7 @@ public:
         if (!ws.get()) ws = make_workspace();
         workspace::scratch& s = *ws.get();
         parts_before_generator(in, target, source, ws, r);
-        const bool g = gate_uses_generator(r.target);
-        if (g) generate_into(s.net, r.target, ws, s.gen);
-        parts_after_generator(in, target, source, s, r, g);
+        parts_after_generator(in, target, source, s, r, generate_if_gated(ws, r));
     }
 
     /// @brief transfer() of many clips to one target, with G run on batches of ws.capacity() clips (each layer over
@@ -463,11 +468,9 @@ private:
         r.change.clear();
         r.change_mean.clear();
         r.prior.clear();
-        if (ran)
-            from_network_into(s.gen, r.image);
-        else
-            r.image.values.clear();
+        if (ran) from_network_into(s.gen, r.image);
         if (!ran) {
+            r.image.values.clear();
             // what a run of G fills, sized as it would size it: a later transfer that runs G allocates nothing
             s.gen.data.resize(s.net.data.size());
             r.image.values.reserve(s.net.data.size());
@@ -508,6 +511,14 @@ private:
     bool gate_uses_generator(std::size_t t) const noexcept
     {
         return !residual() || info_.gate_posture[t] != 0.0 || info_.gate_motion[t] != 0.0;
+    }
+
+    /// G on the workspace's network image (s.net into s.gen) when the gate of r.target uses it; whether it ran.
+    bool generate_if_gated(workspace& ws, const transfer_parts& r) const
+    {
+        if (!gate_uses_generator(r.target)) return false;
+        generate_into(ws.get()->net, r.target, ws, ws.get()->gen);
+        return true;
     }
 
 public:
@@ -644,11 +655,8 @@ public:
         workspace::scratch& s = *ws.get();
         s.parts.base = kf;
         keyframes_before_generator(target, source, s, s.parts);
-        const bool g = gate_uses_generator(s.parts.target);
-        if (g) generate_into(s.net, s.parts.target, ws, s.gen);
-        keyframes_after_generator(source, s, s.parts, g);
-        const std::size_t t = s.parts.target;
-        combine_into(s.parts, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], s.out_keys);
+        keyframes_after_generator(source, s, s.parts, generate_if_gated(ws, s.parts));
+        combine_gated_into(s.parts, s.out_keys);
         return s.out_keys;
     }
 
@@ -658,8 +666,7 @@ private:
                          transfer_result& out) const
     {
         const transfer_parts& p = s.parts;
-        const std::size_t t = p.target;
-        combine_into(p, info_.gate_posture[t], info_.gate_motion[t], info_.gate_prior.empty() ? 0.0 : info_.gate_prior[t], s.out_keys);
+        combine_gated_into(p, s.out_keys);
         reconstruct_into(s.out_keys, in.skel, p.frames, in.fps, out.motion);
         out.clamped_values = p.run_generator ? p.clamped_values : 0;
         encode_into(s.out_keys, info_.range, out.image);
