@@ -21,7 +21,7 @@ struct train_overrides {
     std::optional<int> n_critic, gate_folds;
     std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, gate_centre, gate_prior_full, tempo_shrink, tempo_neighbours, lag;
     std::optional<double> gate_margin, gate_guard, gate_iters_scale;
-    std::optional<std::string> range, tempo_basis, amplitude_anchor;
+    std::optional<std::string> range, tempo_basis, amplitude_anchor, amplitude_estimator;
 };
 
 /// @brief Adds `--inference-weights native|f16` (kernels::weight_storage) to `sub`, read into `w` (which must
@@ -83,6 +83,11 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
                     "'auto' (the ends when leave-one-content-out on the training clips finds that closer to the left-out "
                     "contents' takes) (handemo auto)")
         ->check(CLI::IsMember({"mean", "ends", "auto"}));
+    sub->add_option("--amplitude-estimator", o.amplitude_estimator,
+                    "How --amplitude measures a training pair's amplitude ratio: 'sum' (the ratio of the clips' summed channel "
+                    "excursions) or 'channel' (the median of the ratios of the channels that move in the neutral clip, so that "
+                    "channels held still do not pull it toward 1) (handemo sum)")
+        ->check(CLI::IsMember({"sum", "channel"}));
     sub->add_option("--augment", o.augment,
                     "Per-channel offset jitter of training images and paired targets, std in network units (handemo 0.1, paper 0)");
     sub->add_option("--gate-folds", o.gate_folds,
@@ -157,6 +162,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.range = o.range.value_or(p.range);
     t.amplitude = o.amplitude.value_or(p.amplitude);
     t.amplitude_anchor = o.amplitude_anchor.value_or(p.amplitude_anchor);
+    t.amplitude_estimator = o.amplitude_estimator.value_or(p.amplitude_estimator);
     t.augment = o.augment.value_or(p.augment);
     t.gate_folds = o.gate_folds.value_or(p.gate_folds);
     t.gate_prior = o.gate_prior.value_or(p.gate_prior);

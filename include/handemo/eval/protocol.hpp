@@ -992,7 +992,8 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
             fsum.lag_applied = to.lag;
             // the amplitude stage's anchors checked on the training clips, reported whatever anchor the model uses
             if (models.model.amplitude_stage()) {
-                const auto af = stargan::fit_amplitude<K>(train, kfs, info.domain_names, info.neutral, "auto");
+                const auto af = stargan::fit_amplitude<K>(train, kfs, info.domain_names, info.neutral, "auto",
+                                                          stargan::parse_amplitude_estimator(to.amplitude_estimator, "eval"));
                 fsum.amplitude_check = detail::fmt(af.anchor_check.first, 3) + " / " + detail::fmt(af.anchor_check.second, 3);
                 fsum.amplitude_anchor = stargan::anchor_name(ckinfo.amplitude_anchor);
             }

@@ -60,6 +60,25 @@ enum class amplitude_anchor { mean, ends };
 /// @brief "mean" or "ends".
 inline const char* anchor_name(amplitude_anchor a) noexcept { return a == amplitude_anchor::ends ? "ends" : "mean"; }
 
+/// @brief How amplitude_factors() measures a pair's amplitude ratio (train_options::amplitude_estimator): `sum`, the
+/// ratio of the clips' summed per-channel excursions (keyframe_excursion()); `channel`, per channel that moves in
+/// the neutral clip (its excursion at least a tenth of the clip's largest), the ratio of that channel's excursions,
+/// so that channels held still, whose excursion is capture noise, tremor or a posture's wobble, do not pull the
+/// ratio toward 1.
+enum class amplitude_estimator { sum, channel };
+
+/// @brief "sum" or "channel".
+inline const char* estimator_name(amplitude_estimator e) noexcept { return e == amplitude_estimator::channel ? "channel" : "sum"; }
+
+/// @brief "sum" or "channel" as an amplitude_estimator.
+/// @throws value_error naming `who` for any other text.
+inline amplitude_estimator parse_amplitude_estimator(std::string_view s, std::string_view who)
+{
+    if (s == "sum") return amplitude_estimator::sum;
+    if (s == "channel") return amplitude_estimator::channel;
+    throw value_error(std::string(who) + ": amplitude estimator '" + std::string(s) + "' is not 'sum' or 'channel'");
+}
+
 /// @brief "mean" or "ends" as an amplitude_anchor.
 /// @throws value_error naming `who` and the value otherwise.
 inline amplitude_anchor parse_amplitude_anchor(std::string_view s, std::string_view who)
@@ -107,6 +126,10 @@ struct train_options {
     /// (the ends when leave-one-content-out on the training clips finds scaling about them closer to the left-out
     /// contents' takes, fit_amplitude()). G trains in the amplitude-normalised space, so it reaches G
     std::string amplitude_anchor = "mean";
+    /// how the amplitude factors measure a training pair's ratio (amplitude_estimator): "sum" (the clips' summed
+    /// channel excursions) or "channel" (the median of the ratios of the channels that move in the neutral clip).
+    /// G trains in the amplitude-normalised space, so it reaches G
+    std::string amplitude_estimator = "sum";
     /// per-channel offset jitter: every training image (and its paired target) gets the same random offset per
     /// channel, N(0, augment) in network units, so G's change cannot hinge on the absolute pose; 0: off
     double augment = 0.0;
@@ -198,6 +221,7 @@ struct train_options {
             bad("gate_iters_scale " + std::to_string(gate_iters_scale) + " is not in (0, 1] (a share of iters)");
         parse_tempo_basis(tempo_basis, "train: tempo_basis");
         if (amplitude_anchor != "auto") parse_amplitude_anchor(amplitude_anchor, "train: amplitude_anchor");
+        parse_amplitude_estimator(amplitude_estimator, "train: amplitude_estimator");
     }
     nlohmann::json to_json() const
     {
@@ -218,6 +242,7 @@ struct train_options {
         if (tempo_neighbours) j["tempo_neighbours"] = true;
         if (lag) j["lag"] = true;
         if (amplitude_anchor != "mean") j["amplitude_anchor"] = amplitude_anchor;  // written only when not the mean
+        if (amplitude_estimator != "sum") j["amplitude_estimator"] = amplitude_estimator;  // written only when not the sum
         return j;
     }
 };
@@ -369,6 +394,26 @@ double keyframe_excursion(const keyframes<K>& kf, amplitude_anchor a = amplitude
     return total;
 }
 
+/// @brief Each channel's root mean square distance from its anchor over the keyframes ([J*3]; the terms
+/// keyframe_excursion() sums).
+template <std::size_t K>
+std::vector<double> channel_excursions(const keyframes<K>& kf, amplitude_anchor a = amplitude_anchor::mean)
+{
+    const std::size_t C = kf.joints * 3, n = kf.count();
+    std::vector<double> out(C);
+    for (std::size_t ch = 0; ch < C; ++ch) {
+        const double m = excursion_anchor(kf, ch, a);
+        double q = 0;
+        for (std::size_t i = 0; i < n; ++i) q += (kf.angles[i * C + ch] - m) * (kf.angles[i * C + ch] - m);
+        out[ch] = std::sqrt(q / static_cast<double>(n));
+    }
+    return out;
+}
+
+/// @brief amplitude_estimator::channel's threshold: a channel counts as moving in a neutral clip when its excursion
+/// is at least this share of the clip's largest channel excursion.
+inline constexpr double amplitude_moving_share = 0.1;
+
 namespace detail {
 
 /// The training pairs of the amplitude stage: for every clip of a domain other than `neutral`, the neutral clip of
@@ -403,18 +448,33 @@ inline std::vector<int> amplitude_partners(const std::vector<labelled_clip>& cli
 template <std::size_t K>
 std::vector<double> amplitude_factors(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
                                       const std::vector<std::string>& domains, const std::string& neutral,
-                                      amplitude_anchor anchor = amplitude_anchor::mean)
+                                      amplitude_anchor anchor = amplitude_anchor::mean,
+                                      amplitude_estimator estimator = amplitude_estimator::sum)
 {
     const auto partner = detail::amplitude_partners(clips, neutral);
     std::vector<double> excursion(clips.size());
-    for (std::size_t m = 0; m < clips.size(); ++m) excursion[m] = keyframe_excursion(kfs[m], anchor);
+    std::vector<std::vector<double>> channel(estimator == amplitude_estimator::channel ? clips.size() : 0);
+    for (std::size_t m = 0; m < clips.size(); ++m) {
+        if (estimator == amplitude_estimator::channel)
+            channel[m] = channel_excursions(kfs[m], anchor);
+        else
+            excursion[m] = keyframe_excursion(kfs[m], anchor);
+    }
     std::vector<double> out(domains.size(), 1.0);
     for (std::size_t d = 0; d < domains.size(); ++d) {
         if (domains[d] == neutral) continue;
         std::vector<double> r;
         for (std::size_t m = 0; m < clips.size(); ++m) {
-            if (clips[m].emotion != domains[d]) continue;
-            const double base = partner[m] < 0 ? 0.0 : excursion[static_cast<std::size_t>(partner[m])];
+            if (clips[m].emotion != domains[d] || partner[m] < 0) continue;
+            if (estimator == amplitude_estimator::channel) {
+                const auto& base = channel[static_cast<std::size_t>(partner[m])];
+                const auto& e = channel[m];
+                const double largest = base.empty() ? 0.0 : *std::max_element(base.begin(), base.end());
+                for (std::size_t ch = 0; ch < base.size() && ch < e.size(); ++ch)
+                    if (base[ch] > 1e-9 && base[ch] >= amplitude_moving_share * largest && std::isfinite(e[ch])) r.push_back(e[ch] / base[ch]);
+                continue;
+            }
+            const double base = excursion[static_cast<std::size_t>(partner[m])];
             const double e = excursion[m];
             if (base > 1e-9 && std::isfinite(e)) r.push_back(e / base);
         }
@@ -493,13 +553,14 @@ bool for_each_left_out_content(const std::vector<labelled_clip>& clips, const st
 /// with it; NaN when there are fewer than two contents or no pairs.
 template <std::size_t K>
 std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
-                                       const std::vector<std::string>& domains, const std::string& neutral)
+                                       const std::vector<std::string>& domains, const std::string& neutral,
+                                       amplitude_estimator estimator = amplitude_estimator::sum)
 {
     const auto partner = detail::amplitude_partners(clips, neutral);
     double s_id = 0, s_amp = 0;
     std::size_t n = 0;
     const bool split = detail::for_each_left_out_content<K>(clips, kfs, [&](const std::string& held, const auto& other_c, const auto& other_k) {
-        const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral);
+        const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral, amplitude_anchor::mean, estimator);
         for (std::size_t m = 0; m < clips.size(); ++m) {
             if (clips[m].content != held || partner[m] < 0) continue;
             const auto& base = kfs[static_cast<std::size_t>(partner[m])];
@@ -524,7 +585,8 @@ std::pair<double, double> amplitude_cv(const std::vector<labelled_clip>& clips, 
 /// are fewer than two contents or no pairs.
 template <std::size_t K>
 std::pair<double, double> amplitude_prior_cv(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
-                                             const std::vector<std::string>& domains, const std::string& neutral, amplitude_anchor anchor)
+                                             const std::vector<std::string>& domains, const std::string& neutral, amplitude_anchor anchor,
+                                             amplitude_estimator estimator = amplitude_estimator::sum)
 {
     if (kfs.empty()) return {std::nan(""), std::nan("")};
     const std::size_t C = kfs.front().joints * 3;
@@ -535,7 +597,7 @@ std::pair<double, double> amplitude_prior_cv(const std::vector<labelled_clip>& c
     double s_id = 0, s_amp = 0;
     std::size_t n = 0;
     const bool split = detail::for_each_left_out_content<K>(clips, kfs, [&](const std::string& held, const auto& other_c, const auto& other_k) {
-        const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral, anchor);
+        const auto f = amplitude_factors<K>(other_c, other_k, domains, neutral, anchor, estimator);
         const auto shift = anchor_mean_shift<K>(other_c, other_k, domains, neutral, f, anchor);
         // the prior on the other contents: the pairs' mean keyframe-mean change per domain and channel
         std::vector<std::vector<double>> prior(domains.size(), std::vector<double>(C, 0.0));
@@ -591,23 +653,24 @@ struct amplitude_fit {
 /// @throws value_error for an anchor name other than mean, ends or auto.
 template <std::size_t K>
 amplitude_fit fit_amplitude(const std::vector<labelled_clip>& clips, const std::vector<keyframes<K>>& kfs,
-                            const std::vector<std::string>& domains, const std::string& neutral, std::string_view anchor = "mean")
+                            const std::vector<std::string>& domains, const std::string& neutral, std::string_view anchor = "mean",
+                            amplitude_estimator estimator = amplitude_estimator::sum)
 {
     amplitude_fit r;
     std::optional<std::pair<double, double>> about_ends;  // amplitude_prior_cv() about the ends, once computed
     if (anchor == "auto") {
-        const auto about_mean = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::mean);
-        about_ends = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::ends);
+        const auto about_mean = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::mean, estimator);
+        about_ends = amplitude_prior_cv<K>(clips, kfs, domains, neutral, amplitude_anchor::ends, estimator);
         r.anchor_check = {about_mean.second, about_ends->second};
         r.anchor = about_ends->second < about_mean.second ? amplitude_anchor::ends : amplitude_anchor::mean;
     } else {
         r.anchor = parse_amplitude_anchor(anchor, "train: amplitude_anchor");
     }
-    r.factors = amplitude_factors<K>(clips, kfs, domains, neutral, r.anchor);
+    r.factors = amplitude_factors<K>(clips, kfs, domains, neutral, r.anchor, estimator);
     if (r.anchor == amplitude_anchor::mean)
-        r.check = amplitude_cv<K>(clips, kfs, domains, neutral);
+        r.check = amplitude_cv<K>(clips, kfs, domains, neutral, estimator);
     else
-        r.check = about_ends ? *about_ends : amplitude_prior_cv<K>(clips, kfs, domains, neutral, r.anchor);
+        r.check = about_ends ? *about_ends : amplitude_prior_cv<K>(clips, kfs, domains, neutral, r.anchor, estimator);
     if (!(r.check.second < r.check.first)) r.factors.assign(r.factors.size(), 1.0);
     return r;
 }
@@ -659,7 +722,8 @@ template <stargan_config Config>
 prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config_info& info,
                            std::optional<angle_range> range = {}, std::string_view range_mode = "global",
                            bool amplitude_normalise = false, bool tempo_shrink = false,
-                           tempo_basis basis = tempo_basis::duration, bool lag = false, std::string_view anchor = "mean")
+                           tempo_basis basis = tempo_basis::duration, bool lag = false, std::string_view anchor = "mean",
+                           amplitude_estimator estimator = amplitude_estimator::sum)
 {
     constexpr std::size_t K = Config::keyframes, J = Config::joints, H = dims<Config>::H, W = dims<Config>::W;
     if (clips.empty()) throw value_error("train: no clips to train on");
@@ -710,7 +774,7 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     }
     p.tempo = tempo_factors(clips, info.domain_names, info.neutral, tempo_shrink, basis);
     {
-        auto amp = fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, anchor);
+        auto amp = fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, anchor, estimator);
         p.amplitude = std::move(amp.factors);
         p.amplitude_check = amp.check;
         p.amplitude_anchor = amp.anchor;
@@ -747,7 +811,8 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
                            std::optional<angle_range> range = {})
 {
     auto p = prepare_data<Config>(clips, info, std::move(range), opt.range, opt.amplitude, opt.tempo_shrink,
-                                  parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"), opt.lag, opt.amplitude_anchor);
+                                  parse_tempo_basis(opt.tempo_basis, "train: tempo_basis"), opt.lag, opt.amplitude_anchor,
+                                  parse_amplitude_estimator(opt.amplitude_estimator, "train: amplitude_estimator"));
     p.tempo_table = tempo_table_of(clips, info, opt);
     return p;
 }
@@ -761,7 +826,9 @@ std::vector<std::vector<double>> joint_lag_of(const std::vector<labelled_clip>& 
     constexpr std::size_t K = Config::keyframes;
     std::vector<keyframes<K>> kfs;
     for (const auto& c : clips) kfs.push_back(extract_keyframes<K>(c.motion));
-    const auto amp = opt.amplitude ? fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, opt.amplitude_anchor).factors
+    const auto amp = opt.amplitude ? fit_amplitude<K>(clips, kfs, info.domain_names, info.neutral, opt.amplitude_anchor,
+                                                      parse_amplitude_estimator(opt.amplitude_estimator, "train: amplitude_estimator"))
+                                         .factors
                                    : std::vector<double>(info.domain_names.size(), 1.0);
     return joint_lags_checked<K>(clips, kfs, info.domain_names, info.neutral, amp).lag;
 }
