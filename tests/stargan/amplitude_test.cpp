@@ -253,3 +253,103 @@ TEST_CASE("the checkpoint stores the ends anchor, transfer scales about it, and 
     write_safetensors(broken, f);
     CHECK(read_checkpoint(broken).second.amplitude_anchor == amplitude_anchor::mean);
 }
+
+namespace {
+
+/// 4 contents x {neutral, angry, fearful} x 2 takes, the amplitude_estimator cases' set: `moving` channels whose
+/// movement each emotion scales exactly (scale_of()), the other channels held still with a wobble (capture noise)
+/// that the emotion does not scale (twice as large in the emotional takes as in the neutral ones).
+std::vector<labelled_clip> still_and_moving(std::size_t moving)
+{
+    std::vector<labelled_clip> out;
+    for (int c = 0; c < 4; ++c)
+        for (const char* e : {"neutral", "angry", "fearful"})
+            for (int t = 0; t < 2; ++t) {
+                const double s = scale_of(e), noise = std::string(e) == "neutral" ? 0.3 : 0.6;
+                out.push_back(frames_clip("c" + std::to_string(c), e, std::to_string(t), [&](std::size_t k, std::size_t ch) {
+                    const double base = 10.0 * std::sin(0.7 * double(ch) + double(c));
+                    const double x = 2.0 * std::numbers::pi * 2.0 * double(k) / double(K - 1);
+                    if (ch < moving) return base + s * (12.0 + 4.0 * std::cos(double(ch) + c)) * std::sin(x + 0.9 * double(ch) + 1.1 * c);
+                    return base + noise * std::sin(1.7 * double(k) + double(ch) + 3.0 * t + 5.0 * c);
+                }));
+            }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("amplitude estimator 'channel': the median ratio of the channels that move, blind to channels held still")
+{
+    // 8 channels move, the other 61 of the hand's 69 hold still with noise: the summed excursions' ratio mixes the
+    // noise's ratio (2) into every emotion's factor, the moving channels' ratios are the scale exactly
+    const auto clips = still_and_moving(8);
+    const auto kfs = keys_of(clips);
+    const std::vector<std::string> domains = {"angry", "fearful", "neutral"};
+    for (auto anchor : {amplitude_anchor::mean, amplitude_anchor::ends}) {
+        CAPTURE(anchor_name(anchor));
+        const auto ch = amplitude_factors<K>(clips, kfs, domains, "neutral", anchor, amplitude_estimator::channel);
+        CHECK(ch[0] == doctest::Approx(1.5).epsilon(1e-9));
+        CHECK(ch[1] == doctest::Approx(0.8).epsilon(1e-9));
+        CHECK(ch[2] == 1.0);
+        const auto sum = amplitude_factors<K>(clips, kfs, domains, "neutral", anchor);  // the default: the sum
+        CHECK(sum == amplitude_factors<K>(clips, kfs, domains, "neutral", anchor, amplitude_estimator::sum));
+        CHECK(sum[1] > 0.9);  // fearful pulled toward (past) 1 by the still channels' noise
+        CHECK(std::abs(sum[0] - 1.5) > 0.05);
+    }
+    // the per-channel excursions are the terms keyframe_excursion() sums
+    for (auto anchor : {amplitude_anchor::mean, amplitude_anchor::ends}) {
+        const auto e = channel_excursions(kfs[5], anchor);
+        REQUIRE(e.size() == kfs[5].joints * 3);
+        double total = 0;
+        for (double v : e) total += v;
+        CHECK(total == doctest::Approx(keyframe_excursion(kfs[5], anchor)).epsilon(1e-12));
+    }
+    // a channel that moves less than a tenth of the clip's largest is not counted: with most channels moving a
+    // little (1/20 of the largest) and not scaled, the factor is still the scale of the large movements
+    auto few = still_and_moving(3);
+    for (auto& c : few) {
+        const std::size_t C = c.motion.skel.size() * 3;
+        for (std::size_t k = 0; k < K; ++k)
+            for (std::size_t q = 3; q < C; ++q) c.motion.angles[k * C + q] += 0.8 * std::sin(2.0 * double(k) + double(q));
+    }
+    const auto f = amplitude_factors<K>(few, keys_of(few), domains, "neutral", amplitude_anchor::mean, amplitude_estimator::channel);
+    CHECK(f[0] == doctest::Approx(1.5).epsilon(1e-9));
+    CHECK(f[1] == doctest::Approx(0.8).epsilon(1e-9));
+    // a domain without a neutral partner keeps 1
+    std::vector<labelled_clip> orphan;
+    for (const auto& c : clips)
+        if (!(c.content == "c0" && c.emotion == "neutral")) orphan.push_back(c);
+    std::vector<labelled_clip> only_c0;
+    for (const auto& c : orphan)
+        if (c.content == "c0") only_c0.push_back(c);
+    const auto o = amplitude_factors<K>(only_c0, keys_of(only_c0), domains, "neutral", amplitude_anchor::mean, amplitude_estimator::channel);
+    CHECK(o[0] == 1.0);
+    CHECK(o[1] == 1.0);
+}
+
+TEST_CASE("amplitude estimator: fit_amplitude and the checks use it, the option is validated and written only when not the sum")
+{
+    const auto clips = still_and_moving(8);
+    const auto kfs = keys_of(clips);
+    const std::vector<std::string> domains = {"angry", "fearful", "neutral"};
+    const auto r = fit_amplitude<K>(clips, kfs, domains, "neutral", "auto", amplitude_estimator::channel);
+    REQUIRE(r.factors.size() == 3);
+    CHECK(r.factors[1] == doctest::Approx(0.8).epsilon(1e-9));
+    CHECK(r.anchor_check.first == amplitude_prior_cv<K>(clips, kfs, domains, "neutral", amplitude_anchor::mean, amplitude_estimator::channel).second);
+    // on this set the moving channels' factors meet the left-out contents' takes closer than the summed ones
+    CHECK(amplitude_prior_cv<K>(clips, kfs, domains, "neutral", amplitude_anchor::mean, amplitude_estimator::channel).second <
+          amplitude_prior_cv<K>(clips, kfs, domains, "neutral", amplitude_anchor::mean).second);
+    CHECK(amplitude_cv<K>(clips, kfs, domains, "neutral", amplitude_estimator::channel).second <
+          amplitude_cv<K>(clips, kfs, domains, "neutral").second);
+
+    train_options o = handemo_options();
+    CHECK(o.amplitude_estimator == "sum");
+    CHECK_FALSE(o.to_json().contains("amplitude_estimator"));  // written only when not the sum: older options stay equal
+    o.amplitude_estimator = "channel";
+    CHECK_NOTHROW(o.validate());
+    CHECK(o.to_json().at("amplitude_estimator") == "channel");
+    o.amplitude_estimator = "median";
+    CHECK_THROWS_WITH_AS(o.validate(), "train: amplitude_estimator: amplitude estimator 'median' is not 'sum' or 'channel'", value_error);
+    CHECK(parse_amplitude_estimator("channel", "x") == amplitude_estimator::channel);
+    CHECK(std::string(estimator_name(amplitude_estimator::channel)) == "channel");
+}

@@ -74,7 +74,9 @@ inline void run_train(train_cli& o)
             for (std::size_t k = 0; k < info.domains; ++k) out << " " << info.domain_names[k] << " " << tr.data().amplitude[k];
             const auto& d = tr.data();
             const bool ends = d.amplitude_anchor == amplitude_anchor::ends;
-            out << " about the " << anchor_name(d.amplitude_anchor) << " (leave-one-content-out on the training clips: RMSE "
+            out << " about the " << anchor_name(d.amplitude_anchor)
+                << (o.opt.amplitude_estimator == "channel" ? ", each the median ratio of the channels that move," : "")
+                << " (leave-one-content-out on the training clips: RMSE "
                 << d.amplitude_check.second << " deg scaled vs " << d.amplitude_check.first << " unscaled" << (ends ? ", both with the posture prior" : "")
                 << (d.amplitude_check.second < d.amplitude_check.first ? ")" : "; not used)");
             if (std::isfinite(d.amplitude_anchor_check.first))
