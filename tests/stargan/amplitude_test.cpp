@@ -316,12 +316,9 @@ TEST_CASE("amplitude estimator 'channel': the median ratio of the channels that 
     CHECK(f[0] == doctest::Approx(1.5).epsilon(1e-9));
     CHECK(f[1] == doctest::Approx(0.8).epsilon(1e-9));
     // a domain without a neutral partner keeps 1
-    std::vector<labelled_clip> orphan;
+    std::vector<labelled_clip> only_c0;  // content c0's emotional takes, without its neutral ones
     for (const auto& c : clips)
-        if (!(c.content == "c0" && c.emotion == "neutral")) orphan.push_back(c);
-    std::vector<labelled_clip> only_c0;
-    for (const auto& c : orphan)
-        if (c.content == "c0") only_c0.push_back(c);
+        if (c.content == "c0" && c.emotion != "neutral") only_c0.push_back(c);
     const auto o = amplitude_factors<K>(only_c0, keys_of(only_c0), domains, "neutral", amplitude_anchor::mean, amplitude_estimator::channel);
     CHECK(o[0] == 1.0);
     CHECK(o[1] == 1.0);

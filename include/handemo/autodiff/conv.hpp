@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <utility>
 
 namespace handemo::autodiff {
 namespace detail {
@@ -30,6 +31,12 @@ conv_geometry geometry_of(const node<T>& n)
     return n.template params<conv_geometry>();
 }
 
+/// Samples [first, second) of chunk c of P of a batch of `batch`.
+inline std::pair<int, int> chunk_range(int batch, int P, int c) noexcept
+{
+    return {int(long(batch) * c / P), int(long(batch) * (c + 1) / P)};
+}
+
 /// Number of batch chunks to run in parallel (1 without a pool): the most, up to the pool's size, whose every chunk
 /// the kernels compute with the whole batch's bits (kernels::conv2d_batch_part_keeps_bits()), so that the result
 /// does not depend on the thread count.
@@ -40,8 +47,9 @@ int chunks(tape<T>& t, const conv_geometry& g) noexcept
     for (int P = std::max(1, std::min<int>(g.batch, int(t.pool()->size()))); P > 1; --P) {
         bool same = true;
         for (int c = 0; c < P && same; ++c) {
+            const auto [n0, n1] = chunk_range(g.batch, P, c);
             conv_geometry gc = g;
-            gc.batch = int(long(g.batch) * (c + 1) / P) - int(long(g.batch) * c / P);
+            gc.batch = n1 - n0;
             same = ck::conv2d_batch_part_keeps_bits<T>(g, gc);
         }
         if (same) return P;
@@ -57,7 +65,7 @@ void for_batch_chunks(tape<T>& t, const conv_geometry& g, F&& f)
     const std::size_t ss = ck::conv2d_scratch_size<T>(g);
     T* scratch = ss ? t.scratch(ss * P) : nullptr;
     auto run = [&](int c) {
-        const int n0 = int(long(g.batch) * c / P), n1 = int(long(g.batch) * (c + 1) / P);
+        const auto [n0, n1] = chunk_range(g.batch, P, c);
         conv_geometry gc = g;
         gc.batch = n1 - n0;
         if (gc.batch > 0) f(gc, n0, c, scratch ? scratch + ss * c : nullptr);

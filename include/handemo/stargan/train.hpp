@@ -378,24 +378,8 @@ void scale_keyframe_excursions(keyframes<K>& kf, double f, amplitude_anchor a = 
     }
 }
 
-/// @brief Excursion of keyframes: the sum over channels of each channel's root mean square distance from its
-/// anchor over the keyframes (about the mean: its standard deviation).
-template <std::size_t K>
-double keyframe_excursion(const keyframes<K>& kf, amplitude_anchor a = amplitude_anchor::mean)
-{
-    const std::size_t C = kf.joints * 3, n = kf.count();
-    double total = 0;
-    for (std::size_t ch = 0; ch < C; ++ch) {
-        const double m = excursion_anchor(kf, ch, a);
-        double q = 0;
-        for (std::size_t i = 0; i < n; ++i) q += (kf.angles[i * C + ch] - m) * (kf.angles[i * C + ch] - m);
-        total += std::sqrt(q / static_cast<double>(n));
-    }
-    return total;
-}
-
-/// @brief Each channel's root mean square distance from its anchor over the keyframes ([J*3]; the terms
-/// keyframe_excursion() sums).
+/// @brief Each channel's root mean square distance from its anchor over the keyframes ([J*3]; about the mean: its
+/// standard deviation).
 template <std::size_t K>
 std::vector<double> channel_excursions(const keyframes<K>& kf, amplitude_anchor a = amplitude_anchor::mean)
 {
@@ -408,6 +392,15 @@ std::vector<double> channel_excursions(const keyframes<K>& kf, amplitude_anchor 
         out[ch] = std::sqrt(q / static_cast<double>(n));
     }
     return out;
+}
+
+/// @brief Excursion of keyframes: the sum over channels of channel_excursions(), in channel order.
+template <std::size_t K>
+double keyframe_excursion(const keyframes<K>& kf, amplitude_anchor a = amplitude_anchor::mean)
+{
+    double total = 0;
+    for (double e : channel_excursions(kf, a)) total += e;
+    return total;
 }
 
 /// @brief amplitude_estimator::channel's threshold: a channel counts as moving in a neutral clip when its excursion
