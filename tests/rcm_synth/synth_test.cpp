@@ -150,3 +150,47 @@ TEST_CASE("rcm synth: the IK's warm start from the previous keyframe reaches the
     CHECK(rw.loss_after_ik <= rc.loss_after_ik);
     CHECK(rw.ik_iterations < rc.ik_iterations);
 }
+
+TEST_CASE("rcm synth: a hand read back from BVH, which carries no limits, is stylised within the hand's joint limits")
+{
+    const clip c = parse_bvh(to_bvh_string(synthesize(hand_motion::gripping, emotion::neutral, 0, 2, 30.0)), "hand.bvh");
+    const skeleton hand = hand_skeleton();
+    for (const auto& j : c.skel.joints) {
+        CHECK(j.lower_limit == vec3{-180, -180, -180});
+        CHECK(j.upper_limit == vec3{180, 180, 180});
+    }
+    skeleton s = c.skel;
+    CHECK(rcm::adopt_hand_limits(s));
+    for (std::size_t j = 0; j < s.size(); ++j) {
+        CHECK(s.joints[j].lower_limit == hand.joints[j].lower_limit);
+        CHECK(s.joints[j].upper_limit == hand.joints[j].upper_limit);
+    }
+    // a hand with a limit of its own, and a body, keep theirs
+    skeleton own = c.skel;
+    own.joints[4].upper_limit[0] = 90;
+    CHECK_FALSE(rcm::adopt_hand_limits(own));
+    CHECK(own.joints[4].upper_limit[0] == 90);
+    CHECK(own.joints[5].upper_limit == vec3{180, 180, 180});
+    skeleton body = test::humanoid_dance(10).skel;
+    const skeleton body_before = body;
+    CHECK_FALSE(rcm::adopt_hand_limits(body));
+    for (std::size_t j = 0; j < body.size(); ++j) CHECK(body.joints[j].upper_limit == body_before.joints[j].upper_limit);
+
+    // an exaggerated target (a wider, faster hand) pushes the fingers toward and past their limits; the output stays
+    // within the hand's, on the input's own skeleton
+    const std::vector<double> truth{std::log(1.8), std::log(0.5), 0.6, -0.5, 0.4, 0.0, std::log(0.7)};
+    const problem p = make_problem(c, truth, {"thumb_palm", "index_palm", "middle_palm", "ring_palm", "index_middle", "hand_volume"});
+    const auto res = rcm::stylise(c, p.targets);
+    res.motion.validate();
+    CHECK(res.motion.skel.joints[4].upper_limit == vec3{180, 180, 180});
+    std::size_t at_limit = 0;
+    for (std::size_t f = 0; f < res.motion.frames; ++f)
+        for (std::size_t j = 0; j < hand.size(); ++j)
+            for (std::size_t a = 0; a < 3; ++a) {
+                const double v = res.motion.angle(f, j, a);
+                CHECK(v >= hand.joints[j].lower_limit[a] - 1e-9);
+                CHECK(v <= hand.joints[j].upper_limit[a] + 1e-9);
+                at_limit += std::abs(v - hand.joints[j].lower_limit[a]) < 1e-6 || std::abs(v - hand.joints[j].upper_limit[a]) < 1e-6;
+            }
+    MESSAGE("angles held at a limit: " << at_limit);
+}

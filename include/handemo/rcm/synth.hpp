@@ -10,6 +10,7 @@
 
 #include <handemo/core/error.hpp>
 #include <handemo/motion/clip.hpp>
+#include <handemo/motion/hand.hpp>
 #include <handemo/motion/keyframes.hpp>
 #include <handemo/rcm/detail/ops.hpp>
 #include <handemo/rcm/features_ad.hpp>
@@ -392,6 +393,24 @@ inline double wrap180(double a) noexcept
 
 }  // namespace detail
 
+/// @brief Gives `s` the joint limits of hand_skeleton() when it is handemo's hand (is_hand_skeleton(): its names
+/// and parents) without limits of its own (every axis of every joint +-180, as a BVH of the hand reads back: the
+/// format carries no limits). Any other skeleton, or a hand with a limit of its own, is left as it is.
+/// @return whether the limits were adopted
+inline bool adopt_hand_limits(skeleton& s)
+{
+    if (!is_hand_skeleton(s)) return false;
+    for (const auto& j : s.joints)
+        for (std::size_t a = 0; a < 3; ++a)
+            if (j.lower_limit[a] != -180.0 || j.upper_limit[a] != 180.0) return false;
+    static const skeleton hand = hand_skeleton();
+    for (std::size_t j = 0; j < s.joints.size(); ++j) {
+        s.joints[j].lower_limit = hand.joints[j].lower_limit;
+        s.joints[j].upper_limit = hand.joints[j].upper_limit;
+    }
+    return true;
+}
+
 /// @brief Stylises `input` toward the desired features (Section 4): keyframes every `keyframe_step` frames,
 /// rule coefficients fitted to `targets`, IK of every keyframe to the moved control points, spline back to
 /// full rate, g4's frame-rate factor applied as `opt.time` says.
@@ -400,6 +419,7 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
 {
     input.validate("rcm::stylise");
     clip u = input;
+    adopt_hand_limits(u.skel);
     unwrap_angles(u);
     const rig r = opt.roles ? make_rig(u.skel, *opt.roles, opt.up) : make_rig(u.skel, opt.up);
     synth_result out;
@@ -465,7 +485,7 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
     } else {
         fps = u.fps * c4;
     }
-    clip res = clip::make(u.skel, frames, fps);
+    clip res = clip::make(input.skel, frames, fps);  // the input's own skeleton, its limits as given
     std::vector<double> xs(K), ys(K);
     for (std::size_t k = 0; k < K; ++k) xs[k] = static_cast<double>(out.keyframes[k]);
     const int tj = r.translation_joint;
