@@ -1,4 +1,6 @@
+#include <handemo/motion/bvh.hpp>
 #include <handemo/motion/hand.hpp>
+#include <handemo/motion/synth.hpp>
 
 #include <doctest/doctest.h>
 
@@ -111,4 +113,32 @@ TEST_CASE("hand skeleton: flexing a finger moves its tip toward the palm")
     CHECK(forward_kinematics(s, w.data()).end_sites[hand_index::finger_joint(2, 3)][2] > 5.0);
     w[hand_index::wrist * 3] = -40;
     CHECK(forward_kinematics(s, w.data()).end_sites[hand_index::finger_joint(2, 3)][2] < -5.0);
+}
+
+TEST_CASE("hand skeleton: a hand read back from BVH, which carries no limits, adopts the hand's; others keep theirs")
+{
+    const clip c = parse_bvh(to_bvh_string(synthesize(hand_motion::gripping, emotion::neutral, 0, 2, 30.0)), "hand.bvh");
+    const skeleton hand = hand_skeleton();
+    for (const auto& j : c.skel.joints) {
+        CHECK(j.lower_limit == vec3{-180, -180, -180});
+        CHECK(j.upper_limit == vec3{180, 180, 180});
+    }
+    skeleton s = c.skel;
+    CHECK(adopt_hand_limits(s));
+    for (std::size_t j = 0; j < s.size(); ++j) {
+        CHECK(s.joints[j].lower_limit == hand.joints[j].lower_limit);
+        CHECK(s.joints[j].upper_limit == hand.joints[j].upper_limit);
+    }
+    CHECK_FALSE(adopt_hand_limits(s));  // it has limits now
+    // a hand with a limit of its own keeps every limit as it is
+    skeleton own = c.skel;
+    own.joints[4].upper_limit[0] = 90;
+    CHECK_FALSE(adopt_hand_limits(own));
+    CHECK(own.joints[4].upper_limit[0] == 90);
+    CHECK(own.joints[5].upper_limit == vec3{180, 180, 180});
+    // another skeleton (a hand with a joint renamed) keeps its own
+    skeleton other = c.skel;
+    other.joints[7].name = "index_knuckle";
+    CHECK_FALSE(adopt_hand_limits(other));
+    CHECK(other.joints[7].upper_limit == vec3{180, 180, 180});
 }

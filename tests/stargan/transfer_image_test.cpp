@@ -45,11 +45,13 @@ std::size_t expect_within_half_level(const keyframes<dynamic_keyframes>& a, cons
     return compared;
 }
 
-/// The gate's weights of `target` in `m`.
+/// The gate's weights of `target` in `m`, within the model's joint limits (as its transfers' keyframes).
 keyframes<dynamic_keyframes> gated(const emotion_model& m, const transfer_parts& p)
 {
     const auto& i = m.info();
-    return m.combine(p, i.gate_posture[p.target], i.gate_motion[p.target], i.gate_prior.empty() ? 0.0 : i.gate_prior[p.target]);
+    auto k = m.combine(p, i.gate_posture[p.target], i.gate_motion[p.target], i.gate_prior.empty() ? 0.0 : i.gate_prior[p.target]);
+    m.clamp_to_limits(k);
+    return k;
 }
 
 }  // namespace
@@ -73,7 +75,8 @@ TEST_CASE("a transfer's motion image holds the keyframes its motion passes throu
             // the image is the gated output's keyframes (Eq. 3 then Eq. 6 give them back to half a pixel level)
             CHECK(expect_within_half_level(decode(r.image, range), out_keys, range) > out_keys.angles.size() / 2);
             // and the output clip is the spline through those keyframes
-            const clip again = reconstruct(out_keys, in.skel, r.motion.frames, in.fps);
+            clip again = reconstruct(out_keys, in.skel, r.motion.frames, in.fps);
+            m->clamp_to_limits(again);
             CHECK(std::memcmp(again.angles.data(), r.motion.angles.data(), again.angles.size() * sizeof(double)) == 0);
             // G's own image stays in the parts, and differs from the output's
             CHECK(parts.run_generator);

@@ -421,6 +421,8 @@ inline void run_transfer(const transfer_cli& o)
                                                : "[" + std::to_string(info.range.p_min) + ", " + std::to_string(info.range.p_max) + "]")
                   << ") and reached G clamped by Eq. 3"
                   << (model->residual() ? " (the output adds G's change to the unclamped angles)" : " (the output is G's image)") << "\n";
+    if (r.limited_values)
+        std::cerr << "transfer: note: " << r.limited_values << " output keyframe angles were held at the joint limits of the model's skeleton\n";
     std::string weights;
     if (target.point) {  // the labels the point blends, in the model's domain order
         const auto w = target.control->weights(target.point->first, target.point->second);

@@ -665,13 +665,16 @@ struct method_outputs {
     }
 };
 
-/// Identity with the learned amplitude and tempo of a transfer, no G: what the amplitude stage alone buys.
+/// Identity with the learned amplitude and tempo of a transfer, no G: what the amplitude stage alone buys (within
+/// the model's joint limits, as its transfers).
 template <std::size_t K>
-clip amplitude_only(const clip& in, const stargan::transfer_result& tr)
+clip amplitude_only(const clip& in, const stargan::transfer_result& tr, const stargan::emotion_model& model)
 {
     auto k = extract_keyframes<dynamic_keyframes>(in, K);
     stargan::scale_keyframe_excursions(k, tr.amplitude, tr.amplitude_anchor);
+    model.clamp_to_limits(k);
     clip out = reconstruct(k, in.skel, tr.motion.frames, in.fps);
+    model.clamp_to_limits(out);
     out.positions = stargan::stretch_positions(in, tr.motion.frames);
     return out;
 }
@@ -1025,13 +1028,14 @@ eval_result run_eval(const std::vector<labelled_clip>& clips, const stargan::con
                 o.stargan = models.model.transfer(input, target, {}, ws);
                 o.has_amp = models.has_amp, o.gated = models.gated;
                 o.detailed = fold_detail.apply(o.stargan.motion, input, info.neutral, target);
+                models.model.clamp_to_limits(o.detailed);  // the detail a transfer adds keeps its limits too
                 if (fi == 0 && (detail_take.empty() || detail_take == in->src->take)) {
                     detail_take = in->src->take;
                     detail::add_detail_curves<K>(detail_curves, target, real->src->motion, o.stargan.motion, o.detailed);
                 }
                 if (o.has_amp) o.g_only = models.g_only.transfer(input, target, {}, ws_g_only).motion;
                 if (o.gated) o.ungated = models.ungated.transfer(input, target, {}, ws_ungated).motion;
-                if (o.has_amp) o.amp_only = detail::amplitude_only<K>(input, o.stargan);
+                if (o.has_amp) o.amp_only = detail::amplitude_only<K>(input, o.stargan, models.model);
                 o.statistics = models.model.statistics(input, target).motion;  // every learned part but G
                 o.nearest = &train[metrics::nearest_neighbour<K>(input, train, target)].motion;
                 o.mean_offset = offset.transfer(input, target, o.stargan.tempo);

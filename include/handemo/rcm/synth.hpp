@@ -393,24 +393,6 @@ inline double wrap180(double a) noexcept
 
 }  // namespace detail
 
-/// @brief Gives `s` the joint limits of hand_skeleton() when it is handemo's hand (is_hand_skeleton(): its names
-/// and parents) without limits of its own (every axis of every joint +-180, as a BVH of the hand reads back: the
-/// format carries no limits). Any other skeleton, or a hand with a limit of its own, is left as it is.
-/// @return whether the limits were adopted
-inline bool adopt_hand_limits(skeleton& s)
-{
-    if (!is_hand_skeleton(s)) return false;
-    for (const auto& j : s.joints)
-        for (std::size_t a = 0; a < 3; ++a)
-            if (j.lower_limit[a] != -180.0 || j.upper_limit[a] != 180.0) return false;
-    static const skeleton hand = hand_skeleton();
-    for (std::size_t j = 0; j < s.joints.size(); ++j) {
-        s.joints[j].lower_limit = hand.joints[j].lower_limit;
-        s.joints[j].upper_limit = hand.joints[j].upper_limit;
-    }
-    return true;
-}
-
 /// @brief Stylises `input` toward the desired features (Section 4): keyframes every `keyframe_step` frames,
 /// rule coefficients fitted to `targets`, IK of every keyframe to the moved control points, spline back to
 /// full rate, g4's frame-rate factor applied as `opt.time` says.

@@ -169,26 +169,12 @@ public:
     }
 
     /// @brief The output keyframes of a point with weights `w` from prepared label keyframes: the weighted sum,
-    /// then the amplitude stage at amplitude(w).
+    /// then the amplitude stage at amplitude(w), then the model's joint limits (emotion_model::clamp_to_limits()).
     /// @throws value_error when a label with a weight was not prepared.
     handemo::keyframes<dynamic_keyframes> blend(const label_keyframes& lk, const std::vector<double>& w) const
     {
         handemo::keyframes<dynamic_keyframes> out;
-        bool first = true;
-        for (std::size_t d = 0; d < w.size(); ++d) {
-            if (w[d] == 0) continue;
-            const auto& k = need(lk, d);
-            if (first) {
-                out = k;
-                for (auto& v : out.angles) v *= w[d];
-                first = false;
-            } else {
-                for (std::size_t i = 0; i < out.angles.size(); ++i) out.angles[i] += w[d] * k.angles[i];
-            }
-        }
-        if (first) throw value_error("continuous transfer: every weight is zero");
-        const double a = amplitude(w);
-        if (a != 1.0) scale_keyframe_excursions(out, a, model_->info().amplitude_anchor);
+        blend_into(lk, w, out);
         return out;
     }
 
@@ -255,6 +241,7 @@ public:
             const double m = excursion_anchor(r.keys, ch, model_->info().amplitude_anchor);
             for (std::size_t k = 0; k < K; ++k) r.keys.angles[k * C + ch] = m + amp[k] * (r.keys.angles[k * C + ch] - m);
         }
+        r.limited_values = model_->clamp_to_limits(r.keys);
         // the time warp: input frame i lasts tempo(i) frames of output; T(i) the output time at input frame i
         std::vector<double> T(N, 0.0), w;
         double prev = 0;
@@ -278,6 +265,7 @@ public:
             positions[f] = std::min(x * static_cast<double>(K - 1) / static_cast<double>(N - 1), static_cast<double>(K - 1));
         }
         reconstruct_at(r.keys, in.skel, positions, in.fps, r.motion);
+        model_->clamp_to_limits(r.motion);
         // position channels (a body's root) follow the same warp
         const std::size_t J3 = in.skel.size() * 3;
         r.motion.positions.assign(M * J3, 0.0);
@@ -311,14 +299,36 @@ private:
         return lk.keys[d];
     }
 
+    /// blend() into `out`; how many angles the joint limits held
+    std::size_t blend_into(const label_keyframes& lk, const std::vector<double>& w, handemo::keyframes<dynamic_keyframes>& out) const
+    {
+        bool first = true;
+        for (std::size_t d = 0; d < w.size(); ++d) {
+            if (w[d] == 0) continue;
+            const auto& k = need(lk, d);
+            if (first) {
+                out = k;
+                for (auto& v : out.angles) v *= w[d];
+                first = false;
+            } else {
+                for (std::size_t i = 0; i < out.angles.size(); ++i) out.angles[i] += w[d] * k.angles[i];
+            }
+        }
+        if (first) throw value_error("continuous transfer: every weight is zero");
+        const double a = amplitude(w);
+        if (a != 1.0) scale_keyframe_excursions(out, a, model_->info().amplitude_anchor);
+        return model_->clamp_to_limits(out);  // as the discrete transfer's keyframes
+    }
+
     continuous_result finish(const clip& in, const label_keyframes& lk, const std::vector<double>& w) const
     {
         continuous_result r;
-        r.keys = blend(lk, w);
+        r.limited_values = blend_into(lk, w, r.keys);
         r.tempo = tempo(lk, w);
         r.amplitude = amplitude(w) / (model_->amplitude_stage() ? model_->info().amplitude[lk.source] : 1.0);
         const std::size_t frames = emotion_model::output_frames(in.frames, r.tempo);
         reconstruct_into(r.keys, in.skel, frames, in.fps, r.motion);
+        model_->clamp_to_limits(r.motion);
         stretch_positions_into(in, frames, r.motion.positions);
         r.clamped_values = lk.clamped_values;
         r.weights = {w};

@@ -860,6 +860,21 @@ inline std::vector<double> json_doubles(const nlohmann::json& j)
     return v;
 }
 
+/// A skeleton's joint limits as the checkpoint stores them (metadata 'handemo', field 'joint_limits': "lower" and
+/// "upper", joints x 3 degrees each); null when every limit is -180..180 (a skeleton read from BVH).
+inline nlohmann::json joint_limits_json(const skeleton& s)
+{
+    bool any = false;
+    std::vector<double> lo, hi;
+    for (const auto& j : s.joints)
+        for (std::size_t a = 0; a < 3; ++a) {
+            lo.push_back(j.lower_limit[a]), hi.push_back(j.upper_limit[a]);
+            any = any || j.lower_limit[a] != -180.0 || j.upper_limit[a] != 180.0;
+        }
+    if (!any) return nullptr;
+    return {{"lower", lo}, {"upper", hi}};
+}
+
 /// The tempo neighbours as the checkpoint stores them (metadata 'handemo', field 'tempo_neighbours'); a domain a
 /// content has no pair of is null.
 inline nlohmann::json tempo_neighbours_json(const tempo_neighbours& t)
@@ -984,6 +999,7 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
                    "): the file is corrupted");
     checkpoint_info info;
     info.source = path.string();
+    std::vector<double> limits_lower, limits_upper;
     try {
         const auto j = nlohmann::json::parse(meta("handemo"), [&](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
             if (depth > 4) throw fail("metadata 'handemo' nests JSON deeper than 4 levels");
@@ -1035,6 +1051,10 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
             for (const auto& row : j.at("lag")) info.lag.push_back(detail::json_doubles(row));
         if (j.contains("tempo_neighbours")) info.tempo_table = detail::parse_tempo_neighbours(j.at("tempo_neighbours"), info.domains.size(), fail);
         if (j.contains("detail")) info.detail = detail_layer::from_json(j.at("detail"), "checkpoint: " + path.string() + " (metadata 'detail')");
+        if (j.contains("joint_limits")) {
+            limits_lower = detail::json_doubles(j.at("joint_limits").at("lower"));
+            limits_upper = detail::json_doubles(j.at("joint_limits").at("upper"));
+        }
         info.joint_names = j.at("joint_names").get<std::vector<std::string>>();
         info.step = static_cast<long>(count("step", std::uint64_t{1} << 53));
         info.options = j.at("options");
@@ -1055,6 +1075,20 @@ inline std::pair<safetensors_file, checkpoint_info> parse_checkpoint(safetensors
                 throw fail("metadata 'skeleton' joint " + std::to_string(k) + " is '" + rest.skel.joints[k].name + "', joint_names says '" +
                            info.joint_names[k] + "'");
         info.skel = rest.skel;
+    }
+    if (!limits_lower.empty() || !limits_upper.empty()) {
+        if (!info.skel) throw fail("metadata field 'joint_limits' without a 'skeleton'");
+        const std::size_t C = info.skel->size() * 3;
+        if (limits_lower.size() != C || limits_upper.size() != C)
+            throw fail("metadata field 'joint_limits' has " + std::to_string(limits_lower.size()) + " lower and " +
+                       std::to_string(limits_upper.size()) + " upper limits for " + std::to_string(C) + " joint axes");
+        for (std::size_t c = 0; c < C; ++c) {
+            if (!std::isfinite(limits_lower[c]) || !std::isfinite(limits_upper[c]) || limits_lower[c] > limits_upper[c])
+                throw fail("metadata field 'joint_limits': joint '" + info.skel->joints[c / 3].name + "' axis " + "xyz"[c % 3] + " has limits " +
+                           std::to_string(limits_lower[c]) + ".." + std::to_string(limits_upper[c]));
+            info.skel->joints[c / 3].lower_limit[c % 3] = limits_lower[c];
+            info.skel->joints[c / 3].upper_limit[c % 3] = limits_upper[c];
+        }
     }
     info.range.validate(("checkpoint: " + path.string() + ": range").c_str());
     if (info.tempo.size() != info.domains.size()) throw fail("tempo has " + std::to_string(info.tempo.size()) + " entries for " + std::to_string(info.domains.size()) + " domains");
@@ -1499,6 +1533,9 @@ public:
         // written only about the ends: a checkpoint without the field scales about the mean, as all did before it
         if (data_.amplitude_anchor != amplitude_anchor::mean) j["amplitude_anchor"] = anchor_name(data_.amplitude_anchor);
         if (!data_.tempo_table.empty()) j["tempo_neighbours"] = detail::tempo_neighbours_json(data_.tempo_table);
+        // the skeleton's joint limits, which its BVH text cannot hold: written only when a joint has one (a skeleton
+        // read from BVH has none, and its checkpoints keep their bytes)
+        if (const auto limits = detail::joint_limits_json(data_.skel); !limits.is_null()) j["joint_limits"] = limits;
         f.metadata["format"] = "handemo-checkpoint/1";
         f.metadata["handemo"] = j.dump();
         if (!data_.skel.joints.empty()) f.metadata["skeleton"] = to_bvh_string(clip::make(data_.skel, 1, 30), -1);

@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
@@ -60,6 +61,9 @@ struct transfer_result {
     /// input keyframe angles outside the model's range, which G saw clamped by Eq. 3 (0 when G did not run; a
     /// residual model adds G's change to the unclamped angles)
     std::size_t clamped_values = 0;
+    /// output keyframe angles the model's joint limits held (emotion_model::clamp_to_limits(): the transfer would
+    /// have moved them past a limit of the skeleton; 0 for a skeleton without limits)
+    std::size_t limited_values = 0;
     double tempo = 1.0;               ///< duration factor applied
     double amplitude = 1.0;           ///< excursion factor applied (1 unless the model learned amplitudes)
     /// what the excursions were scaled about (the model's anchor, checkpoint_info::amplitude_anchor)
@@ -569,7 +573,11 @@ public:
     /// keyframe spline at the target's tempo. transfer() is finish() with the model's gate.
     clip finish(const clip& in, const transfer_parts& p, double posture, double motion, double prior) const
     {
-        return reconstruct(combine(p, posture, motion, prior), in.skel, p.frames, in.fps);
+        auto kf = combine(p, posture, motion, prior);
+        clamp_to_limits(kf);
+        clip out = reconstruct(kf, in.skel, p.frames, in.fps);
+        clamp_to_limits(out);
+        return out;
     }
 
     /// @brief Every learned part of the model but G, each at its learned setting: the input's keyframes with the
@@ -597,12 +605,14 @@ public:
         if (!lag.empty()) shift_joints(kf, lag);
         if (amp && info_.amplitude[t] != 1.0) scale_keyframe_excursions(kf, info_.amplitude[t], info_.amplitude_anchor);
         transfer_result r;
+        r.limited_values = clamp_to_limits(kf);
         encode_into(kf, info_.range, r.image);
         r.tempo = tempo(in, target, source);
         r.amplitude = amp ? amplitude(target, source) : 1.0;
         r.amplitude_anchor = info_.amplitude_anchor;
         const std::size_t frames = output_frames(in.frames, r.tempo);
         r.motion = reconstruct(kf, in.skel, frames, in.fps);
+        clamp_to_limits(r.motion);
         r.motion.positions = stretch_positions(in, frames);
         return r;
     }
@@ -657,6 +667,7 @@ public:
         keyframes_before_generator(target, source, s, s.parts);
         keyframes_after_generator(source, s, s.parts, generate_if_gated(ws, s.parts));
         combine_gated_into(s.parts, s.out_keys);
+        clamp_to_limits(s.out_keys);
         return s.out_keys;
     }
 
@@ -667,7 +678,9 @@ private:
     {
         const transfer_parts& p = s.parts;
         combine_gated_into(p, s.out_keys);
+        out.limited_values = clamp_to_limits(s.out_keys);
         reconstruct_into(s.out_keys, in.skel, p.frames, in.fps, out.motion);
+        clamp_to_limits(out.motion);
         out.clamped_values = p.run_generator ? p.clamped_values : 0;
         encode_into(s.out_keys, info_.range, out.image);
         out.amplitude = amplitude_stage() ? amplitude(target, source) : 1.0;
@@ -682,13 +695,15 @@ public:
 
     /// @brief `out`, a transfer of `in` to `target` (transfer()), with the detail layer learned from the model's
     /// training clips (motion/detail_layer.hpp): the input's own full-rate detail, played back and scaled by the
-    /// target's statistics against the source's, zero at the output's keyframes.
+    /// target's statistics against the source's, zero at the output's keyframes, within the model's joint limits (clamp_to_limits()).
     /// @throws value_error when the model has no detail layer or no statistics for the source or the target.
     clip add_detail(const clip& out, const clip& in, std::string_view target, std::optional<std::string_view> source = {}) const
     {
         if (!info_.detail)
             throw value_error("transfer: model " + info_.source + " has no detail layer (trained before it existed): train it again");
-        return info_.detail->apply(out, in, std::string(source ? *source : std::string_view(info_.neutral)), std::string(target));
+        clip r = info_.detail->apply(out, in, std::string(source ? *source : std::string_view(info_.neutral)), std::string(target));
+        clamp_to_limits(r);  // the detail keeps the joint limits, as the transfer does
+        return r;
     }
 
     /// @brief The skeleton the model was trained on: stored in the checkpoint, or handemo's hand when the model's
@@ -710,6 +725,42 @@ public:
                           "to transfer captures of other skeletons");
     }
 
+    /// @brief The joint limits every output of the model keeps, per channel (joint j, axis a at 3j + a; degrees):
+    /// those of the skeleton the model was trained on, or handemo's hand's when that skeleton is the hand without
+    /// limits of its own (adopt_hand_limits(): a hand read from BVH, which carries none). A channel whose limits
+    /// span the whole circle (a BVH body's -180..180) is not limited: -inf and inf here.
+    const std::vector<double>& lower_limits() const noexcept { return lower_; }
+    /// @brief The upper joint limits, as lower_limits().
+    const std::vector<double>& upper_limits() const noexcept { return upper_; }
+
+    /// @brief Replaces the joint limits the outputs keep (per channel, as lower_limits(); -inf and inf leave a channel
+    /// unlimited): a rig's own limits, or none. Like set_gate(), it must not overlap any other call, and a refused
+    /// argument leaves the model as it was.
+    /// @throws value_error for vectors that are not joints x 3 long, a NaN, or a lower limit above its upper one
+    ///         (naming the joint and axis).
+    void set_limits(std::vector<double> lower, std::vector<double> upper)
+    {
+        const std::size_t C = joints() * 3;
+        if (lower.size() != C || upper.size() != C)
+            throw value_error("transfer: joint limits need " + std::to_string(C) + " values each (joints x 3), got " +
+                              std::to_string(lower.size()) + " and " + std::to_string(upper.size()));
+        for (std::size_t c = 0; c < C; ++c)
+            if (std::isnan(lower[c]) || std::isnan(upper[c]) || lower[c] > upper[c])
+                throw value_error("transfer: joint '" + info_.joint_names[c / 3] + "' axis " + "xyz"[c % 3] + ": limits " +
+                                  std::to_string(lower[c]) + ".." + std::to_string(upper[c]) + " are not a range");
+        lower_ = std::move(lower), upper_ = std::move(upper);
+    }
+
+    /// @brief Clamps every angle of keyframes on the model's skeleton into lower_limits()..upper_limits(); how many
+    /// it moved. The transfers do this to their output keyframes, after the amplitude stage, and to the full-rate
+    /// frames of their spline, so that no output leaves the skeleton's joint limits.
+    std::size_t clamp_to_limits(handemo::keyframes<dynamic_keyframes>& kf) const noexcept
+    {
+        return clamp_angles(kf.angles.data(), kf.angles.size() / (lower_.size() ? lower_.size() : 1));
+    }
+    /// @brief clamp_to_limits() on every frame of a clip on the model's skeleton (its rotation angles).
+    std::size_t clamp_to_limits(clip& c) const noexcept { return clamp_angles(c.angles.data(), c.frames); }
+
     /// @brief Checks a skeleton against the one the model was trained on.
     void check_skeleton(const skeleton& s) const
     {
@@ -723,7 +774,7 @@ public:
     }
 
 protected:
-    explicit emotion_model(checkpoint_info info) : info_(std::move(info)) {}
+    explicit emotion_model(checkpoint_info info) : info_(std::move(info)) { set_limits(); }
     /// x, out: [3, K, J] in [-1, 1]; `ws` made by new_scratch() of this model.
     virtual void run_generator(const float* x, std::size_t target, float* out, workspace::scratch& ws) const = 0;
     virtual std::unique_ptr<workspace::scratch> new_scratch() const = 0;
@@ -745,6 +796,46 @@ protected:
         workspace ws;
     };
     checkpoint_info info_;
+
+private:
+    /// lower_limits(), upper_limits() from the stored skeleton (handemo's hand for a checkpoint without one whose
+    /// joints are the hand's; none otherwise), the hand's adopted by a hand without limits of its own
+    void set_limits()
+    {
+        const std::size_t C = info_.joint_names.size() * 3;
+        lower_.assign(C, -std::numeric_limits<double>::infinity());
+        upper_.assign(C, std::numeric_limits<double>::infinity());
+        skeleton s;
+        if (info_.skel) {
+            s = *info_.skel;
+        } else {
+            s = hand_skeleton();
+            if (s.size() != info_.joint_names.size()) return;
+            for (std::size_t j = 0; j < s.size(); ++j)
+                if (s.joints[j].name != info_.joint_names[j]) return;
+        }
+        if (s.size() * 3 != C) return;
+        adopt_hand_limits(s);
+        for (std::size_t j = 0; j < s.size(); ++j)
+            for (std::size_t a = 0; a < 3; ++a)
+                if (s.joints[j].upper_limit[a] - s.joints[j].lower_limit[a] < 360.0)
+                    lower_[j * 3 + a] = s.joints[j].lower_limit[a], upper_[j * 3 + a] = s.joints[j].upper_limit[a];
+    }
+
+    std::size_t clamp_angles(double* v, std::size_t rows) const noexcept
+    {
+        const std::size_t C = lower_.size();
+        std::size_t moved = 0;
+        for (std::size_t r = 0; r < rows; ++r)
+            for (std::size_t c = 0; c < C; ++c) {
+                double& x = v[r * C + c];
+                if (x < lower_[c]) x = lower_[c], ++moved;
+                else if (x > upper_[c]) x = upper_[c], ++moved;
+            }
+        return moved;
+    }
+
+    std::vector<double> lower_, upper_;
 };
 
 namespace detail {
