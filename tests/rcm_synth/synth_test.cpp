@@ -155,13 +155,8 @@ TEST_CASE("rcm synth: a hand read back from BVH, which carries no limits, is sty
 {
     const clip c = parse_bvh(to_bvh_string(synthesize(hand_motion::gripping, emotion::neutral, 0, 2, 30.0)), "hand.bvh");
     const skeleton hand = hand_skeleton();
-    for (const auto& j : c.skel.joints) {
-        CHECK(j.lower_limit == vec3{-180, -180, -180});
-        CHECK(j.upper_limit == vec3{180, 180, 180});
-    }
-    skeleton s = c.skel;
-    CHECK(adopt_hand_limits(s));  // motion/hand.hpp (its cases: tests/motion/hand_test.cpp)
-    for (std::size_t j = 0; j < s.size(); ++j) CHECK(s.joints[j].upper_limit == hand.joints[j].upper_limit);
+    // the premise: the hand read back has no limits (adopt_hand_limits()'s cases are in tests/motion/hand_test.cpp)
+    REQUIRE(c.skel.joints[4].upper_limit == vec3{180, 180, 180});
 
     // an exaggerated target (a wider, faster hand) pushes the fingers toward and past their limits; the output stays
     // within the hand's, on the input's own skeleton
