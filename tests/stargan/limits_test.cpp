@@ -139,6 +139,12 @@ TEST_CASE("a model's limits: a skeleton's own limits are kept, a channel spannin
     CHECK(m.clamp_to_limits(k) >= 1);
     CHECK(k.angles[13] == 200);
     CHECK(k.angles[12] == 40);
+    // keyframes or a clip of another skeleton are refused, not read past their end
+    auto fewer = k;
+    fewer.joints = 22, fewer.angles.resize(fewer.count() * 22 * 3);
+    CHECK_THROWS_WITH_AS(m.clamp_to_limits(fewer), doctest::Contains("has 22 joints"), shape_error);
+    clip body = clip::make(skeleton{"body", {joint{"hips"}}}, 4, 30);
+    CHECK_THROWS_WITH_AS(m.clamp_to_limits(body), doctest::Contains("clip body has 1 joints"), shape_error);
 }
 
 TEST_CASE("set_limits: a rig's own limits or none; refusals name the joint and axis and leave the model as it was")

@@ -754,12 +754,19 @@ public:
     /// @brief Clamps every angle of keyframes on the model's skeleton into lower_limits()..upper_limits(); how many
     /// it moved. The transfers do this to their output keyframes, after the amplitude stage, and to the full-rate
     /// frames of their spline, so that no output leaves the skeleton's joint limits.
-    std::size_t clamp_to_limits(handemo::keyframes<dynamic_keyframes>& kf) const noexcept
+    /// @throws shape_error for keyframes of another joint count.
+    std::size_t clamp_to_limits(handemo::keyframes<dynamic_keyframes>& kf) const
     {
-        return clamp_angles(kf.angles.data(), kf.angles.size() / (lower_.size() ? lower_.size() : 1));
+        check_channels(kf.joints, kf.angles.size(), kf.count(), "keyframes");
+        return clamp_angles(kf.angles.data(), kf.count());
     }
     /// @brief clamp_to_limits() on every frame of a clip on the model's skeleton (its rotation angles).
-    std::size_t clamp_to_limits(clip& c) const noexcept { return clamp_angles(c.angles.data(), c.frames); }
+    /// @throws shape_error for a clip of another joint count.
+    std::size_t clamp_to_limits(clip& c) const
+    {
+        check_channels(c.skel.size(), c.angles.size(), c.frames, "clip " + c.skel.name);
+        return clamp_angles(c.angles.data(), c.frames);
+    }
 
     /// @brief Checks a skeleton against the one the model was trained on.
     void check_skeleton(const skeleton& s) const
@@ -820,6 +827,13 @@ private:
             for (std::size_t a = 0; a < 3; ++a)
                 if (s.joints[j].upper_limit[a] - s.joints[j].lower_limit[a] < 360.0)
                     lower_[j * 3 + a] = s.joints[j].lower_limit[a], upper_[j * 3 + a] = s.joints[j].upper_limit[a];
+    }
+
+    void check_channels(std::size_t joints, std::size_t values, std::size_t rows, const std::string& what) const
+    {
+        if (joints * 3 != lower_.size() || values != rows * lower_.size())
+            throw shape_error("transfer: joint limits: " + what + " has " + std::to_string(joints) + " joints (" + std::to_string(values) +
+                              " angles), the model " + info_.source + " has " + std::to_string(lower_.size() / 3));
     }
 
     std::size_t clamp_angles(double* v, std::size_t rows) const noexcept
