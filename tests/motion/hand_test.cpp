@@ -123,6 +123,8 @@ TEST_CASE("hand skeleton: a hand read back from BVH, which carries no limits, ad
         CHECK(j.lower_limit == vec3{-180, -180, -180});
         CHECK(j.upper_limit == vec3{180, 180, 180});
     }
+    CHECK_FALSE(c.skel.has_limits());
+    CHECK(hand.has_limits());
     skeleton s = c.skel;
     CHECK(adopt_hand_limits(s));
     for (std::size_t j = 0; j < s.size(); ++j) {

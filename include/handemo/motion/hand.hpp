@@ -183,10 +183,7 @@ inline bool is_hand_skeleton(const skeleton& s)
 /// @return whether the limits were adopted
 inline bool adopt_hand_limits(skeleton& s)
 {
-    if (!is_hand_skeleton(s)) return false;
-    for (const auto& j : s.joints)
-        for (std::size_t a = 0; a < 3; ++a)
-            if (j.lower_limit[a] != -180.0 || j.upper_limit[a] != 180.0) return false;
+    if (!is_hand_skeleton(s) || s.has_limits()) return false;
     static const skeleton hand = hand_skeleton();
     for (std::size_t j = 0; j < s.joints.size(); ++j) {
         s.joints[j].lower_limit = hand.joints[j].lower_limit;

@@ -80,6 +80,15 @@ struct skeleton {
     std::vector<joint> joints;
 
     std::size_t size() const noexcept { return joints.size(); }
+    /// @brief True when some joint has a limit other than -180..180 (a skeleton read from BVH has none: the format
+    /// holds no limits).
+    bool has_limits() const noexcept
+    {
+        for (const auto& j : joints)
+            for (std::size_t a = 0; a < 3; ++a)
+                if (j.lower_limit[a] != -180.0 || j.upper_limit[a] != 180.0) return true;
+        return false;
+    }
     /// @brief Index of a joint by name.
     /// @throws value_error when no joint has that name.
     std::size_t index_of(std::string_view n) const

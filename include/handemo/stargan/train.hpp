@@ -864,14 +864,10 @@ inline std::vector<double> json_doubles(const nlohmann::json& j)
 /// "upper", joints x 3 degrees each); null when every limit is -180..180 (a skeleton read from BVH).
 inline nlohmann::json joint_limits_json(const skeleton& s)
 {
-    bool any = false;
+    if (!s.has_limits()) return nullptr;
     std::vector<double> lo, hi;
     for (const auto& j : s.joints)
-        for (std::size_t a = 0; a < 3; ++a) {
-            lo.push_back(j.lower_limit[a]), hi.push_back(j.upper_limit[a]);
-            any = any || j.lower_limit[a] != -180.0 || j.upper_limit[a] != 180.0;
-        }
-    if (!any) return nullptr;
+        for (std::size_t a = 0; a < 3; ++a) lo.push_back(j.lower_limit[a]), hi.push_back(j.upper_limit[a]);
     return {{"lower", lo}, {"upper", hi}};
 }
 
