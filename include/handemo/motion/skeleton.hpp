@@ -48,6 +48,10 @@ struct joint {
     vec3 lower_limit{-180, -180, -180};  ///< joint-angle limits in degrees, per axis x, y, z
     vec3 upper_limit{180, 180, 180};
 
+    /// True when axis `a` (0 x, 1 y, 2 z) is limited: its limits span less than the whole circle (a BVH joint's
+    /// -180..180, or anything wider, is not).
+    bool limited(std::size_t a) const noexcept { return upper_limit[a] - lower_limit[a] < 360.0; }
+
     /// True when the joint has position channels (6-channel BVH joint).
     bool has_position() const noexcept
     {

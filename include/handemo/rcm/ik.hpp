@@ -306,10 +306,8 @@ public:
         lo_.assign(n, -1e300);
         hi_.assign(n, 1e300);
         for (std::size_t j = 0; j < s.size(); ++j)
-            for (std::size_t a = 0; a < 3; ++a) {
-                const double l = s.joints[j].lower_limit[a], u = s.joints[j].upper_limit[a];
-                if (u - l < 360.0) lo_[j * 3 + a] = l, hi_[j * 3 + a] = u;
-            }
+            for (std::size_t a = 0; a < 3; ++a)
+                if (s.joints[j].limited(a)) lo_[j * 3 + a] = s.joints[j].lower_limit[a], hi_[j * 3 + a] = s.joints[j].upper_limit[a];
     }
 
     /// @brief Number of unknowns: 3 angles per joint (+ 3 translation values).

@@ -481,7 +481,7 @@ inline synth_result stylise(const clip& input, const std::vector<feature_target>
     for (std::size_t idx = 0; idx < J3; ++idx) {
         const std::size_t j = idx / 3, a = idx % 3;
         const bool translated = tj >= 0 && j == static_cast<std::size_t>(tj);
-        const bool limited = u.skel.joints[j].upper_limit[a] - u.skel.joints[j].lower_limit[a] < 360.0;
+        const bool limited = u.skel.joints[j].limited(a);
         // angles
         for (std::size_t k = 0; k < K; ++k)
             ys[k] = kf_angles[k * J3 + idx] - (opt.interpolate_offsets ? u.angles[out.keyframes[k] * J3 + idx] : 0.0);

@@ -711,16 +711,10 @@ public:
     /// @throws value_error for an older checkpoint of another skeleton.
     skeleton model_skeleton() const
     {
-        if (info_.skel) {
-            skeleton s = *info_.skel;
-            s.name = "model " + info_.config;
-            return s;
+        if (auto s = trained_skeleton()) {
+            s->name = "model " + info_.config;
+            return *s;
         }
-        skeleton h = hand_skeleton();
-        h.name = "model " + info_.config;
-        bool same = h.size() == info_.joint_names.size();
-        for (std::size_t j = 0; same && j < h.size(); ++j) same = h.joints[j].name == info_.joint_names[j];
-        if (same) return h;
         throw value_error("transfer: model " + info_.source + " stores no skeleton (written before skeletons were stored): train it again "
                           "to transfer captures of other skeletons");
     }
@@ -757,14 +751,14 @@ public:
     /// @throws shape_error for keyframes of another joint count.
     std::size_t clamp_to_limits(handemo::keyframes<dynamic_keyframes>& kf) const
     {
-        check_channels(kf.joints, kf.angles.size(), kf.count(), "keyframes");
+        check_channels(kf.joints, kf.angles.size(), kf.count(), "keyframes", {});
         return clamp_angles(kf.angles.data(), kf.count());
     }
     /// @brief clamp_to_limits() on every frame of a clip on the model's skeleton (its rotation angles).
     /// @throws shape_error for a clip of another joint count.
     std::size_t clamp_to_limits(clip& c) const
     {
-        check_channels(c.skel.size(), c.angles.size(), c.frames, "clip " + c.skel.name);
+        check_channels(c.skel.size(), c.angles.size(), c.frames, "clip ", c.skel.name);
         return clamp_angles(c.angles.data(), c.frames);
     }
 
@@ -781,7 +775,7 @@ public:
     }
 
 protected:
-    explicit emotion_model(checkpoint_info info) : info_(std::move(info)) { set_limits(); }
+    explicit emotion_model(checkpoint_info info) : info_(std::move(info)) { limits_from_skeleton(); }
     /// x, out: [3, K, J] in [-1, 1]; `ws` made by new_scratch() of this model.
     virtual void run_generator(const float* x, std::size_t target, float* out, workspace::scratch& ws) const = 0;
     virtual std::unique_ptr<workspace::scratch> new_scratch() const = 0;
@@ -805,35 +799,41 @@ protected:
     checkpoint_info info_;
 
 private:
-    /// lower_limits(), upper_limits() from the stored skeleton (handemo's hand for a checkpoint without one whose
-    /// joints are the hand's; none otherwise), the hand's adopted by a hand without limits of its own
-    void set_limits()
+    /// The skeleton the model was trained on: the stored one, or handemo's hand for a checkpoint written before
+    /// skeletons were stored whose joints are the hand's; none for another such checkpoint.
+    std::optional<skeleton> trained_skeleton() const
+    {
+        if (info_.skel) return *info_.skel;
+        skeleton h = hand_skeleton();
+        if (h.size() != info_.joint_names.size()) return std::nullopt;
+        for (std::size_t j = 0; j < h.size(); ++j)
+            if (h.joints[j].name != info_.joint_names[j]) return std::nullopt;
+        return h;
+    }
+
+    /// lower_limits(), upper_limits() from trained_skeleton() (none without one), the hand's adopted by a hand
+    /// without limits of its own
+    void limits_from_skeleton()
     {
         const std::size_t C = info_.joint_names.size() * 3;
         lower_.assign(C, -std::numeric_limits<double>::infinity());
         upper_.assign(C, std::numeric_limits<double>::infinity());
-        skeleton s;
-        if (info_.skel) {
-            s = *info_.skel;
-        } else {
-            s = hand_skeleton();
-            if (s.size() != info_.joint_names.size()) return;
-            for (std::size_t j = 0; j < s.size(); ++j)
-                if (s.joints[j].name != info_.joint_names[j]) return;
-        }
-        if (s.size() * 3 != C) return;
-        adopt_hand_limits(s);
-        for (std::size_t j = 0; j < s.size(); ++j)
+        auto s = trained_skeleton();
+        if (!s || s->size() * 3 != C) return;
+        adopt_hand_limits(*s);
+        for (std::size_t j = 0; j < s->size(); ++j)
             for (std::size_t a = 0; a < 3; ++a)
-                if (s.joints[j].upper_limit[a] - s.joints[j].lower_limit[a] < 360.0)
-                    lower_[j * 3 + a] = s.joints[j].lower_limit[a], upper_[j * 3 + a] = s.joints[j].upper_limit[a];
+                if (s->joints[j].limited(a)) lower_[j * 3 + a] = s->joints[j].lower_limit[a], upper_[j * 3 + a] = s->joints[j].upper_limit[a];
     }
 
-    void check_channels(std::size_t joints, std::size_t values, std::size_t rows, const std::string& what) const
+    /// The shape check of clamp_to_limits(); the message (`what` then `name`) is built only when it fails, so the
+    /// transfers' clamp allocates nothing.
+    void check_channels(std::size_t joints, std::size_t values, std::size_t rows, const char* what, std::string_view name) const
     {
         if (joints * 3 != lower_.size() || values != rows * lower_.size())
-            throw shape_error("transfer: joint limits: " + what + " has " + std::to_string(joints) + " joints (" + std::to_string(values) +
-                              " angles), the model " + info_.source + " has " + std::to_string(lower_.size() / 3));
+            throw shape_error("transfer: joint limits: " + std::string(what) + std::string(name) + " has " + std::to_string(joints) +
+                              " joints (" + std::to_string(values) + " angles), the model " + info_.source + " has " +
+                              std::to_string(lower_.size() / 3));
     }
 
     std::size_t clamp_angles(double* v, std::size_t rows) const noexcept
