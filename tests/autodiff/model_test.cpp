@@ -234,7 +234,7 @@ TEST_CASE("stargan: the frozen generator's label maps are the first layer's labe
         float d = 0;
         for (std::size_t i = 0; i < x.size(); ++i) d = std::max(d, std::abs(y_infer[i] - y_frozen[i]));
         CAPTURE(lab[0]);
-        CHECK(d < 1e-5f);
+        CHECK(d < 2e-5f);  // two float sum orders (the frozen one by kernel row), each within about 1e-5 of the exact G
     }
 }
 

@@ -118,7 +118,7 @@ TEST_CASE("winograd_conv3x3 matches the reference as closely as the direct kerne
             CAPTURE(bias);
             CAPTURE(ed);
             CHECK(ew <= 1e-5);       // packed_test.cpp's tolerance for the direct kernels
-            CHECK(ew <= std::max(4 * ed, 1e-6));  // and of the direct kernel's own error's order (or 1e-6: 8 ulps)
+            CHECK(ew <= std::max(4 * ed, 2e-6));  // and of the direct kernel's own error's order (or 2e-6: 16 ulps)
         }
         if (s.ci <= 2 * L) {
             const auto [ew, ed] = errors<double>(g, 3, 2, seed++, true);

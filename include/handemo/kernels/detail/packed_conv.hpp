@@ -163,12 +163,15 @@ inline void micro_ws_dispatch(int nr, int kc, const W* wp, const int* koff, cons
 
 /// One weight-stationary GEMM: `co` output channels from the panels `wp` ([ceil(co/MR)][K][MR]) and the
 /// offsets `koff` [K]; `rows` output rows of `cols` pixels each; pixel (r, q) reads the padded input at
-/// src + r*src_row + q*sj and is written to y[o*y_chan + y_row0 + r*y_row + q*y_col].
+/// src + r*src_row + q*sj and is written to y[o*y_chan + y_row0 + r*y_row + q*y_col]. row_k: nullptr (every
+/// row sums over k in [0, K)), or per row r the range [row_k[2r], row_k[2r + 1]) outside which every tap of
+/// the row reads the zero padding (the caller orders k so that those taps lie at the ends: kernel row first).
 struct ws_job {
     int K, co, rows, cols, sj;
     const int* koff;
     std::ptrdiff_t src_row;
     std::ptrdiff_t y_chan, y_row0, y_row, y_col;
+    const int* row_k = nullptr;
 };
 
 /// Elements of the accumulator scratch of a job: every pixel tile of one panel.
@@ -203,17 +206,34 @@ inline void ws_run_tiled(const ws_job& j, const W* wp, const T* src, const T* bi
             T* tile = acc;
             for (int r = 0; r < j.rows; ++r) {
                 const T* srow = src + r * j.src_row;
+                // the row's taps within this block that can read the image: [ka, kb); the others read zeros
+                const int klo = j.row_k ? j.row_k[2 * r] : 0, khi = j.row_k ? j.row_k[2 * r + 1] : j.K;
+                const int ka = std::max(k0, klo), kb = std::min(k0 + kc, khi);
                 for (int q0 = 0; q0 < j.cols; q0 += NR, tile += NR * MR) {
                     const int nr = std::min(NR, j.cols - q0);
                     const T* sp = srow + std::ptrdiff_t(q0) * (SJ > 0 ? SJ : j.sj);
+                    int r0 = 0, rows = 0;
                     if (pf && nr == NR) {
-                        const int r0 = std::min(kc, ti * share), rows = std::min(kc - r0, share);
+                        r0 = std::min(kc, ti * share), rows = std::min(kc - r0, share);
                         ++ti;
-                        micro_ws<T, W, NV, NR, SJ, true>(kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj, tile,
-                                                          k0 > 0, wp + (next + r0) * MR, rows);
-                    } else
-                        micro_ws_dispatch<T, W, NV, NR, SJ>(nr, kc, wpanel + std::ptrdiff_t(k0) * MR, j.koff + k0, sp, j.sj,
-                                                         tile, k0 > 0);
+                    }
+                    if (ka >= kb) {
+                        // no tap of this block reaches the image: the tile keeps its sums (an empty row: zeros),
+                        // and its share of the next block's weights is still prefetched
+                        if (k0 == 0 && klo >= khi)
+                            for (int i = 0; i < NR * MR; ++i) tile[i] = T(0);
+                        for (int k = 0; k < rows; ++k)
+                            for (int b = 0; b < MR * int(sizeof(W)); b += 64)
+                                __builtin_prefetch(reinterpret_cast<const char*>(wp + (next + r0 + k) * MR) + b, 0, 2);
+                        continue;
+                    }
+                    const bool accumulate = ka > klo;
+                    if (rows > 0)
+                        micro_ws<T, W, NV, NR, SJ, true>(kb - ka, wpanel + std::ptrdiff_t(ka) * MR, j.koff + ka, sp, j.sj, tile,
+                                                          accumulate, wp + (next + r0) * MR, rows);
+                    else
+                        micro_ws_dispatch<T, W, NV, NR, SJ>(nr, kb - ka, wpanel + std::ptrdiff_t(ka) * MR, j.koff + ka, sp, j.sj,
+                                                         tile, accumulate);
                 }
             }
         }
