@@ -10,7 +10,8 @@
 // gradient penalty's double backward included) and GFLOP/s = FLOP / time. The rows stargan_infer_winograd/ run the
 // frozen generator with the residual convolutions by Winograd's F(3x2, 3x3) (kernels::conv_algorithm::winograd):
 // their FLOP and GFLOP/s count the same direct-convolution FLOPs as the other rows (what G computes, however it is
-// computed), and performed_FLOP what the multiplications of their GEMMs and of the other layers are.
+// computed), and performed_FLOP what the multiplications of their GEMMs and of the other layers are. Every frozen
+// row's performed_FLOP leaves out the multiply-adds the packed kernels skip (kernel rows over the zero padding).
 // HANDEMO_BENCH_QUICK=1 in the environment runs every benchmark for 0.01 s instead of its minimum time: a check
 // that the program runs end to end, not a measurement.
 #include <handemo/motion/synth.hpp>
@@ -50,12 +51,15 @@ void flop_counters(benchmark::State& st, double flop)
     st.counters["GFLOP/s"] = benchmark::Counter(flop, benchmark::Counter::kIsIterationInvariantRate, benchmark::Counter::kIs1000);
 }
 
-/// The counter performed_FLOP of a frozen generator's call on `images` images: frozen_generator_flops() with the
-/// residual convolutions' direct multiply-adds replaced by those of their Winograd GEMMs (when it has them).
+/// The counter performed_FLOP of a frozen generator's call on `images` images: frozen_generator_flops() with each
+/// convolution's multiply-adds replaced by those it performs: without the kernel rows that read only the zero
+/// padding (kernels::packed_conv::macs_per_image()), and the residual convolutions' by those of their Winograd
+/// GEMMs (when it has them).
 template <class Config, class Frozen>
 void performed_counter(benchmark::State& st, const Frozen& f, std::size_t images)
 {
     double flop = frozen_generator_flops<Config>();
+    for (const auto& c : f.convolutions()) flop += 2 * (c.macs_per_image() - c.geometry().macs() / c.geometry().batch);
     for (const auto& w : f.winograd_convolutions()) flop += 2 * (w.macs_per_image() - w.geometry().macs() / w.geometry().batch);
     st.counters["performed_FLOP"] = flop * double(images);
 }

@@ -113,6 +113,35 @@ TEST_CASE("packed convolutions match the reference on the generator's layers at 
     }
 }
 
+TEST_CASE("packed convolutions skip the kernel rows that read only the padding: multiply-adds by hand")
+{
+    if constexpr (!hk::detail::has_simd) return;
+    constexpr int L = hk::detail::simd_lanes<float>;
+    // the residual geometry (3 x 6 pixels, 3 x 3 kernel, pad 1): rows 0 and 2 use 2 of the 3 kernel rows
+    const hk::conv_geometry res{1, L, 3, 6, L, 3, 3, 1, 1};
+    const auto pr = hk::packed_conv<float>::conv2d(res, std::vector<float>(res.w_size(), 1.f).data());
+    REQUIRE(pr.weight_stationary());
+    CHECK(res.macs() == double(L) * L * 18 * 9);
+    CHECK(pr.macs_per_image() == double(L) * L * 6 * 3 * (2 + 3 + 2));
+    // the transposed 4 x 4 stride-2 layer onto 6 x 12 from 3 x 6: output row h reads x's rows m - t (t = 0, 1),
+    // one of them outside x for h = 0 and h = 5: 1, 2, 2, 2, 2, 1 kernel rows of 2, each with 2 column taps
+    const hk::conv_geometry up{1, L, 6, 12, L, 4, 4, 2, 1};
+    const auto pt = hk::packed_conv<float>::conv_transpose2d(up, std::vector<float>(up.w_size(), 1.f).data());
+    REQUIRE(pt.weight_stationary());
+    CHECK(up.macs() == double(L) * L * 18 * 16);
+    CHECK(pt.macs_per_image() == double(L) * L * 12 * 2 * (1 + 2 + 2 + 2 + 2 + 1));
+    // a stride-2 4 x 4 conv 6 x 12 -> 3 x 6, pad 1: row 0 reads padded rows 0-3 (row 0 is padding), row 2 rows 4-7
+    // (row 7 is padding): 3, 4, 3 kernel rows of 4
+    const hk::conv_geometry down{1, L, 6, 12, L, 4, 4, 2, 1};
+    const auto pd = hk::packed_conv<float>::conv2d(down, std::vector<float>(down.w_size(), 1.f).data());
+    CHECK(pd.macs_per_image() == double(L) * L * 6 * 4 * (3 + 4 + 3));
+    // a layer on the fallback kernels performs the geometry's multiply-adds
+    const hk::conv_geometry last{1, L, 12, 24, 3, 7, 7, 1, 3};
+    const auto pl = hk::packed_conv<float>::conv2d(last, std::vector<float>(last.w_size(), 1.f).data());
+    CHECK_FALSE(pl.weight_stationary());
+    CHECK(pl.macs_per_image() == last.macs());
+}
+
 TEST_CASE("packed convolutions match the reference on random geometries (strides 1-3, any padding)")
 {
     std::mt19937 rng(20261202u);

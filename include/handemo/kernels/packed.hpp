@@ -88,6 +88,19 @@ public:
     /// @brief Bytes of the stored weights (packed panels with their zero padding, or the plain copy): what
     /// one forward pass streams.
     std::size_t weight_bytes() const noexcept { return w_.size() * sizeof(T) + wh_.size() * sizeof(std::uint16_t); }
+    /// @brief Multiply-adds one forward pass performs per image: the geometry's (conv_geometry::macs() of a batch
+    /// of 1) for the kernels of kernels/conv.hpp; on the weight-stationary path, every output row's taps but the
+    /// kernel rows that read only the zero padding above or below the image (fewer than the geometry's at the
+    /// image's top and bottom edges).
+    double macs_per_image() const noexcept
+    {
+        if (!ws_) return g_.macs() / double(g_.batch);
+        double m = 0;
+        for (const auto& ph : phases_)
+            for (int r = 0; r < ph.job.rows; ++r)
+                m += double(row_k_[ph.row_k_off + 2 * std::size_t(r) + 1] - row_k_[ph.row_k_off + 2 * std::size_t(r)]) * ph.job.cols * ph.job.co;
+        return m;
+    }
 
     /// @brief conv2d: y = conv(x, w) + bias, x [batch, in_channels, in_h, in_w], y [batch, out_channels,
     /// out_h, out_w]. conv_transpose2d: y = ConvTranspose2d(x, w) + bias, x [batch, g.out_channels,
