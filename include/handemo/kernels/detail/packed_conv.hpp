@@ -161,6 +161,58 @@ inline void micro_ws_dispatch(int nr, int kc, const W* wp, const int* koff, cons
     else micro_ws_dispatch<T, W, NV, N - 1, SJ>(nr, kc, wp, koff, src, sj, tile, accumulate);
 }
 
+/// micro_ws over the taps idx[0..n) only: tile[j] (+)= sum_i wp[idx[i]*MR ..] * src[koff[idx[i]] + j*sj], in the
+/// order of idx. For the output rows of a training convolution whose window reaches over the image's top or bottom
+/// edge: the taps left out read only the zero padding.
+template <class T, int NV, int NR, int SJ>
+[[gnu::noinline]] inline void micro_ws_idx(int n, const int* __restrict idx, const T* __restrict wp, const int* __restrict koff,
+                                           const T* __restrict src, int sj, T* __restrict tile, bool accumulate) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>, MR = NV * L;
+    B acc[NR][NV];
+    if (accumulate) {
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j)
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
+    } else {
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j)
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
+    }
+    const int step = SJ > 0 ? SJ : sj;
+    for (int i = 0; i < n; ++i) {
+        const int k = idx[i];
+        const T* w = wp + std::ptrdiff_t(k) * MR;
+        B a[NV];
+        HANDEMO_UNROLL_TILE
+        for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_aligned(w + q * L));
+        const T* s = src + koff[k];
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j) {
+            const B b(s[j * step]);
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
+        }
+    }
+    HANDEMO_UNROLL_TILE
+    for (int j = 0; j < NR; ++j)
+        HANDEMO_UNROLL_TILE
+        for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
+}
+
+/// micro_ws_idx<T, NV, nr, SJ> for nr = 1..N.
+template <class T, int NV, int N, int SJ>
+inline void micro_ws_idx_dispatch(int nr, int n, const int* idx, const T* wp, const int* koff, const T* src, int sj, T* tile,
+                                  bool accumulate) noexcept
+{
+    if constexpr (N <= 1) micro_ws_idx<T, NV, 1, SJ>(n, idx, wp, koff, src, sj, tile, accumulate);
+    else if (nr >= N) micro_ws_idx<T, NV, N, SJ>(n, idx, wp, koff, src, sj, tile, accumulate);
+    else micro_ws_idx_dispatch<T, NV, N - 1, SJ>(nr, n, idx, wp, koff, src, sj, tile, accumulate);
+}
+
 /// One weight-stationary GEMM: `co` output channels from the panels `wp` ([ceil(co/MR)][K][MR]) and the
 /// offsets `koff` [K]; `rows` output rows of `cols` pixels each; pixel (r, q) reads the padded input at
 /// src + r*src_row + q*sj and is written to y[o*y_chan + y_row0 + r*y_row + q*y_col]. row_k: nullptr (every
@@ -313,7 +365,9 @@ inline std::size_t ws_packed_elements(int co, int K) noexcept
 // trains to the same bits on either: each output's products are summed in k = (c, u, v) order in chains of
 // forward_kc products, each chain starting from zero (the kernel's reduction blocks never cross a chain's
 // end), and the chains are added to the output as those paths add them: ((y or 0) + chain) + bias for the
-// first, (y + chain) + 0 for each later one.
+// first, (y + chain) + 0 for each later one. Output rows whose window reaches over the image's top or bottom edge
+// leave out the taps on the kernel rows that read only the zero padding (micro_ws_idx): their products are +-0,
+// which leave a sum that starts at +0 as it is, so the bits are the same, for fewer multiply-adds.
 
 /// Images forward_ws runs together: each block of panel weights is loaded into L1 once for all of them (one image
 /// at a time streamed the paper G's 2 MB panels from L3 once per image, for 18 output pixels each), as many as
@@ -367,6 +421,17 @@ inline void ws_run_chains(const conv_geometry& g, int Hp, int Wp, const T* wp, i
     const std::size_t n_acc = std::size_t(rows) * tiles_per_row * NR * MR;
     int koff[forward_kc];
     alignas(64) T bv[MR];
+    // Output rows whose window reaches over the image's top edge (the first `top`) or bottom edge (from `bottom`
+    // on): their taps on kernel rows outside [u_lo, u_hi) read only the zero padding, and a product with +-0 leaves
+    // a chain's sum as it is (each chain starts at +0), so those rows run over their other taps only (micro_ws_idx),
+    // with the bits of the full sum. Per edge row and chain, the chain-relative taps it keeps.
+    constexpr int max_edge_rows = 8;
+    const int top = std::min(rows, (g.pad + g.stride - 1) / g.stride);
+    const int bottom = std::max(top, std::min(rows, g.pad + g.in_h - kh >= 0 ? (g.pad + g.in_h - kh) / g.stride + 1 : 0));
+    const bool skip = top + (rows - bottom) <= max_edge_rows && (top > 0 || bottom < rows);
+    int edge_taps[max_edge_rows][forward_kc];
+    int edge_count[max_edge_rows];
+    auto edge_index = [&](int r) { return r < top ? r : r >= bottom ? top + (r - bottom) : -1; };
     for (int pn = 0; pn < panels; ++pn) {
         const T* wpanel = wp + std::ptrdiff_t(pn) * K * MR;
         const int o0 = pn * MR, no = std::min(MR, co - o0);
@@ -383,19 +448,51 @@ inline void ws_run_chains(const conv_geometry& g, int Hp, int Wp, const T* wp, i
         for (int s0 = 0; s0 < K; s0 += forward_kc) {
             const int s1 = std::min(K, s0 + forward_kc);
             padded_window_offsets(s0, s1 - s0, kh, kw, Hp, Wp, koff);
+            if (skip)
+                for (int r = 0; r < rows; ++r) {
+                    const int e = edge_index(r);
+                    if (e < 0) continue;
+                    const int u_lo = std::clamp(g.pad - r * g.stride, 0, kh), u_hi = std::clamp(g.pad + g.in_h - r * g.stride, u_lo, kh);
+                    int m = 0;
+                    for (int k = s0, u = (s0 / kw) % kh, v = s0 % kw; k < s1; ++k) {
+                        if (u >= u_lo && u < u_hi) edge_taps[e][m++] = k - s0;
+                        if (++v == kw) v = 0, u = u + 1 == kh ? 0 : u + 1;
+                    }
+                    edge_count[e] = m;
+                }
+            int cursor[max_edge_rows] = {};  // per edge row: its first tap at or after the block
             for (int k0 = s0; k0 < s1; k0 += kc_max) {
                 const int kc = std::min(kc_max, s1 - k0);
+                int block_end[max_edge_rows] = {};
+                if (skip)
+                    for (int e = 0; e < top + (rows - bottom); ++e) {
+                        int i = cursor[e];
+                        while (i < edge_count[e] && edge_taps[e][i] < k0 + kc - s0) ++i;
+                        block_end[e] = i;
+                    }
                 for (int n = 0; n < images; ++n) {
                     T* tile = acc + n * tile_image;
                     const T* sn = src + n * src_image;
                     for (int r = 0; r < rows; ++r) {
                         const T* srow = sn + r * src_row;
-                        for (int q0 = 0; q0 < cols; q0 += NR, tile += NR * MR)
-                            micro_ws_dispatch<T, T, NV, NR, SJ>(std::min(NR, cols - q0), kc, wpanel + std::ptrdiff_t(k0) * MR,
-                                                                koff + (k0 - s0), srow + std::ptrdiff_t(q0) * (SJ > 0 ? SJ : sj), sj,
-                                                                tile, k0 > s0);
+                        const int e = skip ? edge_index(r) : -1;
+                        for (int q0 = 0; q0 < cols; q0 += NR, tile += NR * MR) {
+                            const T* sp = srow + std::ptrdiff_t(q0) * (SJ > 0 ? SJ : sj);
+                            if (e < 0) {
+                                micro_ws_dispatch<T, T, NV, NR, SJ>(std::min(NR, cols - q0), kc, wpanel + std::ptrdiff_t(k0) * MR,
+                                                                    koff + (k0 - s0), sp, sj, tile, k0 > s0);
+                            } else if (block_end[e] > cursor[e]) {
+                                micro_ws_idx_dispatch<T, NV, NR, SJ>(std::min(NR, cols - q0), block_end[e] - cursor[e],
+                                                                     edge_taps[e] + cursor[e], wpanel + std::ptrdiff_t(s0) * MR, koff,
+                                                                     sp, sj, tile, k0 > s0);
+                            } else if (k0 == s0) {
+                                for (int i = 0; i < NR * MR; ++i) tile[i] = T(0);  // no tap of the block: the chain starts at 0
+                            }
+                        }
                     }
                 }
+                if (skip)
+                    for (int e = 0; e < top + (rows - bottom); ++e) cursor[e] = block_end[e];
             }
             // the chain into the running sums: (sum + chain) + bias (the first chain) or + 0
             for (int i = 0; i < MR; ++i) bv[i] = (s0 == 0 && bias && i < no) ? bias[o0 + i] : T(0);
