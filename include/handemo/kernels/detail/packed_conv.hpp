@@ -102,6 +102,37 @@ inline simd_t<T> ws_load(const W* p) noexcept
     }
 }
 
+/// The accumulators of a register tile (NV vectors of output channels x NR pixels or taps, rows of MR = NV lanes in
+/// `tile`): loaded from `tile` when accumulating, else zero.
+template <class T, int NV, int NR>
+[[gnu::always_inline]] inline void ws_tile_begin(simd_t<T> (&acc)[NR][NV], const T* tile, bool accumulate) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>, MR = NV * L;
+    if (accumulate) {
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j)
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
+    } else {
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NR; ++j)
+            HANDEMO_UNROLL_TILE
+            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
+    }
+}
+
+/// The accumulators of a register tile stored back into `tile`.
+template <class T, int NV, int NR>
+[[gnu::always_inline]] inline void ws_tile_end(const simd_t<T> (&acc)[NR][NV], T* tile) noexcept
+{
+    constexpr int L = simd_lanes<T>, MR = NV * L;
+    HANDEMO_UNROLL_TILE
+    for (int j = 0; j < NR; ++j)
+        HANDEMO_UNROLL_TILE
+        for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
+}
+
 /// tile[j][0..MR) (+)= sum_{k<kc} wp[k*MR + 0..MR) * src[koff[k] + j*sj], j < NR. SJ > 0 fixes sj at
 /// compile time (stride 1 and 2 of the generator); SJ = 0 reads it from `sj`. PF: also prefetch (into L2)
 /// pf_rows rows (MR elements each) of the weight stream starting at `pf`, one row per iteration. W: the
@@ -114,17 +145,7 @@ template <class T, class W, int NV, int NR, int SJ, bool PF = false>
     using B = simd_t<T>;
     constexpr int L = simd_lanes<T>, MR = NV * L;
     B acc[NR][NV];
-    if (accumulate) {
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j)
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
-    } else {
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j)
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
-    }
+    ws_tile_begin<T, NV, NR>(acc, tile, accumulate);
     const int step = SJ > 0 ? SJ : sj;
     for (int k = 0; k < kc; ++k) {
         if constexpr (PF) {
@@ -145,10 +166,7 @@ template <class T, class W, int NV, int NR, int SJ, bool PF = false>
         }
         wp += MR;
     }
-    HANDEMO_UNROLL_TILE
-    for (int j = 0; j < NR; ++j)
-        HANDEMO_UNROLL_TILE
-        for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
+    ws_tile_end<T, NV, NR>(acc, tile);
 }
 
 /// micro_ws<T, W, NV, nr, SJ> for nr = 1..N.
@@ -171,17 +189,7 @@ template <class T, int NV, int NR, int SJ>
     using B = simd_t<T>;
     constexpr int L = simd_lanes<T>, MR = NV * L;
     B acc[NR][NV];
-    if (accumulate) {
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j)
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
-    } else {
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j)
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
-    }
+    ws_tile_begin<T, NV, NR>(acc, tile, accumulate);
     const int step = SJ > 0 ? SJ : sj;
     for (int i = 0; i < n; ++i) {
         const int k = idx[i];
@@ -197,10 +205,7 @@ template <class T, int NV, int NR, int SJ>
             for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
         }
     }
-    HANDEMO_UNROLL_TILE
-    for (int j = 0; j < NR; ++j)
-        HANDEMO_UNROLL_TILE
-        for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
+    ws_tile_end<T, NV, NR>(acc, tile);
 }
 
 /// micro_ws_idx<T, NV, nr, SJ> for nr = 1..N.
@@ -775,17 +780,7 @@ template <class T, int NV, int NR, int SJ>
     using B = simd_t<T>;
     constexpr int L = simd_lanes<T>, MR = NV * L;
     B acc[NR][NV];
-    if (accumulate) {
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j)
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = B::load_aligned(tile + j * MR + q * L);
-    } else {
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j)
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = B(T(0));
-    }
+    ws_tile_begin<T, NV, NR>(acc, tile, accumulate);
     const int step = SJ > 0 ? SJ : sj;
     for (int r = 0; r < runs; ++r) {
         const T* sp[NR];
@@ -804,10 +799,7 @@ template <class T, int NV, int NR, int SJ>
             v += MR;
         }
     }
-    HANDEMO_UNROLL_TILE
-    for (int j = 0; j < NR; ++j)
-        HANDEMO_UNROLL_TILE
-        for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
+    ws_tile_end<T, NV, NR>(acc, tile);
 }
 
 /// micro_wg<T, NV, nr, SJ> for nr = 1..N.
