@@ -133,6 +133,23 @@ template <class T, int NV, int NR>
         for (int q = 0; q < NV; ++q) acc[j][q].store_aligned(tile + j * MR + q * L);
 }
 
+/// One step of the tile: acc[j] += w[0..MR) * s[j * step] for its NR pixels (W: T or binary16, ws_load).
+template <class T, class W, int NV, int NR>
+[[gnu::always_inline]] inline void ws_tile_fma(simd_t<T> (&acc)[NR][NV], const W* w, const T* s, int step) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>;
+    B a[NV];
+    HANDEMO_UNROLL_TILE
+    for (int q = 0; q < NV; ++q) a[q] = keep_in_register(ws_load<T>(w + q * L));
+    HANDEMO_UNROLL_TILE
+    for (int j = 0; j < NR; ++j) {
+        const B b(s[j * step]);
+        HANDEMO_UNROLL_TILE
+        for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
+    }
+}
+
 /// tile[j][0..MR) (+)= sum_{k<kc} wp[k*MR + 0..MR) * src[koff[k] + j*sj], j < NR. SJ > 0 fixes sj at
 /// compile time (stride 1 and 2 of the generator); SJ = 0 reads it from `sj`. PF: also prefetch (into L2)
 /// pf_rows rows (MR elements each) of the weight stream starting at `pf`, one row per iteration. W: the
@@ -154,16 +171,7 @@ template <class T, class W, int NV, int NR, int SJ, bool PF = false>
                 for (int q = 0; q < NV * L * int(sizeof(W)); q += 64)
                     __builtin_prefetch(reinterpret_cast<const char*>(pf + std::ptrdiff_t(k) * MR) + q, 0, 2);
         }
-        B a[NV];
-        HANDEMO_UNROLL_TILE
-        for (int q = 0; q < NV; ++q) a[q] = keep_in_register(ws_load<T>(wp + q * L));
-        const T* s = src + koff[k];
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j) {
-            const B b(s[j * step]);
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
-        }
+        ws_tile_fma<T, W, NV, NR>(acc, wp, src + koff[k], step);
         wp += MR;
     }
     ws_tile_end<T, NV, NR>(acc, tile);
@@ -193,17 +201,7 @@ template <class T, int NV, int NR, int SJ>
     const int step = SJ > 0 ? SJ : sj;
     for (int i = 0; i < n; ++i) {
         const int k = idx[i];
-        const T* w = wp + std::ptrdiff_t(k) * MR;
-        B a[NV];
-        HANDEMO_UNROLL_TILE
-        for (int q = 0; q < NV; ++q) a[q] = keep_in_register(B::load_aligned(w + q * L));
-        const T* s = src + koff[k];
-        HANDEMO_UNROLL_TILE
-        for (int j = 0; j < NR; ++j) {
-            const B b(s[j * step]);
-            HANDEMO_UNROLL_TILE
-            for (int q = 0; q < NV; ++q) acc[j][q] = xsimd::fma(a[q], b, acc[j][q]);
-        }
+        ws_tile_fma<T, T, NV, NR>(acc, wp + std::ptrdiff_t(k) * MR, src + koff[k], step);
     }
     ws_tile_end<T, NV, NR>(acc, tile);
 }
