@@ -162,12 +162,16 @@ def peak_range(b):
     flop = performed_gflops(b) * seconds(b)  # GFLOP per iteration (the median's rate x the median's time)
     return f" ({flop / max(ts) / peak:.0%}-{flop / min(ts) / peak:.0%})"
 
-def performed_gflops(b):
-    """GFLOP/s of the FLOPs a benchmark performs: bench_stargan's performed_FLOP over its time where it has one (the
-    packed kernels skip the kernel rows over the zero padding), else its GFLOP(S) counter (bench_conv's packed rows
-    count what they perform already)."""
+def performed_rate(b):
+    """GFLOP/s of bench_stargan's performed_FLOP (the FLOPs a call performs: the packed kernels skip the kernel rows
+    over the zero padding, Winograd's GEMMs multiply less) over the benchmark's time; None without that counter."""
     perf = b.get("performed_FLOP") if b else None
-    return perf / seconds(b) / 1e9 if perf else gflops(b)
+    return perf / seconds(b) / 1e9 if perf else None
+
+def performed_gflops(b):
+    """GFLOP/s of the FLOPs a benchmark performs: performed_rate() where it has one, else its GFLOP(S) counter
+    (bench_conv's packed rows count what they perform already)."""
+    return performed_rate(b) or gflops(b)
 
 def frac_of_peak(b):
     gfl = performed_gflops(b)
@@ -307,8 +311,7 @@ for cfg, keys in (("paper", ("paper", "(64,")), ("embedded", ("embedded", "(32,"
         ts = list(b.get("_times", {}).values()) if b else []
         rng = f" ({flop / max(ts) / 1e9 / peak:.0%}-{flop / min(ts) / 1e9 / peak:.0%})" if gfl and peak and len(ts) > 1 else ""
         # inference: the packed kernels skip the kernel rows over the zero padding, so they perform fewer FLOPs
-        perf = b.get("performed_FLOP") if b else None
-        gp = perf / seconds(b) / 1e9 if perf else None
+        perf, gp = (b.get("performed_FLOP"), performed_rate(b)) if b else (None, None)
         perf_s = (f"{fmt_flop(perf)}: {gp:.1f} ({gp / peak:.0%})" if gp and peak else
                   (f"{fmt_flop(perf)}: {gp:.1f}" if gp else "as counted"))
         print(f"| {cfg} | {label} | {fmt_flop(flop)} | {fmt_b(b)} | {f'{gfl:.1f}' if gfl else 'n/a'} | "
@@ -332,7 +335,7 @@ if any(b for _, _, b in wrows):
         vs = f"{seconds(d) / seconds(b):.2f}x faster" if d else "n/a"
         flop, perf = b.get("FLOP"), b.get("performed_FLOP")
         g1 = flop / seconds(b) / 1e9 if flop else None
-        g2 = perf / seconds(b) / 1e9 if perf else None
+        g2 = performed_rate(b)
         share = lambda g: f"{g:.1f} ({g / peak:.0%})" if g and peak else (f"{g:.1f}" if g else "n/a")
         print(f"| {cfg} | {batch} | {fmt_b(b)} | {vs} | {share(g1)} | {fmt_flop(perf)} | {share(g2)} |")
     print()

@@ -212,7 +212,7 @@ private:
         // output row r reads padded rows r * stride + u: the image for u in [pad - r s, pad + in_h - r s)
         ph.row_k_off = row_k_.size();
         for (int r = 0; r < out_h_; ++r) {
-            const int u0 = std::clamp(g.pad - r * g.stride, 0, kh), u1 = std::clamp(g.pad + g.in_h - r * g.stride, u0, kh);
+            const auto [u0, u1] = detail::window_rows(r, g.stride, g.pad, kh, g.in_h);
             row_k_.push_back(u0 * C * kw);
             row_k_.push_back(u1 * C * kw);
         }

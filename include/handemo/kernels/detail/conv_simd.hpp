@@ -182,14 +182,22 @@ template <class T, int NR>
         for (int q = 0; q < NV; ++q) acc[j][q].store_unaligned(tile + j * MR + q * L);
 }
 
+/// Calls f.template operator()<n>() with n = min(width, N) fixed at compile time (n >= 1): the register tile of a
+/// micro-kernel instantiated for the width of a row's last, narrower tile. Every micro-kernel's dispatch below.
+template <int N, class F>
+inline void with_tile_width(int width, F&& f)
+{
+    if constexpr (N <= 1) f.template operator()<1>();
+    else if (width >= N) f.template operator()<N>();
+    else with_tile_width<N - 1>(width, f);
+}
+
 /// micro_kernel<T, nr> for nr = 1..micro_nr.
 template <class T, int N = micro_nr>
 inline void micro_dispatch(int nr, int kc, const T* v, std::ptrdiff_t vk, const T* s, std::ptrdiff_t sj,
                            std::ptrdiff_t sk, T* tile, bool accumulate) noexcept
 {
-    if constexpr (N <= 1) micro_kernel<T, 1>(kc, v, vk, s, sj, sk, tile, accumulate);
-    else if (nr >= N) micro_kernel<T, N>(kc, v, vk, s, sj, sk, tile, accumulate);
-    else micro_dispatch<T, N - 1>(nr, kc, v, vk, s, sj, sk, tile, accumulate);
+    with_tile_width<N>(nr, [&]<int R>() { micro_kernel<T, R>(kc, v, vk, s, sj, sk, tile, accumulate); });
 }
 
 /// tile[j][0..MR) = sum_{k<kc} v[koff[k] + 0..MR) * s[j*sj + k], j < NR, MR = NV lanes: the V rows of the
@@ -232,9 +240,7 @@ template <class T, int N = micro_nr, int NV = micro_nv>
 inline void micro_idx_dispatch(int nr, int kc, const T* v, const int* koff, const T* s, std::ptrdiff_t sj,
                                T* tile) noexcept
 {
-    if constexpr (N <= 1) micro_kernel_idx<T, 1, NV>(kc, v, koff, s, sj, tile);
-    else if (nr >= N) micro_kernel_idx<T, N, NV>(kc, v, koff, s, sj, tile);
-    else micro_idx_dispatch<T, N - 1, NV>(nr, kc, v, koff, s, sj, tile);
+    with_tile_width<N>(nr, [&]<int R>() { micro_kernel_idx<T, R, NV>(kc, v, koff, s, sj, tile); });
 }
 
 /// The stride-1 forward pass of a layer with few output channels (at most stride1_few_channels, G's last conv:
@@ -411,9 +417,7 @@ template <class T, int NO, int NP>
 template <class T, int NO, int N = dot_np>
 inline void micro_dot_np(int np, int steps, const T* w, std::ptrdiff_t ldw, const T* c, std::ptrdiff_t ldc, T* out) noexcept
 {
-    if constexpr (N <= 1) micro_dot<T, NO, 1>(steps, w, ldw, c, ldc, out);
-    else if (np >= N) micro_dot<T, NO, N>(steps, w, ldw, c, ldc, out);
-    else micro_dot_np<T, NO, N - 1>(np, steps, w, ldw, c, ldc, out);
+    with_tile_width<N>(np, [&]<int R>() { micro_dot<T, NO, R>(steps, w, ldw, c, ldc, out); });
 }
 
 /// micro_dot<T, no, np> for no = 1..dot_no, np = 1..dot_np; out gets no x np values (row-major).
@@ -421,9 +425,7 @@ template <class T, int N = dot_no>
 inline void micro_dot_dispatch(int no, int np, int steps, const T* w, std::ptrdiff_t ldw, const T* c,
                                std::ptrdiff_t ldc, T* out) noexcept
 {
-    if constexpr (N <= 1) micro_dot_np<T, 1>(np, steps, w, ldw, c, ldc, out);
-    else if (no >= N) micro_dot_np<T, N>(np, steps, w, ldw, c, ldc, out);
-    else micro_dot_dispatch<T, N - 1>(no, np, steps, w, ldw, c, ldc, out);
+    with_tile_width<N>(no, [&]<int R>() { micro_dot_np<T, R>(np, steps, w, ldw, c, ldc, out); });
 }
 
 /// Forward pass through micro_dot: col^T [pixels, K] packed once, weights read in place. The im2col reads

@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <handemo/core/half.hpp>
@@ -182,9 +183,7 @@ template <class T, class W, int NV, int N, int SJ>
 inline void micro_ws_dispatch(int nr, int kc, const W* wp, const int* koff, const T* src, int sj, T* tile,
                               bool accumulate) noexcept
 {
-    if constexpr (N <= 1) micro_ws<T, W, NV, 1, SJ>(kc, wp, koff, src, sj, tile, accumulate);
-    else if (nr >= N) micro_ws<T, W, NV, N, SJ>(kc, wp, koff, src, sj, tile, accumulate);
-    else micro_ws_dispatch<T, W, NV, N - 1, SJ>(nr, kc, wp, koff, src, sj, tile, accumulate);
+    with_tile_width<N>(nr, [&]<int R>() { micro_ws<T, W, NV, R, SJ>(kc, wp, koff, src, sj, tile, accumulate); });
 }
 
 /// micro_ws over the taps idx[0..n) only: tile[j] (+)= sum_i wp[idx[i]*MR ..] * src[koff[idx[i]] + j*sj], in the
@@ -211,9 +210,16 @@ template <class T, int NV, int N, int SJ>
 inline void micro_ws_idx_dispatch(int nr, int n, const int* idx, const T* wp, const int* koff, const T* src, int sj, T* tile,
                                   bool accumulate) noexcept
 {
-    if constexpr (N <= 1) micro_ws_idx<T, NV, 1, SJ>(n, idx, wp, koff, src, sj, tile, accumulate);
-    else if (nr >= N) micro_ws_idx<T, NV, N, SJ>(n, idx, wp, koff, src, sj, tile, accumulate);
-    else micro_ws_idx_dispatch<T, NV, N - 1, SJ>(nr, n, idx, wp, koff, src, sj, tile, accumulate);
+    with_tile_width<N>(nr, [&]<int R>() { micro_ws_idx<T, NV, R, SJ>(n, idx, wp, koff, src, sj, tile, accumulate); });
+}
+
+/// The kernel rows [first, second) whose taps output row r of a convolution (stride, padding pad, kernel_h rows,
+/// in_h input rows) places over the image; the rows outside read only the zero padding above or below it (an empty
+/// range when no row reaches the image).
+inline std::pair<int, int> window_rows(int r, int stride, int pad, int kernel_h, int in_h) noexcept
+{
+    const int lo = std::clamp(pad - r * stride, 0, kernel_h);
+    return {lo, std::clamp(pad + in_h - r * stride, lo, kernel_h)};
 }
 
 /// One weight-stationary GEMM: `co` output channels from the panels `wp` ([ceil(co/MR)][K][MR]) and the
@@ -429,8 +435,11 @@ inline void ws_run_chains(const conv_geometry& g, int Hp, int Wp, const T* wp, i
     // a chain's sum as it is (each chain starts at +0), so those rows run over their other taps only (micro_ws_idx),
     // with the bits of the full sum. Per edge row and chain, the chain-relative taps it keeps.
     constexpr int max_edge_rows = 8;
-    const int top = std::min(rows, (g.pad + g.stride - 1) / g.stride);
-    const int bottom = std::max(top, std::min(rows, g.pad + g.in_h - kh >= 0 ? (g.pad + g.in_h - kh) / g.stride + 1 : 0));
+    const auto rows_of = [&](int r) { return window_rows(r, g.stride, g.pad, kh, g.in_h); };
+    const auto full = [&](int r) { return rows_of(r) == std::pair{0, kh}; };
+    int top = 0, bottom = rows;  // the rows before `top` and from `bottom` on are not full (the others are)
+    while (top < rows && !full(top)) ++top;
+    while (bottom > top && !full(bottom - 1)) --bottom;
     const bool skip = top + (rows - bottom) <= max_edge_rows && (top > 0 || bottom < rows);
     int edge_taps[max_edge_rows][forward_kc];
     int edge_count[max_edge_rows];
@@ -455,7 +464,7 @@ inline void ws_run_chains(const conv_geometry& g, int Hp, int Wp, const T* wp, i
                 for (int r = 0; r < rows; ++r) {
                     const int e = edge_index(r);
                     if (e < 0) continue;
-                    const int u_lo = std::clamp(g.pad - r * g.stride, 0, kh), u_hi = std::clamp(g.pad + g.in_h - r * g.stride, u_lo, kh);
+                    const auto [u_lo, u_hi] = rows_of(r);
                     int m = 0;
                     for (int k = s0, u = (s0 / kw) % kh, v = s0 % kw; k < s1; ++k) {
                         if (u >= u_lo && u < u_hi) edge_taps[e][m++] = k - s0;
@@ -805,9 +814,7 @@ template <class T, int NV, int N, int SJ>
 inline void micro_wg_dispatch(int nr, int runs, const std::ptrdiff_t* run_off, int len, const T* v, const T* src,
                               const int* koff, int sj, T* tile, bool accumulate) noexcept
 {
-    if constexpr (N <= 1) micro_wg<T, NV, 1, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate);
-    else if (nr >= N) micro_wg<T, NV, N, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate);
-    else micro_wg_dispatch<T, NV, N - 1, SJ>(nr, runs, run_off, len, v, src, koff, sj, tile, accumulate);
+    with_tile_width<N>(nr, [&]<int R>() { micro_wg<T, NV, R, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate); });
 }
 
 /// dst[p MR + l] = gy[(o0 + l) P + p] for p < pixels, l < MR (0 for channels past co): pixels of one image's
