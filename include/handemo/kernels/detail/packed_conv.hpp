@@ -565,17 +565,17 @@ inline simd_t<T> ws_strided(const T* p, std::int32_t stride, int valid) noexcept
 template <class T>
 inline constexpr bool ws_transpose_type = vector_gather_type<T>;
 
-/// out[j] for j < L = simd_lanes<T>: lane i is p[i * stride + j] for i < rows and j < cols, else 0. An L x L block
-/// of a row-major matrix transposed in registers: L contiguous (masked) loads and 4 log2(L) / 2 shuffles per
-/// vector, where packing by gathers issues one L-lane gather per vector. Only where ws_transpose_type<T>.
-template <class T>
-inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int cols, simd_t<T>* out) noexcept
+/// out[j] for j < L = simd_lanes<T>: lane i is row(i)[j] for i < rows and j < cols, else 0. An L x L block of
+/// rows transposed in registers: L contiguous (masked) loads and 4 log2(L) / 2 shuffles per vector, where packing
+/// by gathers issues one L-lane gather per vector. Only where ws_transpose_type<T>.
+template <class T, class Row>
+inline void ws_transpose_rows(Row&& row, int rows, int cols, simd_t<T>* out) noexcept
 {
 #if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
     if constexpr (ws_transpose_type<T>) {
         const __mmask16 m = cols >= 16 ? __mmask16(0xffff) : __mmask16((1u << cols) - 1u);
         __m512 r[16], t[16];
-        for (int i = 0; i < 16; ++i) r[i] = i < rows ? _mm512_maskz_loadu_ps(m, p + i * stride) : _mm512_setzero_ps();
+        for (int i = 0; i < 16; ++i) r[i] = i < rows ? _mm512_maskz_loadu_ps(m, row(i)) : _mm512_setzero_ps();
         for (int i = 0; i < 16; i += 2) {
             t[i] = _mm512_unpacklo_ps(r[i], r[i + 1]);
             t[i + 1] = _mm512_unpackhi_ps(r[i], r[i + 1]);
@@ -603,7 +603,7 @@ inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int 
     if constexpr (ws_transpose_type<T>) {
         const __m256i m = _mm256_cmpgt_epi32(_mm256_set1_epi32(cols), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
         __m256 r[8], t[8];
-        for (int i = 0; i < 8; ++i) r[i] = i < rows ? _mm256_maskload_ps(p + i * stride, m) : _mm256_setzero_ps();
+        for (int i = 0; i < 8; ++i) r[i] = i < rows ? _mm256_maskload_ps(row(i), m) : _mm256_setzero_ps();
         for (int i = 0; i < 8; i += 2) {
             t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]);
             t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
@@ -621,7 +621,14 @@ inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int 
         return;
     }
 #endif
-    (void)p, (void)stride, (void)rows, (void)cols, (void)out;
+    (void)row, (void)rows, (void)cols, (void)out;
+}
+
+/// ws_transpose_rows over the rows of a row-major matrix: lane i of out[j] is p[i * stride + j].
+template <class T>
+inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int cols, simd_t<T>* out) noexcept
+{
+    ws_transpose_rows<T>([&](int i) { return p + i * stride; }, rows, cols, out);
 }
 
 /// Panels as ws_pack writes them, one vector of channels at a time: block(o, n, d, MR) writes
@@ -738,7 +745,10 @@ inline void forward_ws(const conv_geometry& g, const T* x, Pack&& pack, const T*
 // [pixel][channel] (one copy of each gradient element), and its broadcasts read the NR taps k straight from a
 // zero-padded copy of the image, as the forward pass reads its pixels. Each (o, k) lane sums its products in
 // the packed path's order, images then pixels, from zero, and the sums are added to gw once at the end: the
-// same bits.
+// same bits. The tiles take the taps kernel row first (k' = (u, c, v)), so that most tiles lie on one kernel row
+// and skip the output rows whose window puts that row on the zero padding above or below the image: those
+// products are +-0, which leave a sum that starts at +0 as it is (the same bits, for fewer multiply-adds; at the
+// generator's residual blocks, 3 rows of pixels and a 3 x 3 kernel, 2 in 9).
 
 /// Pixels of gy per transposed block: one block of a panel ([pixels][MR], 32 KiB for 128 pixels and 64 float
 /// channels) stays in L1 while every tile of taps runs over it. Images with fewer pixels go in groups.
@@ -748,7 +758,7 @@ inline constexpr int wg_block_pixels = 128;
 template <class T>
 struct wg_scratch_layout {
     std::size_t sums, block, offsets, padded;  // per call ([panel][K][MR]); one block of one panel; K tap
-                                               // offsets (int); per image
+                                               // offsets and K rows of the sums (int); per image
     int group;                        // images per group
     int runs;                         // output rows (runs of out_w pixels) per block
     std::size_t total;
@@ -762,7 +772,7 @@ struct wg_scratch_layout {
         runs = std::max(1, wg_block_pixels / g.out_w());
         block = up(std::size_t(runs) * g.out_w() * MR);
         const std::size_t K = std::size_t(g.in_channels) * g.kernel_h * g.kernel_w;
-        offsets = up((K * sizeof(int) + sizeof(T) - 1) / sizeof(T));
+        offsets = up((2 * K * sizeof(int) + sizeof(T) - 1) / sizeof(T));
         padded = up(std::size_t(g.in_channels) * (g.in_h + 2 * g.pad) * (g.in_w + 2 * g.pad));
         group = std::clamp(wg_block_pixels / (g.out_h() * g.out_w()), 1, ws_group_max);
         total = a + sums + block + offsets + std::size_t(group) * padded;
@@ -776,12 +786,13 @@ inline std::size_t backward_weight_ws_scratch_elements(const conv_geometry& g) n
     return wg_scratch_layout<T>(g).total;
 }
 
-/// tile[j][0..MR) (+)= sum_{r < runs} sum_{w < len} v[(r len + w) MR + 0..MR) * src[run_off[r] + koff[j] + w sj],
-/// j < NR taps: v is a block of gy transposed ([pixel][channel]), src the zero-padded images, run r one output
-/// row. SJ > 0 fixes the stride at compile time, as in micro_ws.
+/// tile[j][0..MR) (+)= sum_{i < runs} sum_{w < len} v[(r len + w) MR + 0..MR) * src[run_off[r] + koff[j] + w sj],
+/// r = run[i], j < NR taps: v is a block of gy transposed ([pixel][channel]), src the zero-padded images, run r one
+/// output row (run lists the block's rows the tile does not skip, in order). SJ > 0 fixes the stride at compile
+/// time, as in micro_ws.
 template <class T, int NV, int NR, int SJ>
-[[gnu::noinline]] inline void micro_wg(int runs, const std::ptrdiff_t* __restrict run_off, int len, const T* __restrict v,
-                                       const T* __restrict src, const int* __restrict koff, int sj,
+[[gnu::noinline]] inline void micro_wg(int runs, const int* __restrict run, const std::ptrdiff_t* __restrict run_off, int len,
+                                       const T* __restrict vb, const T* __restrict src, const int* __restrict koff, int sj,
                                        T* __restrict tile, bool accumulate) noexcept
 {
     using B = simd_t<T>;
@@ -789,7 +800,9 @@ template <class T, int NV, int NR, int SJ>
     B acc[NR][NV];
     ws_tile_begin<T, NV, NR>(acc, tile, accumulate);
     const int step = SJ > 0 ? SJ : sj;
-    for (int r = 0; r < runs; ++r) {
+    for (int i = 0; i < runs; ++i) {
+        const int r = run[i];
+        const T* v = vb + std::ptrdiff_t(r) * len * MR;
         const T* sp[NR];
         HANDEMO_UNROLL_TILE
         for (int j = 0; j < NR; ++j) sp[j] = src + run_off[r] + koff[j];
@@ -811,10 +824,10 @@ template <class T, int NV, int NR, int SJ>
 
 /// micro_wg<T, NV, nr, SJ> for nr = 1..N.
 template <class T, int NV, int N, int SJ>
-inline void micro_wg_dispatch(int nr, int runs, const std::ptrdiff_t* run_off, int len, const T* v, const T* src,
-                              const int* koff, int sj, T* tile, bool accumulate) noexcept
+inline void micro_wg_dispatch(int nr, int runs, const int* run, const std::ptrdiff_t* run_off, int len, const T* v,
+                              const T* src, const int* koff, int sj, T* tile, bool accumulate) noexcept
 {
-    with_tile_width<N>(nr, [&]<int R>() { micro_wg<T, NV, R, SJ>(runs, run_off, len, v, src, koff, sj, tile, accumulate); });
+    with_tile_width<N>(nr, [&]<int R>() { micro_wg<T, NV, R, SJ>(runs, run, run_off, len, v, src, koff, sj, tile, accumulate); });
 }
 
 /// dst[p MR + l] = gy[(o0 + l) P + p] for p < pixels, l < MR (0 for channels past co): pixels of one image's
@@ -840,11 +853,12 @@ inline void wg_transpose(const T* gy, std::ptrdiff_t P, int o0, int co, int MR, 
     }
 }
 
-/// gw[o K + k] += sums[(pn K + k) MR + o - pn MR], pn = o / MR: the sums' panels added to the weight gradient
-/// [co][K], in blocks of L x L transposed in registers where ws_transpose_type<T> (one strided read per element
-/// was a fifth of the residual conv's time: each a different cache line of a panel larger than L2).
+/// gw[o K + k] += sums[(pn K + sum_row[k]) MR + o - pn MR], pn = o / MR: the sums' panels (their rows in the
+/// order `sum_row` gives) added to the weight gradient [co][K], in blocks of L x L transposed in registers where
+/// ws_transpose_type<T> (one strided read per element was a fifth of the residual conv's time: each a different
+/// cache line of a panel larger than L2).
 template <class T>
-inline void wg_add_sums(int co, int K, int MR, const T* sums, T* gw) noexcept
+inline void wg_add_sums(int co, int K, int MR, const T* sums, const int* sum_row, T* gw) noexcept
 {
     constexpr int L = simd_lanes<T>;
     for (int o = 0; o < co; o += L) {
@@ -855,7 +869,7 @@ inline void wg_add_sums(int co, int K, int MR, const T* sums, T* gw) noexcept
             alignas(64) T row[L];
             for (int k0 = 0; k0 < K; k0 += L) {
                 const int nk = std::min(L, K - k0);
-                ws_transpose_block<T>(src + std::ptrdiff_t(k0) * MR, MR, nk, n, v);  // v[i]: channel o + i, taps k0..
+                ws_transpose_rows<T>([&](int i) { return src + std::ptrdiff_t(sum_row[k0 + i]) * MR; }, nk, n, v);  // v[i]: channel o + i, taps k0..
                 for (int i = 0; i < n; ++i) {
                     T* dst = gw + std::ptrdiff_t(o + i) * K + k0;
                     if (nk == L) {
@@ -869,7 +883,7 @@ inline void wg_add_sums(int co, int K, int MR, const T* sums, T* gw) noexcept
         } else {
             for (int k0 = 0; k0 < K; k0 += L)
                 for (int i = 0; i < n; ++i)
-                    for (int k = k0; k < std::min(K, k0 + L); ++k) gw[std::ptrdiff_t(o + i) * K + k] += src[std::ptrdiff_t(k) * MR + i];
+                    for (int k = k0; k < std::min(K, k0 + L); ++k) gw[std::ptrdiff_t(o + i) * K + k] += src[std::ptrdiff_t(sum_row[k]) * MR + i];
         }
     }
 }
@@ -883,18 +897,28 @@ inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, 
 {
     const wg_scratch_layout<T> lay(g);
     const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
-    const int kh = g.kernel_h, kw = g.kernel_w, K = g.in_channels * kh * kw, co = g.out_channels;
+    const int C = g.in_channels, kh = g.kernel_h, kw = g.kernel_w, K = C * kh * kw, co = g.out_channels, ck = C * kw;
     T* sums = align_up(scratch);
     T* vb = sums + lay.sums;
     int* koff = reinterpret_cast<int*>(vb + lay.block);
+    int* row = koff + K;
     T* xp = vb + lay.block + lay.offsets;
-    padded_window_offsets(0, K, kh, kw, Hp, Wp, koff);
+    // the tiles' taps kernel row first: k' = (u, c, v) reads its window at koff[k'] and sums into row k' of the
+    // panels; tap k = (c, u, v) of the weights is row[k]
+    for (int u = 0, k = 0; u < kh; ++u)
+        for (int c = 0; c < C; ++c)
+            for (int v = 0; v < kw; ++v, ++k) {
+                koff[k] = (c * Hp + u) * Wp + v;
+                row[(c * kh + u) * kw + v] = k;
+            }
     const std::size_t x_per = std::size_t(g.in_channels) * g.in_h * g.in_w, y_per = std::size_t(co) * P;
     std::memset(xp, 0, std::size_t(std::min(lay.group, g.batch)) * lay.padded * sizeof(T));
     ws_with_tile<T>(co, g.stride, [&]<int NV, int NR, int SJ>() {
         constexpr int MR = NV * simd_lanes<T>;
         const int panels = (co + MR - 1) / MR;
         std::ptrdiff_t run_off[wg_block_pixels];
+        int run_row[wg_block_pixels];  // each run's output row in its image
+        int kept[wg_block_pixels];     // the runs a tile sums over
         for (int n0 = 0; n0 < g.batch; n0 += lay.group) {
             const int images = std::min(lay.group, g.batch - n0);
             for (int n = 0; n < images; ++n)
@@ -906,19 +930,33 @@ inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, 
                     // the block's runs: their offsets in the padded images and their gradients transposed
                     for (int r = r0; r < r0 + nruns;) {
                         const int n = r / oh, h = r % oh, rows = std::min(oh - h, r0 + nruns - r);
-                        for (int i = 0; i < rows; ++i)
+                        for (int i = 0; i < rows; ++i) {
                             run_off[r - r0 + i] = std::ptrdiff_t(n) * lay.padded + std::ptrdiff_t(h + i) * g.stride * Wp;
+                            run_row[r - r0 + i] = h + i;
+                        }
                         wg_transpose<T>(gy + (n0 + n) * y_per + std::ptrdiff_t(h) * ow, P, pn * MR, co, MR, rows * ow,
                                         vb + std::ptrdiff_t(r - r0) * ow * MR);
                         r += rows;
                     }
                     const bool accumulate = n0 > 0 || r0 > 0;
-                    for (int k0 = 0; k0 < K; k0 += NR)
-                        micro_wg_dispatch<T, NV, NR, SJ>(std::min(NR, K - k0), nruns, run_off, ow, vb, xp, koff + k0, g.stride,
+                    int u_first = -1, u_last = -1, nkept = 0;  // the kernel rows `kept` was listed for
+                    for (int k0 = 0; k0 < K; k0 += NR) {
+                        const int nr = std::min(NR, K - k0), u0 = k0 / ck, u1 = (k0 + nr - 1) / ck;
+                        if (u0 != u_first || u1 != u_last) {
+                            // the runs that place one of the tile's kernel rows [u0, u1] over the image
+                            u_first = u0, u_last = u1, nkept = 0;
+                            for (int r = 0; r < nruns; ++r) {
+                                const auto [lo, hi] = window_rows(run_row[r], g.stride, g.pad, kh, g.in_h);
+                                if (lo < hi && lo <= u1 && hi > u0) kept[nkept++] = r;
+                            }
+                        }
+                        if (nkept == 0 && accumulate) continue;
+                        micro_wg_dispatch<T, NV, NR, SJ>(nr, nkept, kept, run_off, ow, vb, xp, koff + k0, g.stride,
                                                          sums + (std::ptrdiff_t(pn) * K + k0) * MR, accumulate);
+                    }
                 }
         }
-        wg_add_sums<T>(co, K, MR, sums, gw);
+        wg_add_sums<T>(co, K, MR, sums, row, gw);
     });
 }
 
