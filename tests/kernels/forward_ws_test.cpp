@@ -9,6 +9,7 @@
 
 #include <handemo/kernels/conv.hpp>
 
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <random>
@@ -236,4 +237,111 @@ TEST_CASE_TEMPLATE("forward_ws: the panel packers (blocks transposed in register
                 });
                 CHECK(std::memcmp(pc, pd, hkd::ws_packed_elements<T>(ci, Kf) * sizeof(T)) == 0);
             }
+}
+
+namespace forward_ws_test {
+
+/// Products of a pass of geometry g whose input row lies in the image (not in the padding above or below it):
+/// what no path can skip, counted one (output row, kernel row) pair at a time.
+double products_in_rows(const hk::conv_geometry& g)
+{
+    double pairs = 0;
+    for (int h = 0; h < g.out_h(); ++h)
+        for (int u = 0; u < g.kernel_h; ++u) {
+            const int row = h * g.stride + u;
+            pairs += (row >= g.pad && row < g.pad + g.in_h) ? 1 : 0;
+        }
+    return pairs * g.in_channels * g.kernel_w * g.out_w() * g.out_channels * g.batch;
+}
+
+}  // namespace forward_ws_test
+
+TEST_CASE("conv2d_performed_macs: a hand count at the residual blocks, bounds on random geometries")
+{
+    using hk::conv_pass;
+    // the generator's residual geometry at batch 16: 3 x 6 pixels, 3 x 3 kernels, padding 1. The top output row's
+    // window puts kernel row 0 on the padding, the bottom row's kernel row 2, so 7 of the 9 (output row, kernel
+    // row) pairs are performed on each weight-stationary pass (48 taps per kernel row: every tile of the weight
+    // gradients lies on one kernel row, with 6 or 12 taps)
+    const hk::conv_geometry g{16, 16, 3, 6, 32, 3, 3, 1, 1};
+    REQUIRE(hkd::use_forward_ws<float>(g));
+    REQUIRE(hkd::backward_data_ws<float>(g));
+    REQUIRE(hkd::use_backward_weight_ws<float>(g));
+    const double full = 16.0 * 32 * 18 * 16 * 9;
+    CHECK(g.macs() == full);
+    for (const conv_pass p : {conv_pass::forward, conv_pass::backward_data, conv_pass::backward_weight}) {
+        CAPTURE(int(p));
+        CHECK(hk::conv2d_performed_macs<float>(g, p) == full * 7 / 9);
+        CHECK(hk::conv2d_performed_macs<long double>(g, p) == full);  // the reference loops skip nothing
+    }
+    // a weight-gradient tile across two kernel rows sums over the rows either keeps: 5 input channels give 15 taps
+    // per kernel row, so with 12-tap tiles taps 12-23 span rows 0 and 1 and the tile keeps all three output rows
+    const hk::conv_geometry odd{16, 5, 3, 6, 32, 3, 3, 1, 1};
+    if (hkd::use_backward_weight_ws<float>(odd) && hkd::ws_tile_for<float>(32).nr == 12) {
+        // tiles [0,12) row 0: 2 rows; [12,24) rows 0-1: 3; [24,36) rows 1-2: 3; [36,45) row 2: 2
+        const double per_pixel = 12.0 * 2 + 12 * 3 + 12 * 3 + 9 * 2;
+        CHECK(hk::conv2d_performed_macs<float>(odd, conv_pass::backward_weight) == per_pixel * 6 * 32 * 16);
+    }
+    // on random geometries: at least the products over the image's rows, at most the full count
+    std::mt19937 rng(77);
+    std::uniform_int_distribution<int> batch(1, 19), ch(1, 40), co(8, 70), hw(2, 20), k(1, 5), stride(1, 3);
+    int skipped = 0;
+    for (int i = 0; i < 300; ++i) {
+        hk::conv_geometry r{batch(rng), ch(rng), hw(rng), hw(rng), co(rng), k(rng), 0, stride(rng), 0};
+        r.kernel_w = r.kernel_h;
+        r.pad = std::uniform_int_distribution<int>(0, r.kernel_h - 1)(rng);
+        if (!r.valid()) continue;
+        INFO(describe(r));
+        const double f = hk::conv2d_performed_macs<float>(r, conv_pass::forward),
+                     w = hk::conv2d_performed_macs<float>(r, conv_pass::backward_weight),
+                     d = hk::conv2d_performed_macs<float>(r, conv_pass::backward_data);
+        CHECK(f >= forward_ws_test::products_in_rows(r));
+        CHECK(f <= r.macs());
+        CHECK(w >= forward_ws_test::products_in_rows(r));
+        CHECK(w <= r.macs());
+        if (hkd::backward_data_by_forward(r)) {
+            const hk::conv_geometry fl = hkd::flipped_geometry(r);
+            CHECK(d >= forward_ws_test::products_in_rows(fl));
+            CHECK(d <= fl.macs());
+        } else {
+            CHECK(d == r.macs());
+        }
+        skipped += (f < r.macs()) + (w < r.macs());
+    }
+    CHECK(skipped > 50);  // the skipping paths are reached
+}
+
+TEST_CASE("performed_macs_count: every pass and the transposed convolution add what they perform")
+{
+    using hk::conv_pass;
+    const hk::conv_geometry g{16, 16, 3, 6, 32, 3, 3, 1, 1}, s2{4, 8, 12, 24, 16, 4, 4, 2, 1};
+    std::mt19937 rng(3);
+    std::uint64_t expected = 0;
+    std::uint64_t counted = 0;
+    {
+        const hk::performed_macs_count count;
+        for (const auto& geo : {g, s2}) {
+            const auto x = cast<float>(random_values(geo.x_size(), rng)), w = cast<float>(random_values(geo.w_size(), rng));
+            const auto gy = cast<float>(random_values(geo.y_size(), rng));
+            std::vector<float> y(geo.y_size()), gx(geo.x_size()), gw(geo.w_size()), xt(geo.x_size());
+            std::vector<float> scratch(hk::conv2d_scratch_size<float>(geo));
+            hk::conv2d_forward<float>(geo, x.data(), w.data(), nullptr, y.data(), scratch.data());
+            hk::conv2d_backward_data<float>(geo, gy.data(), w.data(), gx.data(), scratch.data());
+            hk::conv2d_backward_weight<float>(geo, x.data(), gy.data(), gw.data(), scratch.data());
+            hk::conv_transpose2d_forward<float>(geo, gy.data(), w.data(), xt.data(), scratch.data());
+            hk::conv_transpose2d_backward_weight<float>(geo, gy.data(), x.data(), gw.data(), scratch.data());
+            expected += std::uint64_t(hk::conv2d_performed_macs<float>(geo, conv_pass::forward)) +
+                        2 * std::uint64_t(hk::conv2d_performed_macs<float>(geo, conv_pass::backward_data)) +
+                        2 * std::uint64_t(hk::conv2d_performed_macs<float>(geo, conv_pass::backward_weight));
+        }
+        counted = count.macs();
+    }
+    CHECK(counted == expected);
+    CHECK(expected < std::uint64_t(5 * (g.macs() + s2.macs())));  // the residual geometry's padding rows are skipped
+    // nothing is counted while no count is alive, and a new count starts from zero
+    std::vector<float> x(g.x_size(), 1.0f), w(g.w_size(), 1.0f), y(g.y_size()), scratch(hk::conv2d_scratch_size<float>(g));
+    hk::conv2d_forward<float>(g, x.data(), w.data(), nullptr, y.data(), scratch.data());
+    CHECK(hkd::macs_counted.load() == counted);
+    const hk::performed_macs_count fresh;
+    CHECK(fresh.macs() == 0);
 }

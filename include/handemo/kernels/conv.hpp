@@ -8,7 +8,9 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
+#include <cstdint>
 #include <type_traits>
 #include <utility>
 
@@ -24,7 +26,18 @@ enum class conv_panels {
     backward_data,  ///< conv2d_backward_data
 };
 
+/// @brief A pass of a convolution (conv2d_performed_macs()).
+enum class conv_pass {
+    forward,          ///< conv2d_forward, conv_transpose2d_backward_data
+    backward_data,    ///< conv2d_backward_data, conv_transpose2d_forward
+    backward_weight,  ///< conv2d_backward_weight, conv_transpose2d_backward_weight (its geometry g)
+};
+
 namespace detail {
+/// performed_macs_count's state: whether one is alive, and its count.
+inline std::atomic<bool> macs_counting{false};
+inline std::atomic<std::uint64_t> macs_counted{0};
+
 /// float and double take the xsimd path when xsimd has an instruction set for the target; any other T,
 /// or a target without SIMD, the reference loops.
 template <class T>
@@ -62,10 +75,32 @@ inline bool use_backward_weight_ws(const conv_geometry& g) noexcept
     return fast_type<T> && g.out_channels >= simd_lanes<T> && !use_stride1_backward_weight<T>(g);
 }
 
+/// Multiply-adds a pass of geometry g performs (conv2d_performed_macs()).
+template <class T>
+inline double performed_macs(const conv_geometry& g, conv_pass pass) noexcept
+{
+    if constexpr (fast_type<T>) {
+        if (pass == conv_pass::forward && use_forward_ws<T>(g)) return forward_ws_macs(g);
+        if (pass == conv_pass::backward_data && backward_data_by_forward(g))
+            return backward_data_ws<T>(g) ? forward_ws_macs(flipped_geometry(g)) : flipped_geometry(g).macs();
+        if (pass == conv_pass::backward_weight && use_backward_weight_ws<T>(g)) return backward_weight_ws_macs<T>(g);
+    }
+    return g.macs();
+}
+
+/// Adds the pass's multiply-adds to the count of a live performed_macs_count.
+template <class T>
+inline void count_macs(const conv_geometry& g, conv_pass pass) noexcept
+{
+    if (macs_counting.load(std::memory_order_relaxed))
+        macs_counted.fetch_add(std::uint64_t(performed_macs<T>(g, pass)), std::memory_order_relaxed);
+}
+
 /// gw += dL/dw: backward_weight_ws where use_backward_weight_ws, else conv_simd.hpp's backward_weight.
 template <class T>
 inline void backward_weight_any(const conv_geometry& g, const T* x, const T* gy, T* gw, T* scratch) noexcept
 {
+    count_macs<T>(g, conv_pass::backward_weight);
     if (use_backward_weight_ws<T>(g)) return backward_weight_ws<T>(g, x, gy, gw, scratch);
     backward_weight(g, x, gy, gw, scratch);
 }
@@ -99,6 +134,7 @@ template <class T>
 inline void forward_any(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
                         bool accumulate_out, const T* panels = nullptr) noexcept
 {
+    count_macs<T>(g, conv_pass::forward);
     if (use_forward_ws<T>(g))
         return forward_ws<T>(g, x, panels_or_pack<T>(g, conv_panels::forward, w, panels), bias, y, scratch, accumulate_out);
     forward(g, x, w, bias, y, scratch, accumulate_out);
@@ -110,12 +146,45 @@ template <class T>
 inline void backward_data_any(const conv_geometry& g, const T* gy, const T* w, T* gx, T* scratch,
                               const T* panels = nullptr) noexcept
 {
+    count_macs<T>(g, conv_pass::backward_data);
     if (backward_data_ws<T>(g))
         return forward_ws<T>(flipped_geometry(g), gy, panels_or_pack<T>(g, conv_panels::backward_data, w, panels),
                              static_cast<const T*>(nullptr), gx, scratch, true);
     backward_data(g, gy, w, gx, scratch);
 }
 }  // namespace detail
+
+/// @brief Multiply-adds a pass of geometry g performs on T's kernels: g.macs(), less the products with the zero
+/// padding that the path it takes leaves out. The weight-stationary paths (forward and stride-1 backward-data of
+/// at least one vector of output channels, and the weight gradients) skip the kernel rows an output row places over
+/// the padding above or below the image, with the bits of the full sum; the other paths compute them. A stride-1
+/// backward-data that runs as the forward pass of its flipped kernel over the padded output gradient counts that
+/// pass's products (g.macs() where the padding keeps the size, as in every StarGAN layer). Idle vector lanes and
+/// columns computed and dropped are not counted. What a benchmark reports as the FLOPs a step performs
+/// (performed_macs_count).
+template <class T>
+double conv2d_performed_macs(const conv_geometry& g, conv_pass pass) noexcept
+{
+    return detail::performed_macs<T>(g, pass);
+}
+
+/// @brief While one is alive, every convolution of this file (forward, backward-data, backward-weight, plain and
+/// transposed, in any thread) adds the multiply-adds it performs (conv2d_performed_macs()) to its count: how a
+/// benchmark counts the FLOPs a training step performs. One at a time; the cost while none is alive is one relaxed
+/// atomic load per call.
+class performed_macs_count {
+public:
+    performed_macs_count() noexcept
+    {
+        detail::macs_counted.store(0);
+        detail::macs_counting.store(true);
+    }
+    ~performed_macs_count() { detail::macs_counting.store(false); }
+    performed_macs_count(const performed_macs_count&) = delete;
+    performed_macs_count& operator=(const performed_macs_count&) = delete;
+    /// Multiply-adds counted since construction.
+    std::uint64_t macs() const noexcept { return detail::macs_counted.load(); }
+};
 
 /// @brief Elements of the panels conv2d_pack_panels writes for geometry g and `use`, or 0 when that call of
 /// geometry g does not take packed panels (it then reads w as it is). Training packs each weight once per tape

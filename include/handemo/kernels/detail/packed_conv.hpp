@@ -378,6 +378,38 @@ inline std::size_t ws_packed_elements(int co, int K) noexcept
 // leave out the taps on the kernel rows that read only the zero padding (micro_ws_idx): their products are +-0,
 // which leave a sum that starts at +0 as it is, so the bits are the same, for fewer multiply-adds.
 
+/// The output rows of a convolution whose window reaches over the image's top edge ([0, top)) or bottom edge
+/// ([bottom, rows)); the rows between place every kernel row over the image. forward_ws runs the edge rows over
+/// their other taps only (`skip`) where there are at most ws_max_edge_rows of them.
+inline constexpr int ws_max_edge_rows = 8;
+struct ws_edges {
+    int top, bottom;
+    bool skip;
+};
+inline ws_edges ws_edge_rows(const conv_geometry& g) noexcept
+{
+    const int rows = g.out_h(), kh = g.kernel_h;
+    const auto full = [&](int r) { return window_rows(r, g.stride, g.pad, kh, g.in_h) == std::pair{0, kh}; };
+    ws_edges e{0, rows, false};
+    while (e.top < rows && !full(e.top)) ++e.top;
+    while (e.bottom > e.top && !full(e.bottom - 1)) --e.bottom;
+    e.skip = e.top + (rows - e.bottom) <= ws_max_edge_rows && (e.top > 0 || e.bottom < rows);
+    return e;
+}
+
+/// Multiply-adds forward_ws performs for geometry g (every image): an edge row it runs over its other taps counts
+/// those only.
+inline double forward_ws_macs(const conv_geometry& g) noexcept
+{
+    const ws_edges e = ws_edge_rows(g);
+    double taps = 0;  // summed over the output rows
+    for (int r = 0; r < g.out_h(); ++r) {
+        const auto [lo, hi] = window_rows(r, g.stride, g.pad, g.kernel_h, g.in_h);
+        taps += double(e.skip && (r < e.top || r >= e.bottom) ? hi - lo : g.kernel_h) * g.in_channels * g.kernel_w;
+    }
+    return taps * g.out_w() * g.out_channels * g.batch;
+}
+
 /// Images forward_ws runs together: each block of panel weights is loaded into L1 once for all of them (one image
 /// at a time streamed the paper G's 2 MB panels from L3 once per image, for 18 output pixels each), as many as
 /// fit ws_group_elements elements of padded input and tiles, at least 1 and at most 16.
@@ -434,13 +466,11 @@ inline void ws_run_chains(const conv_geometry& g, int Hp, int Wp, const T* wp, i
     // on): their taps on kernel rows outside [u_lo, u_hi) read only the zero padding, and a product with +-0 leaves
     // a chain's sum as it is (each chain starts at +0), so those rows run over their other taps only (micro_ws_idx),
     // with the bits of the full sum. Per edge row and chain, the chain-relative taps it keeps.
-    constexpr int max_edge_rows = 8;
+    constexpr int max_edge_rows = ws_max_edge_rows;
     const auto rows_of = [&](int r) { return window_rows(r, g.stride, g.pad, kh, g.in_h); };
-    const auto full = [&](int r) { return rows_of(r) == std::pair{0, kh}; };
-    int top = 0, bottom = rows;  // the rows before `top` and from `bottom` on are not full (the others are)
-    while (top < rows && !full(top)) ++top;
-    while (bottom > top && !full(bottom - 1)) --bottom;
-    const bool skip = top + (rows - bottom) <= max_edge_rows && (top > 0 || bottom < rows);
+    const ws_edges edges = ws_edge_rows(g);
+    const int top = edges.top, bottom = edges.bottom;
+    const bool skip = edges.skip;
     int edge_taps[max_edge_rows][forward_kc];
     int edge_count[max_edge_rows];
     auto edge_index = [&](int r) { return r < top ? r : r >= bottom ? top + (r - bottom) : -1; };
@@ -779,6 +809,30 @@ struct wg_scratch_layout {
     }
 };
 
+/// Whether backward_weight_ws's tile of taps on kernel rows [u0, u1] sums over output row h: some of those rows
+/// lie over the image in h's window.
+inline bool wg_row_kept(const conv_geometry& g, int h, int u0, int u1) noexcept
+{
+    const auto [lo, hi] = window_rows(h, g.stride, g.pad, g.kernel_h, g.in_h);
+    return lo < hi && lo <= u1 && hi > u0;
+}
+
+/// Multiply-adds backward_weight_ws performs for geometry g (every image): each tile of taps over the output rows
+/// it keeps (wg_row_kept).
+template <class T>
+inline double backward_weight_ws_macs(const conv_geometry& g) noexcept
+{
+    const int NR = ws_tile_for<T>(g.out_channels).nr, ck = g.in_channels * g.kernel_w, K = ck * g.kernel_h;
+    double m = 0;
+    for (int k0 = 0; k0 < K; k0 += NR) {
+        const int nr = std::min(NR, K - k0), u0 = k0 / ck, u1 = (k0 + nr - 1) / ck;
+        int kept = 0;
+        for (int h = 0; h < g.out_h(); ++h) kept += wg_row_kept(g, h, u0, u1) ? 1 : 0;
+        m += double(nr) * kept;
+    }
+    return m * g.out_w() * g.out_channels * g.batch;
+}
+
 /// Elements (of T) of backward_weight_ws's scratch for geometry g. It does not depend on g.batch.
 template <class T>
 inline std::size_t backward_weight_ws_scratch_elements(const conv_geometry& g) noexcept
@@ -945,10 +999,8 @@ inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, 
                         if (u0 != u_first || u1 != u_last) {
                             // the runs that place one of the tile's kernel rows [u0, u1] over the image
                             u_first = u0, u_last = u1, nkept = 0;
-                            for (int r = 0; r < nruns; ++r) {
-                                const auto [lo, hi] = window_rows(run_row[r], g.stride, g.pad, kh, g.in_h);
-                                if (lo < hi && lo <= u1 && hi > u0) kept[nkept++] = r;
-                            }
+                            for (int r = 0; r < nruns; ++r)
+                                if (wg_row_kept(g, run_row[r], u0, u1)) kept[nkept++] = r;
                         }
                         if (nkept == 0 && accumulate) continue;
                         micro_wg_dispatch<T, NV, NR, SJ>(nr, nkept, kept, run_off, ow, vb, xp, koff + k0, g.stride,
