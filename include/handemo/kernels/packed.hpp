@@ -198,9 +198,7 @@ private:
         // k = (u, c, v), kernel row first: the taps of kernel row u are one run of C * kw, so the rows of the
         // kernel that read the padding above or below the image are a run at either end of k (row_k_)
         koff_.resize(std::size_t(K));
-        for (int u = 0, k = 0; u < kh; ++u)
-            for (int c = 0; c < C; ++c)
-                for (int v = 0; v < kw; ++v) koff_[std::size_t(k++)] = (c * Hp_ + u) * Wp_ + v;
+        detail::padded_window_offsets_row_first(C, kh, kw, Hp_, Wp_, koff_.data());
         w_ = aligned_buffer<T>(detail::ws_packed_elements<T>(out_c_, K));
         detail::ws_pack<T>(out_c_, K, w_.data(), [&](int o, int k) {
             const int u = k / (C * kw), c = (k / kw) % C, v = k % kw;

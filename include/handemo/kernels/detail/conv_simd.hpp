@@ -508,6 +508,16 @@ inline void padded_window_offsets(int k0, int n, int kh, int kw, int Hp, int Wp,
     }
 }
 
+/// koff[k] = (c Hp + u) Wp + v for k = (u, c, v), kernel row first, of a C-channel kh x kw kernel: the taps of
+/// kernel row u are the run [u C kw, (u + 1) C kw), so those of the rows that read only the zero padding above or
+/// below the image lie at either end of k (packed_conv's row ranges, backward_weight_ws's tiles).
+inline void padded_window_offsets_row_first(int C, int kh, int kw, int Hp, int Wp, int* koff) noexcept
+{
+    for (int u = 0, k = 0; u < kh; ++u)
+        for (int c = 0; c < C; ++c)
+            for (int v = 0; v < kw; ++v) koff[k++] = (c * Hp + u) * Wp + v;
+}
+
 /// Forward pass for stride 1: per image, x is copied once into a zero-padded [C, H+2p, W+2p] buffer and
 /// the output is computed on the "wide" grid p' = i*(W+2p) + j, where im2col row (c,u,v) is the window
 /// starting at c*(H+2p)*(W+2p) + u*(W+2p) + v; columns j >= out_w are computed and dropped.

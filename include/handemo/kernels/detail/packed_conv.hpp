@@ -809,6 +809,13 @@ struct wg_scratch_layout {
     }
 };
 
+/// The kernel rows [first, second] of backward_weight_ws's tile of taps [k0, k0 + nr) in the kernel-row-first order
+/// (ck = C kw taps per kernel row).
+inline std::pair<int, int> wg_tile_rows(int k0, int nr, int ck) noexcept
+{
+    return {k0 / ck, (k0 + nr - 1) / ck};
+}
+
 /// Whether backward_weight_ws's tile of taps on kernel rows [u0, u1] sums over output row h: some of those rows
 /// lie over the image in h's window.
 inline bool wg_row_kept(const conv_geometry& g, int h, int u0, int u1) noexcept
@@ -825,7 +832,8 @@ inline double backward_weight_ws_macs(const conv_geometry& g) noexcept
     const int NR = ws_tile_for<T>(g.out_channels).nr, ck = g.in_channels * g.kernel_w, K = ck * g.kernel_h;
     double m = 0;
     for (int k0 = 0; k0 < K; k0 += NR) {
-        const int nr = std::min(NR, K - k0), u0 = k0 / ck, u1 = (k0 + nr - 1) / ck;
+        const int nr = std::min(NR, K - k0);
+        const auto [u0, u1] = wg_tile_rows(k0, nr, ck);
         int kept = 0;
         for (int h = 0; h < g.out_h(); ++h) kept += wg_row_kept(g, h, u0, u1) ? 1 : 0;
         m += double(nr) * kept;
@@ -959,12 +967,10 @@ inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, 
     T* xp = vb + lay.block + lay.offsets;
     // the tiles' taps kernel row first: k' = (u, c, v) reads its window at koff[k'] and sums into row k' of the
     // panels; tap k = (c, u, v) of the weights is row[k]
+    padded_window_offsets_row_first(C, kh, kw, Hp, Wp, koff);
     for (int u = 0, k = 0; u < kh; ++u)
         for (int c = 0; c < C; ++c)
-            for (int v = 0; v < kw; ++v, ++k) {
-                koff[k] = (c * Hp + u) * Wp + v;
-                row[(c * kh + u) * kw + v] = k;
-            }
+            for (int v = 0; v < kw; ++v) row[(c * kh + u) * kw + v] = k++;
     const std::size_t x_per = std::size_t(g.in_channels) * g.in_h * g.in_w, y_per = std::size_t(co) * P;
     std::memset(xp, 0, std::size_t(std::min(lay.group, g.batch)) * lay.padded * sizeof(T));
     ws_with_tile<T>(co, g.stride, [&]<int NV, int NR, int SJ>() {
@@ -995,7 +1001,8 @@ inline void backward_weight_ws(const conv_geometry& g, const T* x, const T* gy, 
                     const bool accumulate = n0 > 0 || r0 > 0;
                     int u_first = -1, u_last = -1, nkept = 0;  // the kernel rows `kept` was listed for
                     for (int k0 = 0; k0 < K; k0 += NR) {
-                        const int nr = std::min(NR, K - k0), u0 = k0 / ck, u1 = (k0 + nr - 1) / ck;
+                        const int nr = std::min(NR, K - k0);
+                        const auto [u0, u1] = wg_tile_rows(k0, nr, ck);
                         if (u0 != u_first || u1 != u_last) {
                             // the runs that place one of the tile's kernel rows [u0, u1] over the image
                             u_first = u0, u_last = u1, nkept = 0;
