@@ -53,15 +53,16 @@ void flop_counters(benchmark::State& st, double flop)
 
 /// The counter performed_FLOP of a frozen generator's call on `images` images: frozen_generator_flops() with each
 /// convolution's multiply-adds replaced by those it performs: without the kernel rows that read only the zero
-/// padding (kernels::packed_conv::macs_per_image()), and the residual convolutions' by those of their Winograd
-/// GEMMs (when it has them).
+/// padding (kernels::packed_conv::macs() of the call: on a batch the last layer's groups of images skip them too),
+/// and the residual convolutions' by those of their Winograd GEMMs (when it has them).
 template <class Config, class Frozen>
 void performed_counter(benchmark::State& st, const Frozen& f, std::size_t images)
 {
-    double flop = frozen_generator_flops<Config>();
-    for (const auto& c : f.convolutions()) flop += 2 * (c.macs_per_image() - c.geometry().macs() / c.geometry().batch);
-    for (const auto& w : f.winograd_convolutions()) flop += 2 * (w.macs_per_image() - w.geometry().macs() / w.geometry().batch);
-    st.counters["performed_FLOP"] = flop * double(images);
+    const double n = double(images);
+    double flop = frozen_generator_flops<Config>() * n;
+    for (const auto& c : f.convolutions()) flop += 2 * (c.macs(images) - c.geometry().macs() / c.geometry().batch * n);
+    for (const auto& w : f.winograd_convolutions()) flop += 2 * (w.macs_per_image() - w.geometry().macs() / w.geometry().batch) * n;
+    st.counters["performed_FLOP"] = flop;
 }
 
 /// frozen: frozen_generator (weights packed once, the path of transfer and the CLI); else generator::infer.

@@ -146,6 +146,67 @@ TEST_CASE("forward_ws: conv_simd.hpp's bits on random geometries (strides 1-3, l
     CHECK(took >= cases / 4);
 }
 
+namespace forward_ws_test {
+
+/// forward_stride1 (groups of simd_lanes<T> images one per lane, the rest image by image) against
+/// forward_stride1_tiles on the whole batch (image by image), bit for bit, overwriting and accumulating, with and
+/// without bias, within the scratch the geometry asks for. Returns whether a group of images was taken.
+template <class T>
+bool check_image_groups(const hk::conv_geometry& g, unsigned seed)
+{
+    INFO(describe(g), (sizeof(T) == 4 ? " float" : " double"));
+    std::mt19937 rng(seed);
+    auto x = cast<T>(random_values(g.x_size(), rng));
+    for (std::size_t i = 0; i < x.size(); i += 5) x[i] = T(0);  // zeros and negative zeros inside the image too
+    for (std::size_t i = 2; i < x.size(); i += 9) x[i] = T(-0.0);
+    const auto w = cast<T>(random_values(g.w_size(), rng)), b = cast<T>(random_values(std::size_t(g.out_channels), rng));
+    const auto y0 = cast<T>(random_values(g.y_size(), rng));
+    for (const bool accumulate : {false, true})
+        for (const bool with_bias : {false, true}) {
+            CAPTURE(accumulate);
+            CAPTURE(with_bias);
+            const T* bias = with_bias ? b.data() : nullptr;
+            std::vector<T> ya = y0, yb = y0;
+            guarded_scratch<T> sa(g), sb(g);
+            hkd::forward_stride1<T>(g, x.data(), w.data(), bias, ya.data(), sa.data(), accumulate);
+            hkd::forward_stride1_tiles<T, hkd::stride1_few_nv, hkd::stride1_few_channels>(g, x.data(), w.data(), bias, yb.data(),
+                                                                                        sb.data(), accumulate);
+            CHECK(std::memcmp(ya.data(), yb.data(), ya.size() * sizeof(T)) == 0);
+            CHECK(sa.intact());
+        }
+    return hkd::stride1_images_fits<T>(g) && g.batch >= hkd::simd_lanes<T>;
+}
+
+}  // namespace forward_ws_test
+
+TEST_CASE("forward_stride1: groups of images one per lane give each image the bits of one image at a time (few output channels)")
+{
+    if constexpr (!hkd::has_simd) return;
+    using forward_ws_test::check_image_groups;
+    constexpr int L = hkd::simd_lanes<float>;
+    int grouped = 0, cases = 0;
+    // the generator's last layer (7 x 7, 32 -> 3 channels: 1568 taps, seven blocks of forward_kc) at one group, two
+    // groups and three images more, and the batch of a training step
+    for (const int n : {L, 2 * L + 3, 16}) {
+        grouped += check_image_groups<float>({n, 32, 12, 24, 3, 7, 7, 1, 3}, unsigned(n));
+        grouped += check_image_groups<double>({n, 32, 12, 24, 3, 7, 7, 1, 3}, unsigned(n + 1));
+        cases += 2;
+    }
+    // random geometries: 1-3 output channels, kernels up to 7 x 7, padding up to 3, images of one row or column,
+    // batches below, at and above the groups
+    std::mt19937 rng(20261208u);
+    auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+    while (cases < 90) {
+        hk::conv_geometry g{pick(1, 2 * L + 5), pick(1, 12), pick(1, 14), pick(1, 30), pick(1, 3), pick(1, 7), pick(1, 7), 1, pick(0, 3)};
+        if (!g.valid()) continue;
+        grouped += check_image_groups<float>(g, unsigned(cases));
+        if (cases % 3 == 0) grouped += check_image_groups<double>(g, unsigned(cases) + 100u);
+        ++cases;
+    }
+    MESSAGE(grouped, " of the checks took a group of images");
+    CHECK(grouped >= 30);  // the test must reach the path it checks
+}
+
 TEST_CASE("backward-data GEMM path: the same bits whatever the pixel tile (4 or 8 pixels per micro-tile)")
 {
     // conv_simd.hpp's backward_data takes 8-pixel tiles where there are 32 vector registers; the bits must be those
@@ -309,6 +370,20 @@ TEST_CASE("conv2d_performed_macs: a hand count at the residual blocks, bounds on
         skipped += (f < r.macs()) + (w < r.macs());
     }
     CHECK(skipped > 50);  // the skipping paths are reached
+
+    // the generator's last layer (3 output channels, 7 x 7, padding 3, 12 output rows): its groups of simd_lanes
+    // images leave out the kernel rows over the padding, 4, 5, 6, 7 x 6, 6, 5, 4 of 7 per output row (72 of 84);
+    // the images past the last group and the batch below one group compute every product
+    if constexpr (hkd::has_simd) {
+        constexpr int L = hkd::simd_lanes<float>;
+        const hk::conv_geometry last{2 * L + 3, 32, 12, 24, 3, 7, 7, 1, 3};
+        REQUIRE(hkd::stride1_images_fits<float>(last));
+        const double per_image = last.macs() / last.batch;
+        CHECK(hk::conv2d_performed_macs<float>(last, conv_pass::forward) == 2 * L * per_image * 72 / 84 + 3 * per_image);
+        hk::conv_geometry few = last;
+        few.batch = L - 1;
+        CHECK(hk::conv2d_performed_macs<float>(few, conv_pass::forward) == few.macs());
+    }
 }
 
 TEST_CASE("performed_macs_count: every pass and the transposed convolution add what they perform")

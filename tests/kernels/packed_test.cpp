@@ -140,6 +140,31 @@ TEST_CASE("packed convolutions skip the kernel rows that read only the padding: 
     const auto pl = hk::packed_conv<float>::conv2d(last, std::vector<float>(last.w_size(), 1.f).data());
     CHECK_FALSE(pl.weight_stationary());
     CHECK(pl.macs_per_image() == last.macs());
+    // ... but on a batch, its groups of L images one per lane leave out the kernel rows over the padding: 4, 5, 6,
+    // 7 x 6, 6, 5, 4 of the 7 kernel rows per output row (72 of 84); the 3 images past the two groups take all 84
+    CHECK(pl.macs(1) == last.macs());
+    CHECK(pl.macs(2 * L + 3) == 2 * L * last.macs() * 72 / 84 + 3 * last.macs());
+}
+
+TEST_CASE("packed convolutions on a batch: the last layer's groups of images give each image its bits alone")
+{
+    if constexpr (!hk::detail::has_simd) return;
+    constexpr int L = hk::detail::simd_lanes<float>;
+    std::mt19937 rng(20261208u);
+    for (const int co : {1, 3}) {
+        const hk::conv_geometry g{1, 32, 12, 24, co, 7, 7, 1, 3};
+        const int images = 2 * L + 3;
+        const auto w = kernel_test::cast<float>(kernel_test::random_values(g.w_size(), rng));
+        const auto b = kernel_test::cast<float>(kernel_test::random_values(std::size_t(co), rng));
+        const auto x = kernel_test::cast<float>(kernel_test::random_values(g.x_size() * images, rng));
+        const auto p = hk::packed_conv<float>::conv2d(g, w.data());
+        std::vector<float> scratch(p.scratch_size()), batch(g.y_size() * images), one(g.y_size() * images);
+        p.forward(x.data(), b.data(), batch.data(), scratch.data(), std::size_t(images));
+        for (int n = 0; n < images; ++n)
+            p.forward(x.data() + n * g.x_size(), b.data(), one.data() + n * g.y_size(), scratch.data(), 1);
+        CAPTURE(co);
+        CHECK(std::memcmp(batch.data(), one.data(), batch.size() * sizeof(float)) == 0);
+    }
 }
 
 TEST_CASE("packed convolutions match the reference on random geometries (strides 1-3, any padding)")

@@ -80,9 +80,9 @@ template <class T>
 inline double performed_macs(const conv_geometry& g, conv_pass pass) noexcept
 {
     if constexpr (fast_type<T>) {
-        if (pass == conv_pass::forward && use_forward_ws<T>(g)) return forward_ws_macs(g);
+        if (pass == conv_pass::forward) return use_forward_ws<T>(g) ? forward_ws_macs(g) : forward_macs<T>(g);
         if (pass == conv_pass::backward_data && backward_data_by_forward(g))
-            return backward_data_ws<T>(g) ? forward_ws_macs(flipped_geometry(g)) : flipped_geometry(g).macs();
+            return backward_data_ws<T>(g) ? forward_ws_macs(flipped_geometry(g)) : forward_macs<T>(flipped_geometry(g));
         if (pass == conv_pass::backward_weight && use_backward_weight_ws<T>(g)) return backward_weight_ws_macs<T>(g);
     }
     return g.macs();
@@ -157,7 +157,8 @@ inline void backward_data_any(const conv_geometry& g, const T* gy, const T* w, T
 /// @brief Multiply-adds a pass of geometry g performs on T's kernels: g.macs(), less the products with the zero
 /// padding that the path it takes leaves out. The weight-stationary paths (forward and stride-1 backward-data of
 /// at least one vector of output channels, and the weight gradients) skip the kernel rows an output row places over
-/// the padding above or below the image, with the bits of the full sum; the other paths compute them. A stride-1
+/// the padding above or below the image, with the bits of the full sum, and so does the stride-1 forward pass of a
+/// layer with few output channels on its groups of images one per lane; the other paths compute them. A stride-1
 /// backward-data that runs as the forward pass of its flipped kernel over the padded output gradient counts that
 /// pass's products (g.macs() where the padding keeps the size, as in every StarGAN layer). Idle vector lanes and
 /// columns computed and dropped are not counted. What a benchmark reports as the FLOPs a step performs

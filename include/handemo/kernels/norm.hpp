@@ -104,6 +104,10 @@ void instance_norm_per_channel(T* x, const T* gamma, const T* beta, int C, int M
 
 namespace detail {
 
+/// Channels instance_norm_channels() takes per block of its three passes (means, scales, affine maps): the groups of
+/// a block have no dependence on one another, so their reductions, divisions and square roots overlap.
+inline constexpr int norm_block_channels = 128;
+
 #if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
 inline constexpr bool grouped_norm = true;
 /// The n < 8 floats at p as doubles, the other lanes `fill`: one masked load (no read past p + n).
@@ -150,56 +154,63 @@ void instance_norm_channels(T* x, const T* gamma, const T* beta, int C, int M, b
 {
     if constexpr (std::is_same_v<T, float> && detail::grouped_norm) {
         using D = xsimd::batch<double>;
-        constexpr int L = int(D::size);
+        constexpr int L = int(D::size), CB = detail::norm_block_channels;
         const int full = M / L * L, rest = M - full;
-        for (int c0 = 0; c0 < C; c0 += L) {
-            const int G = std::min(L, C - c0);
-            D r[L];
-            for (int j = 0; j < L; ++j) {
-                if (j >= G) {
-                    r[j] = D(0.0);
-                    continue;
+        alignas(64) double mv[CB], kv[CB];
+        for (int cb = 0; cb < C; cb += CB) {
+            const int nc = std::min(CB, C - cb);
+            T* xb = x + std::ptrdiff_t(cb) * M;
+            // three passes over the block's channels, each group's reductions independent of the other groups'
+            for (int c0 = 0; c0 < nc; c0 += L) {
+                D r[L];
+                for (int j = 0; j < L; ++j) {
+                    if (c0 + j >= nc) {
+                        r[j] = D(0.0);
+                        continue;
+                    }
+                    const float* v = xb + std::ptrdiff_t(c0 + j) * M;
+                    D a0(0.0), a1(0.0);
+                    int m = 0;
+                    for (; m + 2 * L <= full; m += 2 * L) a0 += detail::load_as_double(v + m), a1 += detail::load_as_double(v + m + L);
+                    if (m < full) a0 += detail::load_as_double(v + m);
+                    if (rest) a1 += detail::tail_as_double(v + full, rest, 0.0);
+                    r[j] = a0 + a1;
                 }
-                const float* v = x + std::ptrdiff_t(c0 + j) * M;
-                D a0(0.0), a1(0.0);
-                int m = 0;
-                for (; m + 2 * L <= full; m += 2 * L) a0 += detail::load_as_double(v + m), a1 += detail::load_as_double(v + m + L);
-                if (m < full) a0 += detail::load_as_double(v + m);
-                if (rest) a1 += detail::tail_as_double(v + full, rest, 0.0);
-                r[j] = a0 + a1;
+                (xsimd::haddp(r) / D(double(M))).store_aligned(mv + c0);
             }
-            const D mean = xsimd::haddp(r) / D(double(M));
-            alignas(64) double mv[L], kv[L], gv[L];
-            mean.store_aligned(mv);
-            for (int j = 0; j < L; ++j) {
-                gv[j] = j < G ? double(gamma[c0 + j]) : 1.0;
-                if (j >= G) {
-                    r[j] = D(0.0);
-                    continue;
+            for (int c0 = 0; c0 < nc; c0 += L) {
+                D r[L];
+                alignas(64) double gv[L];
+                for (int j = 0; j < L; ++j) {
+                    gv[j] = c0 + j < nc ? double(gamma[cb + c0 + j]) : 1.0;
+                    if (c0 + j >= nc) {
+                        r[j] = D(0.0);
+                        continue;
+                    }
+                    const float* v = xb + std::ptrdiff_t(c0 + j) * M;
+                    const D mu(mv[c0 + j]);
+                    D a0(0.0), a1(0.0);
+                    int m = 0;
+                    for (; m + 2 * L <= full; m += 2 * L) {
+                        const D d0 = detail::load_as_double(v + m) - mu, d1 = detail::load_as_double(v + m + L) - mu;
+                        a0 = xsimd::fma(d0, d0, a0), a1 = xsimd::fma(d1, d1, a1);
+                    }
+                    if (m < full) {
+                        const D d0 = detail::load_as_double(v + m) - mu;
+                        a0 = xsimd::fma(d0, d0, a0);
+                    }
+                    if (rest) {
+                        const D d = detail::tail_as_double(v + full, rest, mv[c0 + j]) - mu;  // the fill's lanes add 0
+                        a1 = xsimd::fma(d, d, a1);
+                    }
+                    r[j] = a0 + a1;
                 }
-                const float* v = x + std::ptrdiff_t(c0 + j) * M;
-                const D mu(mv[j]);
-                D a0(0.0), a1(0.0);
-                int m = 0;
-                for (; m + 2 * L <= full; m += 2 * L) {
-                    const D d0 = detail::load_as_double(v + m) - mu, d1 = detail::load_as_double(v + m + L) - mu;
-                    a0 = xsimd::fma(d0, d0, a0), a1 = xsimd::fma(d1, d1, a1);
-                }
-                if (m < full) {
-                    const D d0 = detail::load_as_double(v + m) - mu;
-                    a0 = xsimd::fma(d0, d0, a0);
-                }
-                if (rest) {
-                    const D d = detail::tail_as_double(v + full, rest, mv[j]) - mu;  // the fill's lanes add 0
-                    a1 = xsimd::fma(d, d, a1);
-                }
-                r[j] = a0 + a1;
+                const D var = xsimd::haddp(r) / D(double(M));
+                (D::load_aligned(gv) / xsimd::sqrt(var + D(double(eps)))).store_aligned(kv + c0);
             }
-            const D var = xsimd::haddp(r) / D(double(M));
-            (D::load_aligned(gv) / xsimd::sqrt(var + D(double(eps)))).store_aligned(kv);
-            for (int j = 0; j < G; ++j) {
-                float* v = x + std::ptrdiff_t(c0 + j) * M;
-                scale_shift(v, M, float(kv[j]), float(mv[j]), beta[c0 + j], relu, v);
+            for (int c = 0; c < nc; ++c) {
+                float* v = xb + std::ptrdiff_t(c) * M;
+                scale_shift(v, M, float(kv[c]), float(mv[c]), beta[cb + c], relu, v);
             }
         }
     } else {

@@ -88,7 +88,7 @@ public:
     /// @brief Bytes of the stored weights (packed panels with their zero padding, or the plain copy): what
     /// one forward pass streams.
     std::size_t weight_bytes() const noexcept { return w_.size() * sizeof(T) + wh_.size() * sizeof(std::uint16_t); }
-    /// @brief Multiply-adds one forward pass performs per image: the geometry's (conv_geometry::macs() of a batch
+    /// @brief Multiply-adds a forward pass on one image performs: the geometry's (conv_geometry::macs() of a batch
     /// of 1) for the kernels of kernels/conv.hpp; on the weight-stationary path, every output row's taps but the
     /// kernel rows that read only the zero padding above or below the image (fewer than the geometry's at the
     /// image's top and bottom edges).
@@ -100,6 +100,16 @@ public:
             for (int r = 0; r < ph.job.rows; ++r)
                 m += double(row_k_[ph.row_k_off + 2 * std::size_t(r) + 1] - row_k_[ph.row_k_off + 2 * std::size_t(r)]) * ph.job.cols * ph.job.co;
         return m;
+    }
+    /// @brief Multiply-adds forward() on `images` images performs: macs_per_image() each, but where a stride-1 layer
+    /// with few output channels takes its groups of images one per lane (kernels::conv2d_performed_macs()), which
+    /// leave out the kernel rows over the zero padding too.
+    double macs(std::size_t images) const noexcept
+    {
+        if (!batched_fallback(images)) return macs_per_image() * double(images);
+        conv_geometry g = g_;
+        g.batch = int(images);
+        return conv2d_performed_macs<T>(g, conv_pass::forward);
     }
 
     /// @brief conv2d: y = conv(x, w) + bias, x [batch, in_channels, in_h, in_w], y [batch, out_channels,
@@ -292,11 +302,30 @@ private:
             }
     }
 
-    // One image at a time (a batch-1 geometry), as the weight-stationary path: the bits of an image do not
-    // depend on the images computed with it.
+    // Whether fallback() runs `images` images in one call (conv2d_forward's stride-1 path for few output channels,
+    // whose groups of images get the bits of one image at a time).
+    bool batched_fallback(std::size_t images) const noexcept
+    {
+        if constexpr (detail::fast_type<T>) {
+            conv_geometry g = g_;
+            g.batch = int(std::min<std::size_t>(images, 1u << 20));
+            return !ws_ && !transposed_ && images > 1 && g.out_channels <= detail::stride1_few_channels &&
+                   detail::stride1_images_fits<T>(g) && !detail::use_dot_forward<T>(g) && detail::use_stride1_forward<T>(g);
+        }
+        return false;
+    }
+
+    // One image at a time (a batch-1 geometry), as the weight-stationary path: the bits of an image do not depend
+    // on the images computed with it. A stride-1 layer with few output channels (the generator's last) takes the
+    // whole batch at once: its groups of images one per lane (detail::forward_stride1_images) get the bits of the
+    // image-by-image path.
     void fallback(const T* x, const T* bias, T* y, T* scratch, int images) const noexcept
     {
         conv_geometry g = g_;
+        if (batched_fallback(std::size_t(images))) {
+            g.batch = images;
+            return conv2d_forward<T>(g, x, w_.data(), bias, y, scratch);
+        }
         g.batch = 1;
         const std::size_t in = g.x_size(), out = g.y_size();
         for (int n = 0; n < images; ++n) {

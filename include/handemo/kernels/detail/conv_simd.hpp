@@ -251,6 +251,63 @@ inline void micro_idx_dispatch(int nr, int kc, const T* v, const int* koff, cons
 inline constexpr int stride1_few_channels = 3;
 inline constexpr int stride1_few_nv = wide_register_file ? 6 : micro_nv;
 
+/// The kernel rows [first, second) whose taps output row r of a convolution (stride, padding pad, kernel_h rows,
+/// in_h input rows) places over the image; the rows outside read only the zero padding above or below it (an empty
+/// range when no row reaches the image).
+inline std::pair<int, int> window_rows(int r, int stride, int pad, int kernel_h, int in_h) noexcept
+{
+    const int lo = std::clamp(pad - r * stride, 0, kernel_h);
+    return {lo, std::clamp(pad + in_h - r * stride, lo, kernel_h)};
+}
+
+/// Output channels x pixels of the image-per-lane tile (micro_images): 3 x 8 = 24 accumulators + 3 weights + 1 with
+/// the 32 registers of AVX-512, 3 x 3 with 16.
+inline constexpr int stride1_images_np = wide_register_file ? 8 : 3;
+/// Most elements of each of forward_stride1_images's buffers (one channel's interleaved padded plane, the output and
+/// the block sums of a group): a layer with larger images keeps forward_stride1_tiles.
+inline constexpr std::size_t stride1_images_max_elements = std::size_t(1) << 16;
+
+/// Whether a stride-1 forward pass of geometry g (up to stride1_few_channels output channels) may take
+/// forward_stride1_images for its groups of simd_lanes<T> images (a batch of fewer keeps forward_stride1_tiles):
+/// one kernel row's taps at most forward_kc and both buffers within stride1_images_max_elements.
+template <class T>
+inline bool stride1_images_fits(const conv_geometry& g) noexcept
+{
+    constexpr std::size_t L = simd_lanes<T>;
+    const std::size_t Hp = std::size_t(g.in_h) + 2 * g.pad, Wp = std::size_t(g.in_w) + 2 * g.pad;
+    const std::size_t P = std::size_t(g.out_h()) * g.out_w();
+    return g.stride == 1 && g.out_channels <= stride1_few_channels && g.kernel_h * g.kernel_w <= forward_kc &&
+           Hp * Wp * L <= stride1_images_max_elements && std::size_t(g.out_channels) * P * L <= stride1_images_max_elements;
+}
+
+/// Scratch elements of forward_stride1_images: an interleaved padded plane, the block sums and the output of a
+/// group, with room to align them.
+template <class T>
+inline std::size_t stride1_images_scratch_elements(const conv_geometry& g) noexcept
+{
+    constexpr std::size_t L = simd_lanes<T>;
+    const std::size_t Hp = std::size_t(g.in_h) + 2 * g.pad, Wp = std::size_t(g.in_w) + 2 * g.pad;
+    const std::size_t P = std::size_t(g.out_h()) * g.out_w();
+    return Hp * Wp * L + 2 * std::size_t(g.out_channels) * P * L + 3 * (64 / sizeof(T) + L);
+}
+
+/// Multiply-adds forward_stride1 performs for geometry g with up to stride1_few_channels output channels: its groups
+/// of simd_lanes<T> images (forward_stride1_images) leave out the kernel rows an output row places over the zero
+/// padding above or below the image; the other images (forward_stride1_tiles) compute every product.
+template <class T>
+inline double forward_stride1_few_macs(const conv_geometry& g) noexcept
+{
+    if (!stride1_images_fits<T>(g)) return g.macs();
+    const int grouped = g.batch / simd_lanes<T> * simd_lanes<T>;
+    double rows = 0;  // kernel rows over the image, summed over the output rows
+    for (int r = 0; r < g.out_h(); ++r) {
+        const auto [lo, hi] = window_rows(r, 1, g.pad, g.kernel_h, g.in_h);
+        rows += hi - lo;
+    }
+    const double per_image = g.macs() / g.batch;
+    return rows * g.kernel_w * g.in_channels * g.out_w() * g.out_channels * grouped + per_image * (g.batch - grouped);
+}
+
 /// Elements of the zero-padded image (plus read-past slack) of the stride-1 path.
 inline std::size_t padded_image_elements(const conv_geometry& g, int mr) noexcept
 {
@@ -311,6 +368,16 @@ inline bool use_dot_forward(const conv_geometry& g) noexcept
     return K % simd_lanes<T> == 0 && K >= 64 && ptot <= dot_max_pixels && eff < 0.9;
 }
 
+/// Multiply-adds forward() performs for geometry g: forward_stride1_few_macs() on the stride-1 path of a layer with
+/// few output channels, else every product (g.macs()).
+template <class T>
+inline double forward_macs(const conv_geometry& g) noexcept
+{
+    return !use_dot_forward<T>(g) && use_stride1_forward<T>(g) && g.out_channels <= stride1_few_channels
+               ? forward_stride1_few_macs<T>(g)
+               : g.macs();
+}
+
 template <class T>
 inline std::size_t dot_scratch_elements(const conv_geometry& g) noexcept
 {
@@ -332,6 +399,7 @@ inline std::size_t forward_scratch_elements(const conv_geometry& g) noexcept
     if (g.stride == 1 && g.out_channels <= stride1_few_channels) {
         constexpr std::size_t MRw = std::size_t(stride1_few_nv) * simd_lanes<T>;
         n = std::max(n, padded_image_elements(g, int(MRw)) + std::size_t(stride1_few_channels) * MRw);
+        if (stride1_images_fits<T>(g)) n = std::max(n, stride1_images_scratch_elements<T>(g));
     }
     if (K % simd_lanes<T> == 0 && K >= 64 && long(g.out_h()) * g.out_w() <= dot_max_pixels)
         n = std::max(n, dot_scratch_elements<T>(g));
@@ -567,16 +635,6 @@ inline void forward_stride1_tiles(const conv_geometry& g, const T* x, const T* w
     }
 }
 
-/// Stride-1 forward pass: forward_stride1_tiles with the wide tile for few output channels.
-template <class T>
-inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
-                            bool accumulate_out) noexcept
-{
-    if (g.out_channels <= stride1_few_channels)
-        return forward_stride1_tiles<T, stride1_few_nv, stride1_few_channels>(g, x, w, bias, y, scratch, accumulate_out);
-    forward_stride1_tiles<T>(g, x, w, bias, y, scratch, accumulate_out);
-}
-
 /// Whether the packing loops gather whole vectors (float, int32 indices: one index vector per float vector) instead
 /// of one element at a time. The indices are offsets into one batch chunk of the input, so it must have fewer than
 /// 2^31 elements.
@@ -596,6 +654,258 @@ inline bool use_vector_gather(std::size_t input_elements) noexcept
 {
     return vector_gather_type<T> && input_elements < std::size_t(INT32_MAX);
 }
+
+/// Whether ws_transpose_block has an in-register transpose for T on this target (float with AVX-512 or AVX2, the
+/// types vector_gather_type names); elsewhere the panels are packed one gathered vector at a time.
+template <class T>
+inline constexpr bool ws_transpose_type = vector_gather_type<T>;
+
+/// out[j] for j < L = simd_lanes<T>: lane i is row(i)[j] for i < rows and j < cols, else 0. An L x L block of
+/// rows transposed in registers: L contiguous (masked) loads and 4 log2(L) / 2 shuffles per vector, where packing
+/// by gathers issues one L-lane gather per vector. Only where ws_transpose_type<T>.
+template <class T, class Row>
+inline void ws_transpose_rows(Row&& row, int rows, int cols, simd_t<T>* out) noexcept
+{
+#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
+    if constexpr (ws_transpose_type<T>) {
+        const __mmask16 m = cols >= 16 ? __mmask16(0xffff) : __mmask16((1u << cols) - 1u);
+        __m512 r[16], t[16];
+        for (int i = 0; i < 16; ++i) r[i] = i < rows ? _mm512_maskz_loadu_ps(m, row(i)) : _mm512_setzero_ps();
+        for (int i = 0; i < 16; i += 2) {
+            t[i] = _mm512_unpacklo_ps(r[i], r[i + 1]);
+            t[i + 1] = _mm512_unpackhi_ps(r[i], r[i + 1]);
+        }
+        for (int i = 0; i < 16; i += 4) {
+            const __m512d a = _mm512_castps_pd(t[i]), b = _mm512_castps_pd(t[i + 1]), c = _mm512_castps_pd(t[i + 2]),
+                          d = _mm512_castps_pd(t[i + 3]);
+            r[i] = _mm512_castpd_ps(_mm512_unpacklo_pd(a, c));
+            r[i + 1] = _mm512_castpd_ps(_mm512_unpackhi_pd(a, c));
+            r[i + 2] = _mm512_castpd_ps(_mm512_unpacklo_pd(b, d));
+            r[i + 3] = _mm512_castpd_ps(_mm512_unpackhi_pd(b, d));
+        }
+        for (int i = 0; i < 16; i += 8)
+            for (int j = 0; j < 4; ++j) {
+                t[i + j] = _mm512_shuffle_f32x4(r[i + j], r[i + j + 4], 0x88);
+                t[i + j + 4] = _mm512_shuffle_f32x4(r[i + j], r[i + j + 4], 0xdd);
+            }
+        for (int j = 0; j < 8; ++j) {
+            out[j] = simd_t<T>(_mm512_shuffle_f32x4(t[j], t[j + 8], 0x88));
+            out[j + 8] = simd_t<T>(_mm512_shuffle_f32x4(t[j], t[j + 8], 0xdd));
+        }
+        return;
+    }
+#elif defined(__AVX2__) && (defined(__x86_64__) || defined(__i386__))
+    if constexpr (ws_transpose_type<T>) {
+        const __m256i m = _mm256_cmpgt_epi32(_mm256_set1_epi32(cols), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        __m256 r[8], t[8];
+        for (int i = 0; i < 8; ++i) r[i] = i < rows ? _mm256_maskload_ps(row(i), m) : _mm256_setzero_ps();
+        for (int i = 0; i < 8; i += 2) {
+            t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]);
+            t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
+        }
+        for (int i = 0; i < 8; i += 4) {
+            r[i] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(1, 0, 1, 0));
+            r[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(3, 2, 3, 2));
+            r[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(1, 0, 1, 0));
+            r[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(3, 2, 3, 2));
+        }
+        for (int j = 0; j < 4; ++j) {
+            out[j] = simd_t<T>(_mm256_permute2f128_ps(r[j], r[j + 4], 0x20));
+            out[j + 4] = simd_t<T>(_mm256_permute2f128_ps(r[j], r[j + 4], 0x31));
+        }
+        return;
+    }
+#endif
+    (void)row, (void)rows, (void)cols, (void)out;
+}
+
+/// ws_transpose_rows over the rows of a row-major matrix: lane i of out[j] is p[i * stride + j].
+template <class T>
+inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int cols, simd_t<T>* out) noexcept
+{
+    ws_transpose_rows<T>([&](int i) { return p + i * stride; }, rows, cols, out);
+}
+
+/// dst[(h * dst_row + q) * L + l] = image(l)[h * cols + q] for h < rows, q < cols, l < L = simd_lanes<T>: L images
+/// planes interleaved one image per lane (ws_transpose_rows where it transposes in registers).
+template <class T, class Image>
+inline void interleave_images(Image&& image, int rows, int cols, T* dst, int dst_row = 0) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    if (rows == 1) dst_row = cols;
+    for (int h = 0; h < rows; ++h) {
+        T* d = dst + std::ptrdiff_t(h) * dst_row * L;
+        if constexpr (ws_transpose_type<T>) {
+            simd_t<T> v[L];
+            for (int q0 = 0; q0 < cols; q0 += L) {
+                const int n = std::min(L, cols - q0);
+                ws_transpose_rows<T>([&](int l) { return image(l) + std::ptrdiff_t(h) * cols + q0; }, L, n, v);
+                for (int j = 0; j < n; ++j) v[j].store_aligned(d + std::ptrdiff_t(q0 + j) * L);
+            }
+        } else {
+            for (int l = 0; l < L; ++l)
+                for (int q = 0; q < cols; ++q) d[std::ptrdiff_t(q) * L + l] = image(l)[std::ptrdiff_t(h) * cols + q];
+        }
+    }
+}
+
+/// image(l)[p] = src[p * L + l] for p < n, l < L = simd_lanes<T>: the inverse of interleave_images on one row.
+template <class T, class Image>
+inline void deinterleave_images(const T* src, int n, Image&& image) noexcept
+{
+    constexpr int L = simd_lanes<T>;
+    if constexpr (ws_transpose_type<T>) {
+        simd_t<T> v[L];
+        alignas(64) T last[L];
+        for (int p0 = 0; p0 < n; p0 += L) {
+            const int m = std::min(L, n - p0);
+            ws_transpose_rows<T>([&](int i) { return src + std::ptrdiff_t(p0 + i) * L; }, m, L, v);
+            for (int l = 0; l < L; ++l) {
+                if (m == L) {
+                    v[l].store_unaligned(image(l) + p0);
+                    continue;
+                }
+                v[l].store_aligned(last);
+                std::copy_n(last, m, image(l) + p0);
+            }
+        }
+    } else {
+        for (int l = 0; l < L; ++l)
+            for (int p = 0; p < n; ++p) image(l)[p] = src[std::ptrdiff_t(p) * L + l];
+    }
+}
+
+/// One tile of forward_stride1_images: NO output channels x NP pixels of one output row, each vector the L images of
+/// a group. acc = (from_tb ? tb : 0) + sum over the n taps of w[o * K + k] * src[koff[k] + j L], in k order; then
+/// stored to tb, or, when yi is given, yi = ((add ? yi : 0) + acc) + b[o] (the block's end: forward_stride1_tiles's
+/// store_run per lane). tb and yi: [NO][P][L] from the tile's first pixel, channel stride co_stride.
+template <class T, int NO, int NP>
+[[gnu::noinline]] inline void micro_images(int n, const int* __restrict koff, const T* __restrict w, std::ptrdiff_t K,
+                                           const T* __restrict src, T* __restrict tb, std::ptrdiff_t co_stride,
+                                           bool from_tb, T* __restrict yi, bool add, const T* b) noexcept
+{
+    using B = simd_t<T>;
+    constexpr int L = simd_lanes<T>;
+    B acc[NO][NP];
+    HANDEMO_UNROLL_TILE
+    for (int o = 0; o < NO; ++o)
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NP; ++j) acc[o][j] = from_tb ? B::load_aligned(tb + o * co_stride + j * L) : B(T(0));
+    for (int k = 0; k < n; ++k) {
+        const T* s = src + koff[k];
+        B wv[NO];
+        HANDEMO_UNROLL_TILE
+        for (int o = 0; o < NO; ++o) wv[o] = B(w[o * K + k]);
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NP; ++j) {
+            const B a = keep_in_register(B::load_aligned(s + j * L));
+            HANDEMO_UNROLL_TILE
+            for (int o = 0; o < NO; ++o) acc[o][j] = xsimd::fma(a, wv[o], acc[o][j]);
+        }
+    }
+    if (!yi) {
+        HANDEMO_UNROLL_TILE
+        for (int o = 0; o < NO; ++o)
+            HANDEMO_UNROLL_TILE
+            for (int j = 0; j < NP; ++j) acc[o][j].store_aligned(tb + o * co_stride + j * L);
+        return;
+    }
+    HANDEMO_UNROLL_TILE
+    for (int o = 0; o < NO; ++o)
+        HANDEMO_UNROLL_TILE
+        for (int j = 0; j < NP; ++j) {
+            T* yo = yi + o * co_stride + j * L;
+            (((add ? B::load_aligned(yo) : B(T(0))) + acc[o][j]) + B(b[o])).store_aligned(yo);
+        }
+}
+
+/// The stride-1 forward pass of a layer with few output channels (stride1_images_fits) on images [0, images) of x,
+/// images a multiple of L = simd_lanes<T>: the L images of a group go in the lanes of every vector, so that no lane is
+/// idle (forward_stride1_tiles's wide grid leaves a quarter of them idle on the generator's last layer), the loads
+/// are aligned, and an output row skips the kernel rows that read only the zero padding above or below the image.
+/// Each lane gets forward_stride1_tiles's bits: its products in the same k = (c, u, v) order within the same blocks of
+/// forward_kc, each block summed from zero and added to the output as store_run adds it; the products left out are
+/// +-0 and a sum started at +0 never becomes -0, so leaving them out changes no bit. One channel of the group is
+/// interleaved at a time; a block's sums are carried from channel to channel in tb.
+template <class T>
+inline void forward_stride1_images(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                                   bool accumulate_out, int images) noexcept
+{
+    constexpr int L = simd_lanes<T>, NP = stride1_images_np;
+    const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
+    const int kh = g.kernel_h, kw = g.kernel_w, khw = kh * kw, Ci = g.in_channels, K = Ci * khw, Co = g.out_channels;
+    const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w, co_stride = std::ptrdiff_t(P) * L;
+    auto align = [](T* p) {
+        const auto a = reinterpret_cast<std::uintptr_t>(p);
+        return reinterpret_cast<T*>((a + 63) / 64 * 64);
+    };
+    T* xi = align(scratch);
+    T* tb = align(xi + std::ptrdiff_t(Hp) * Wp * L);
+    T* yi = align(tb + Co * co_stride);
+    int koff[forward_kc];
+    for (int u = 0; u < kh; ++u)
+        for (int v = 0; v < kw; ++v) koff[u * kw + v] = (u * Wp + v) * L;
+    std::memset(xi, 0, std::size_t(Hp) * Wp * L * sizeof(T));
+    for (int n0 = 0; n0 < images; n0 += L) {
+        const T* xg = x + std::ptrdiff_t(n0) * Ci * HW;
+        T* yg = y + std::ptrdiff_t(n0) * Co * P;
+        if (accumulate_out)
+            for (int o = 0; o < Co; ++o)
+                interleave_images<T>([&](int l) { return yg + (std::ptrdiff_t(l) * Co + o) * P; }, 1, P, yi + o * co_stride);
+        for (int k0 = 0; k0 < K; k0 += forward_kc) {
+            const int k1 = std::min(K, k0 + forward_kc), c0 = k0 / khw, c1 = (k1 - 1) / khw;
+            const bool add = k0 > 0 || accumulate_out;
+            T b[stride1_few_channels] = {};
+            for (int o = 0; o < Co; ++o) b[o] = (k0 == 0 && bias) ? bias[o] : T(0);
+            for (int c = c0; c <= c1; ++c) {
+                interleave_images<T>([&](int l) { return xg + (std::ptrdiff_t(l) * Ci + c) * HW; }, g.in_h, g.in_w,
+                                     xi + (std::ptrdiff_t(g.pad) * Wp + g.pad) * L, Wp);
+                // the channel's taps in this block, (u, v) order
+                const int ka = std::max(k0, c * khw) - c * khw, kb = std::min(k1, (c + 1) * khw) - c * khw;
+                const bool from_tb = c > c0;
+                for (int r = 0; r < oh; ++r) {
+                    const auto [u0, u1] = window_rows(r, 1, g.pad, kh, g.in_h);
+                    const int ta = std::max(ka, u0 * kw), n = std::max(0, std::min(kb, u1 * kw) - ta);
+                    const T* src = xi + std::ptrdiff_t(r) * Wp * L;
+                    for (int q0 = 0; q0 < ow; q0 += NP) {
+                        const std::ptrdiff_t t0 = std::ptrdiff_t(r * ow + q0) * L;
+                        with_tile_width<NP>(ow - q0, [&]<int NPr>() {
+                            with_tile_width<stride1_few_channels>(Co, [&]<int NO>() {
+                                micro_images<T, NO, NPr>(n, koff + ta, w + std::ptrdiff_t(c) * khw + ta, K, src + q0 * L, tb + t0,
+                                                         co_stride, from_tb, c == c1 ? yi + t0 : nullptr, add, b);
+                            });
+                        });
+                    }
+                }
+            }
+        }
+        for (int o = 0; o < Co; ++o)
+            deinterleave_images<T>(yi + o * co_stride, P, [&](int l) { return yg + (std::ptrdiff_t(l) * Co + o) * P; });
+    }
+}
+
+/// Stride-1 forward pass: forward_stride1_tiles with the wide tile for few output channels.
+template <class T>
+inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, const T* bias, T* y, T* scratch,
+                            bool accumulate_out) noexcept
+{
+    if (g.out_channels <= stride1_few_channels) {
+        // whole groups of simd_lanes<T> images one image per lane, the rest image by image: the same bits
+        int grouped = 0;
+        if (stride1_images_fits<T>(g)) {
+            grouped = g.batch / simd_lanes<T> * simd_lanes<T>;
+            if (grouped) forward_stride1_images(g, x, w, bias, y, scratch, accumulate_out, grouped);
+        }
+        if (grouped == g.batch) return;
+        conv_geometry rest = g;
+        rest.batch = g.batch - grouped;
+        return forward_stride1_tiles<T, stride1_few_nv, stride1_few_channels>(
+            rest, x + std::ptrdiff_t(grouped) * g.in_channels * g.in_h * g.in_w, w, bias,
+            y + std::ptrdiff_t(grouped) * g.out_channels * g.out_h() * g.out_w(), scratch, accumulate_out);
+    }
+    forward_stride1_tiles<T>(g, x, w, bias, y, scratch, accumulate_out);
+}
+
 
 /// One vector of a packing loop: x[index] in each lane whose row is in [0, h) and column in [0, w), else 0: a masked
 /// gather (out-of-range lanes read nothing), so every lane holds exactly what the element-wise loop stores.

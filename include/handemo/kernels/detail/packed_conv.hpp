@@ -213,15 +213,6 @@ inline void micro_ws_idx_dispatch(int nr, int n, const int* idx, const T* wp, co
     with_tile_width<N>(nr, [&]<int R>() { micro_ws_idx<T, NV, R, SJ>(n, idx, wp, koff, src, sj, tile, accumulate); });
 }
 
-/// The kernel rows [first, second) whose taps output row r of a convolution (stride, padding pad, kernel_h rows,
-/// in_h input rows) places over the image; the rows outside read only the zero padding above or below it (an empty
-/// range when no row reaches the image).
-inline std::pair<int, int> window_rows(int r, int stride, int pad, int kernel_h, int in_h) noexcept
-{
-    const int lo = std::clamp(pad - r * stride, 0, kernel_h);
-    return {lo, std::clamp(pad + in_h - r * stride, lo, kernel_h)};
-}
-
 /// One weight-stationary GEMM: `co` output channels from the panels `wp` ([ceil(co/MR)][K][MR]) and the
 /// offsets `koff` [K]; `rows` output rows of `cols` pixels each; pixel (r, q) reads the padded input at
 /// src + r*src_row + q*sj and is written to y[o*y_chan + y_row0 + r*y_row + q*y_col]. row_k: nullptr (every
@@ -588,77 +579,6 @@ inline simd_t<T> ws_strided(const T* p, std::int32_t stride, int valid) noexcept
     alignas(64) T v[L];
     for (int i = 0; i < L; ++i) v[i] = i < valid ? p[std::ptrdiff_t(i) * stride] : T(0);
     return simd_t<T>::load_aligned(v);
-}
-
-/// Whether ws_transpose_block has an in-register transpose for T on this target (float with AVX-512 or AVX2, the
-/// types vector_gather_type names); elsewhere the panels are packed one gathered vector at a time.
-template <class T>
-inline constexpr bool ws_transpose_type = vector_gather_type<T>;
-
-/// out[j] for j < L = simd_lanes<T>: lane i is row(i)[j] for i < rows and j < cols, else 0. An L x L block of
-/// rows transposed in registers: L contiguous (masked) loads and 4 log2(L) / 2 shuffles per vector, where packing
-/// by gathers issues one L-lane gather per vector. Only where ws_transpose_type<T>.
-template <class T, class Row>
-inline void ws_transpose_rows(Row&& row, int rows, int cols, simd_t<T>* out) noexcept
-{
-#if defined(__AVX512F__) && (defined(__x86_64__) || defined(__i386__))
-    if constexpr (ws_transpose_type<T>) {
-        const __mmask16 m = cols >= 16 ? __mmask16(0xffff) : __mmask16((1u << cols) - 1u);
-        __m512 r[16], t[16];
-        for (int i = 0; i < 16; ++i) r[i] = i < rows ? _mm512_maskz_loadu_ps(m, row(i)) : _mm512_setzero_ps();
-        for (int i = 0; i < 16; i += 2) {
-            t[i] = _mm512_unpacklo_ps(r[i], r[i + 1]);
-            t[i + 1] = _mm512_unpackhi_ps(r[i], r[i + 1]);
-        }
-        for (int i = 0; i < 16; i += 4) {
-            const __m512d a = _mm512_castps_pd(t[i]), b = _mm512_castps_pd(t[i + 1]), c = _mm512_castps_pd(t[i + 2]),
-                          d = _mm512_castps_pd(t[i + 3]);
-            r[i] = _mm512_castpd_ps(_mm512_unpacklo_pd(a, c));
-            r[i + 1] = _mm512_castpd_ps(_mm512_unpackhi_pd(a, c));
-            r[i + 2] = _mm512_castpd_ps(_mm512_unpacklo_pd(b, d));
-            r[i + 3] = _mm512_castpd_ps(_mm512_unpackhi_pd(b, d));
-        }
-        for (int i = 0; i < 16; i += 8)
-            for (int j = 0; j < 4; ++j) {
-                t[i + j] = _mm512_shuffle_f32x4(r[i + j], r[i + j + 4], 0x88);
-                t[i + j + 4] = _mm512_shuffle_f32x4(r[i + j], r[i + j + 4], 0xdd);
-            }
-        for (int j = 0; j < 8; ++j) {
-            out[j] = simd_t<T>(_mm512_shuffle_f32x4(t[j], t[j + 8], 0x88));
-            out[j + 8] = simd_t<T>(_mm512_shuffle_f32x4(t[j], t[j + 8], 0xdd));
-        }
-        return;
-    }
-#elif defined(__AVX2__) && (defined(__x86_64__) || defined(__i386__))
-    if constexpr (ws_transpose_type<T>) {
-        const __m256i m = _mm256_cmpgt_epi32(_mm256_set1_epi32(cols), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-        __m256 r[8], t[8];
-        for (int i = 0; i < 8; ++i) r[i] = i < rows ? _mm256_maskload_ps(row(i), m) : _mm256_setzero_ps();
-        for (int i = 0; i < 8; i += 2) {
-            t[i] = _mm256_unpacklo_ps(r[i], r[i + 1]);
-            t[i + 1] = _mm256_unpackhi_ps(r[i], r[i + 1]);
-        }
-        for (int i = 0; i < 8; i += 4) {
-            r[i] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(1, 0, 1, 0));
-            r[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(3, 2, 3, 2));
-            r[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(1, 0, 1, 0));
-            r[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(3, 2, 3, 2));
-        }
-        for (int j = 0; j < 4; ++j) {
-            out[j] = simd_t<T>(_mm256_permute2f128_ps(r[j], r[j + 4], 0x20));
-            out[j + 4] = simd_t<T>(_mm256_permute2f128_ps(r[j], r[j + 4], 0x31));
-        }
-        return;
-    }
-#endif
-    (void)row, (void)rows, (void)cols, (void)out;
-}
-
-/// ws_transpose_rows over the rows of a row-major matrix: lane i of out[j] is p[i * stride + j].
-template <class T>
-inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int cols, simd_t<T>* out) noexcept
-{
-    ws_transpose_rows<T>([&](int i) { return p + i * stride; }, rows, cols, out);
 }
 
 /// Panels as ws_pack writes them, one vector of channels at a time: block(o, n, d, MR) writes
