@@ -140,6 +140,9 @@ public:
                 detail::ws_job j = ph.job;
                 j.koff = koff_.data() + ph.koff_off;
                 j.row_k = row_k_.data() + ph.row_k_off;
+                // the first image streams the weights and prefetches them; the next ones find them in cache, where
+                // the prefetches only cost time
+                j.prefetch = n == 0;
                 if constexpr (detail::ws_f16_native<T>) {
                     if (wh_.size()) {
                         detail::ws_run(j, wh_.data() + ph.w_off, xp + ph.src0, bias_or_null, y + n * y_per, acc);

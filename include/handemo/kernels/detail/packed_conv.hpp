@@ -218,12 +218,15 @@ inline void micro_ws_idx_dispatch(int nr, int n, const int* idx, const T* wp, co
 /// src + r*src_row + q*sj and is written to y[o*y_chan + y_row0 + r*y_row + q*y_col]. row_k: nullptr (every
 /// row sums over k in [0, K)), or per row r the range [row_k[2r], row_k[2r + 1]) outside which every tap of
 /// the row reads the zero padding (the caller orders k so that those taps lie at the ends: kernel row first).
+/// prefetch: whether the tiles prefetch the next block of the weight stream into L2 (what a stream from beyond the
+/// L2 needs; where the weights were just streamed for an image before, the prefetches only cost).
 struct ws_job {
     int K, co, rows, cols, sj;
     const int* koff;
     std::ptrdiff_t src_row;
     std::ptrdiff_t y_chan, y_row0, y_row, y_col;
     const int* row_k = nullptr;
+    bool prefetch = true;
 };
 
 /// Elements of the accumulator scratch of a job: every pixel tile of one panel.
@@ -248,7 +251,7 @@ inline void ws_run_tiled(const ws_job& j, const W* wp, const T* src, const T* bi
             const int kc = std::min(kc_max, j.K - k0);
             // the weights of the next block (of this panel or the next: the panels are contiguous)
             const std::ptrdiff_t next = std::ptrdiff_t(pn) * j.K + k0 + kc * ws_prefetch_blocks;
-            const bool pf = next + kc <= std::ptrdiff_t(panels) * j.K;
+            const bool pf = j.prefetch && next + kc <= std::ptrdiff_t(panels) * j.K;
             // the next block's kc rows are prefetched in equal shares by the full tiles of this block, each
             // share spread over the start of the tile's loop (one burst of a whole block overflowed the
             // outstanding-miss queues on the 18-pixel layers)
@@ -291,10 +294,27 @@ inline void ws_run_tiled(const ws_job& j, const W* wp, const T* src, const T* bi
         }
         // write the panel's tiles out: tile[q][i] -> y[o0 + i][pixel q]
         const int o0 = pn * MR, no = std::min(MR, j.co - o0);
+        // On a job whose output channels are whole planes of its rows back to back, a tile's pixels of each channel are
+        // written as one vector (a block of L channels transposed in registers): the lanes past the tile's pixels land on
+        // pixels of the same plane that a later tile writes; the tiles whose vector would run past the plane are
+        // written element by element. The same single addition of the bias per value.
+        const bool whole_planes = ws_transpose_type<T> && NR <= L && j.y_col == 1 && j.y_row0 == 0 && j.y_row == j.cols &&
+                                  j.y_chan == std::ptrdiff_t(j.rows) * j.cols;
+        const std::ptrdiff_t plane = std::ptrdiff_t(j.rows) * j.cols;
         const T* tile = acc;
         for (int r = 0; r < j.rows; ++r)
             for (int q0 = 0; q0 < j.cols; q0 += NR, tile += NR * MR) {
                 const int nr = std::min(NR, j.cols - q0);
+                const std::ptrdiff_t p = std::ptrdiff_t(r) * j.cols + q0;
+                if (whole_planes && p + L <= plane) {
+                    simd_t<T> out[L];
+                    for (int v = 0; v * L < no; ++v) {
+                        ws_transpose_rows<T>([&](int q) { return tile + q * MR + v * L; }, nr, L, out);
+                        for (int c = 0, o = o0 + v * L; c < L && o < o0 + no; ++c, ++o)
+                            (out[c] + simd_t<T>(bias ? bias[o] : T(0))).store_unaligned(y + std::ptrdiff_t(o) * j.y_chan + p);
+                    }
+                    continue;
+                }
                 for (int i = 0; i < no; ++i) {
                     const T b = bias ? bias[o0 + i] : T(0);
                     T* yo = y + std::ptrdiff_t(o0 + i) * j.y_chan + j.y_row0 + r * j.y_row + q0 * j.y_col;
