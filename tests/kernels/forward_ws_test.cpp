@@ -45,6 +45,25 @@ struct guarded_scratch {
     std::vector<T> v;
 };
 
+/// Two forward passes of geometry g, run(bias, y, scratch, accumulate), from the same y0, overwriting and accumulating,
+/// with the bias b and without: the same bits, and the first within the scratch the geometry asks for.
+template <class T, class RunA, class RunB>
+void same_forward_bits(const hk::conv_geometry& g, const std::vector<T>& b, const std::vector<T>& y0, RunA&& run_a, RunB&& run_b)
+{
+    for (const bool accumulate : {false, true})
+        for (const bool with_bias : {false, true}) {
+            CAPTURE(accumulate);
+            CAPTURE(with_bias);
+            const T* bias = with_bias ? b.data() : nullptr;
+            std::vector<T> ya = y0, yb = y0;
+            guarded_scratch<T> sa(g), sb(g);
+            run_a(bias, ya.data(), sa.data(), accumulate);
+            run_b(bias, yb.data(), sb.data(), accumulate);
+            CHECK(std::memcmp(ya.data(), yb.data(), ya.size() * sizeof(T)) == 0);
+            CHECK(sa.intact());
+        }
+}
+
 /// forward_any (weight-stationary where use_forward_ws) against conv_simd.hpp's forward, backward_data_any
 /// against backward_data and backward_weight_any against backward_weight, each bit for bit. Returns how many of
 /// the three took the weight-stationary path.
@@ -57,18 +76,11 @@ int check_same_bits(const hk::conv_geometry& g, unsigned seed)
     const auto b = cast<T>(random_values(std::size_t(g.out_channels), rng));
     const auto y0 = cast<T>(random_values(g.y_size(), rng)), gx0 = cast<T>(random_values(g.x_size(), rng));
     int took = 0;
-    for (const bool accumulate : {false, true})
-        for (const bool with_bias : {false, true}) {
-            CAPTURE(accumulate);
-            CAPTURE(with_bias);
-            const T* bias = with_bias ? b.data() : nullptr;
-            std::vector<T> ya = y0, yb = y0;
-            guarded_scratch<T> sa(g), sb(g);
-            hkd::forward_any<T>(g, x.data(), w.data(), bias, ya.data(), sa.data(), accumulate);
-            hkd::forward<T>(g, x.data(), w.data(), bias, yb.data(), sb.data(), accumulate);
-            CHECK(std::memcmp(ya.data(), yb.data(), ya.size() * sizeof(T)) == 0);
-            CHECK(sa.intact());
-        }
+    same_forward_bits<T>(g, b, y0, [&](const T* bias, T* y, T* scratch, bool accumulate) {
+        hkd::forward_any<T>(g, x.data(), w.data(), bias, y, scratch, accumulate);
+    }, [&](const T* bias, T* y, T* scratch, bool accumulate) {
+        hkd::forward<T>(g, x.data(), w.data(), bias, y, scratch, accumulate);
+    });
     took += hkd::use_forward_ws<T>(g) ? 1 : 0;
     // backward-data accumulates into gx
     std::vector<T> ga = gx0, gb = gx0;
@@ -161,19 +173,12 @@ bool check_image_groups(const hk::conv_geometry& g, unsigned seed)
     for (std::size_t i = 2; i < x.size(); i += 9) x[i] = T(-0.0);
     const auto w = cast<T>(random_values(g.w_size(), rng)), b = cast<T>(random_values(std::size_t(g.out_channels), rng));
     const auto y0 = cast<T>(random_values(g.y_size(), rng));
-    for (const bool accumulate : {false, true})
-        for (const bool with_bias : {false, true}) {
-            CAPTURE(accumulate);
-            CAPTURE(with_bias);
-            const T* bias = with_bias ? b.data() : nullptr;
-            std::vector<T> ya = y0, yb = y0;
-            guarded_scratch<T> sa(g), sb(g);
-            hkd::forward_stride1<T>(g, x.data(), w.data(), bias, ya.data(), sa.data(), accumulate);
-            hkd::forward_stride1_tiles<T, hkd::stride1_few_nv, hkd::stride1_few_channels>(g, x.data(), w.data(), bias, yb.data(),
-                                                                                        sb.data(), accumulate);
-            CHECK(std::memcmp(ya.data(), yb.data(), ya.size() * sizeof(T)) == 0);
-            CHECK(sa.intact());
-        }
+    same_forward_bits<T>(g, b, y0, [&](const T* bias, T* y, T* scratch, bool accumulate) {
+        hkd::forward_stride1<T>(g, x.data(), w.data(), bias, y, scratch, accumulate);
+    }, [&](const T* bias, T* y, T* scratch, bool accumulate) {
+        hkd::forward_stride1_tiles<T, hkd::stride1_few_nv, hkd::stride1_few_channels>(g, x.data(), w.data(), bias, y, scratch,
+                                                                                    accumulate);
+    });
     return hkd::stride1_images_fits<T>(g) && g.batch >= hkd::simd_lanes<T>;
 }
 
