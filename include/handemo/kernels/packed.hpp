@@ -312,8 +312,8 @@ private:
         if constexpr (detail::fast_type<T>) {
             conv_geometry g = g_;
             g.batch = int(std::min<std::size_t>(images, 1u << 20));
-            return !ws_ && !transposed_ && images > 1 && g.out_channels <= detail::stride1_few_channels &&
-                   detail::stride1_images_fits<T>(g) && !detail::use_dot_forward<T>(g) && detail::use_stride1_forward<T>(g);
+            return !ws_ && !transposed_ && images > 1 && detail::forward_takes_stride1_few<T>(g) &&
+                   detail::stride1_images_fits<T>(g);
         }
         return false;
     }

@@ -30,6 +30,7 @@
 #endif
 
 #include <handemo/kernels/reference.hpp>
+#include <handemo/tensor/aligned.hpp>
 
 namespace handemo::kernels::detail {
 
@@ -288,7 +289,15 @@ inline std::size_t stride1_images_scratch_elements(const conv_geometry& g) noexc
     constexpr std::size_t L = simd_lanes<T>;
     const std::size_t Hp = std::size_t(g.in_h) + 2 * g.pad, Wp = std::size_t(g.in_w) + 2 * g.pad;
     const std::size_t P = std::size_t(g.out_h()) * g.out_w();
-    return Hp * Wp * L + 2 * std::size_t(g.out_channels) * P * L + 3 * (64 / sizeof(T) + L);
+    return Hp * Wp * L + 2 * std::size_t(g.out_channels) * P * L + 3 * (tensor_alignment / sizeof(T) + L);
+}
+
+/// Images of a stride-1 forward pass of geometry g (few output channels) that forward_stride1 takes in groups of
+/// simd_lanes<T>, one per lane (forward_stride1_images); the others go image by image (forward_stride1_tiles).
+template <class T>
+inline int stride1_images_grouped(const conv_geometry& g) noexcept
+{
+    return stride1_images_fits<T>(g) ? g.batch / simd_lanes<T> * simd_lanes<T> : 0;
 }
 
 /// Multiply-adds forward_stride1 performs for geometry g with up to stride1_few_channels output channels: its groups
@@ -297,8 +306,8 @@ inline std::size_t stride1_images_scratch_elements(const conv_geometry& g) noexc
 template <class T>
 inline double forward_stride1_few_macs(const conv_geometry& g) noexcept
 {
-    if (!stride1_images_fits<T>(g)) return g.macs();
-    const int grouped = g.batch / simd_lanes<T> * simd_lanes<T>;
+    const int grouped = stride1_images_grouped<T>(g);
+    if (grouped == 0) return g.macs();
     double rows = 0;  // kernel rows over the image, summed over the output rows
     for (int r = 0; r < g.out_h(); ++r) {
         const auto [lo, hi] = window_rows(r, 1, g.pad, g.kernel_h, g.in_h);
@@ -368,14 +377,20 @@ inline bool use_dot_forward(const conv_geometry& g) noexcept
     return K % simd_lanes<T> == 0 && K >= 64 && ptot <= dot_max_pixels && eff < 0.9;
 }
 
+/// Whether forward() of geometry g takes forward_stride1's path for few output channels (forward_stride1_images for
+/// its groups of images where stride1_images_fits).
+template <class T>
+inline bool forward_takes_stride1_few(const conv_geometry& g) noexcept
+{
+    return !use_dot_forward<T>(g) && use_stride1_forward<T>(g) && g.out_channels <= stride1_few_channels;
+}
+
 /// Multiply-adds forward() performs for geometry g: forward_stride1_few_macs() on the stride-1 path of a layer with
 /// few output channels, else every product (g.macs()).
 template <class T>
 inline double forward_macs(const conv_geometry& g) noexcept
 {
-    return !use_dot_forward<T>(g) && use_stride1_forward<T>(g) && g.out_channels <= stride1_few_channels
-               ? forward_stride1_few_macs<T>(g)
-               : g.macs();
+    return forward_takes_stride1_few<T>(g) ? forward_stride1_few_macs<T>(g) : g.macs();
 }
 
 template <class T>
@@ -726,13 +741,12 @@ inline void ws_transpose_block(const T* p, std::ptrdiff_t stride, int rows, int 
     ws_transpose_rows<T>([&](int i) { return p + i * stride; }, rows, cols, out);
 }
 
-/// dst[(h * dst_row + q) * L + l] = image(l)[h * cols + q] for h < rows, q < cols, l < L = simd_lanes<T>: L images
-/// planes interleaved one image per lane (ws_transpose_rows where it transposes in registers).
+/// dst[(h * dst_row + q) * L + l] = image(l)[h * cols + q] for h < rows, q < cols, l < L = simd_lanes<T>: the
+/// planes of L images interleaved one image per lane (ws_transpose_rows where it transposes in registers).
 template <class T, class Image>
-inline void interleave_images(Image&& image, int rows, int cols, T* dst, int dst_row = 0) noexcept
+inline void interleave_images(Image&& image, int rows, int cols, T* dst, int dst_row) noexcept
 {
     constexpr int L = simd_lanes<T>;
-    if (rows == 1) dst_row = cols;
     for (int h = 0; h < rows; ++h) {
         T* d = dst + std::ptrdiff_t(h) * dst_row * L;
         if constexpr (ws_transpose_type<T>) {
@@ -835,13 +849,9 @@ inline void forward_stride1_images(const conv_geometry& g, const T* x, const T* 
     const int Hp = g.in_h + 2 * g.pad, Wp = g.in_w + 2 * g.pad, oh = g.out_h(), ow = g.out_w(), P = oh * ow;
     const int kh = g.kernel_h, kw = g.kernel_w, khw = kh * kw, Ci = g.in_channels, K = Ci * khw, Co = g.out_channels;
     const std::ptrdiff_t HW = std::ptrdiff_t(g.in_h) * g.in_w, co_stride = std::ptrdiff_t(P) * L;
-    auto align = [](T* p) {
-        const auto a = reinterpret_cast<std::uintptr_t>(p);
-        return reinterpret_cast<T*>((a + 63) / 64 * 64);
-    };
-    T* xi = align(scratch);
-    T* tb = align(xi + std::ptrdiff_t(Hp) * Wp * L);
-    T* yi = align(tb + Co * co_stride);
+    T* xi = align_up(scratch);
+    T* tb = align_up(xi + std::ptrdiff_t(Hp) * Wp * L);
+    T* yi = align_up(tb + Co * co_stride);
     int koff[forward_kc];
     for (int u = 0; u < kh; ++u)
         for (int v = 0; v < kw; ++v) koff[u * kw + v] = (u * Wp + v) * L;
@@ -851,7 +861,7 @@ inline void forward_stride1_images(const conv_geometry& g, const T* x, const T* 
         T* yg = y + std::ptrdiff_t(n0) * Co * P;
         if (accumulate_out)
             for (int o = 0; o < Co; ++o)
-                interleave_images<T>([&](int l) { return yg + (std::ptrdiff_t(l) * Co + o) * P; }, 1, P, yi + o * co_stride);
+                interleave_images<T>([&](int l) { return yg + (std::ptrdiff_t(l) * Co + o) * P; }, 1, P, yi + o * co_stride, P);
         for (int k0 = 0; k0 < K; k0 += forward_kc) {
             const int k1 = std::min(K, k0 + forward_kc), c0 = k0 / khw, c1 = (k1 - 1) / khw;
             const bool add = k0 > 0 || accumulate_out;
@@ -891,11 +901,8 @@ inline void forward_stride1(const conv_geometry& g, const T* x, const T* w, cons
 {
     if (g.out_channels <= stride1_few_channels) {
         // whole groups of simd_lanes<T> images one image per lane, the rest image by image: the same bits
-        int grouped = 0;
-        if (stride1_images_fits<T>(g)) {
-            grouped = g.batch / simd_lanes<T> * simd_lanes<T>;
-            if (grouped) forward_stride1_images(g, x, w, bias, y, scratch, accumulate_out, grouped);
-        }
+        const int grouped = stride1_images_grouped<T>(g);
+        if (grouped) forward_stride1_images(g, x, w, bias, y, scratch, accumulate_out, grouped);
         if (grouped == g.batch) return;
         conv_geometry rest = g;
         rest.batch = g.batch - grouped;
