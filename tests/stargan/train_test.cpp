@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <set>
 
 #include <stdlib.h>
 
@@ -665,4 +666,66 @@ TEST_CASE("statistics(): every learned part but G is the transfer with G's chang
     for (std::size_t i = 0; i < expect.angles.size(); ++i) worst = std::max(worst, std::abs(expect.angles[i] - s.motion.angles[i]));
     CHECK(worst < 1e-9);
     CHECK_THROWS_AS(plain->statistics(in, "bored"), value_error);
+}
+
+TEST_CASE("neutral_share: the led slots take a neutral source and another domain, the rest keep StarGAN's sampling")
+{
+    CHECK(neutral_led_slots(0.0, 16) == 0);
+    CHECK(neutral_led_slots(0.5, 16) == 8);
+    CHECK(neutral_led_slots(0.3, 16) == 5);
+    CHECK(neutral_led_slots(1.0, 16) == 16);
+    for (std::size_t led : {0, 1, 5, 8, 16}) {
+        std::size_t count = 0, first_half = 0;
+        for (std::size_t n = 0; n < 16; ++n)
+            if (neutral_led(n, led, 16)) ++count, first_half += n < 8;
+        CHECK(count == led);
+        CHECK(first_half == led / 2);  // spread: each half of the batch (a shard) takes its share
+    }
+
+    using cfg = with_batch<hand_tiny, 16>;
+    const auto clips = toy_set();
+    const auto data = prepare_data<cfg>(clips, tiny_info());
+    REQUIRE(data.neutral == 2);  // hand_domains(): angry, happy, neutral, sad, fearful
+    auto o = quiet(12);
+    o.neutral_share = 0.5;
+    trainer<cfg> tr(tiny_info(), data, o);
+    trainer<cfg> plain(tiny_info(), data, quiet(12));
+    std::size_t led_neutral = 0, led_other_target = 0, other_neutral = 0;
+    for (int s = 0; s < 12; ++s) {
+        tr.train_step();
+        plain.train_step();
+        std::multiset<int> src, trg;
+        for (std::size_t n = 0; n < 16; ++n) {
+            const int a = tr.batch_sources()[n], b = tr.batch_targets()[n];
+            if (neutral_led(n, 8, 16)) {
+                led_neutral += a == data.neutral;
+                led_other_target += b != data.neutral && b >= 0 && b < 5;
+            } else {
+                src.insert(a), trg.insert(b);
+                other_neutral += a == data.neutral;
+            }
+        }
+        CHECK(src == trg);  // the other slots' targets: their own labels permuted
+    }
+    CHECK(led_neutral == 12 * 8);
+    CHECK(led_other_target == 12 * 8);
+    MESSAGE("neutral sources in the unled slots: " << other_neutral << " of " << 12 * 8);
+    // share 0 is StarGAN's sampling, bit for bit what an option-less run trains
+    auto z = quiet(3);
+    z.neutral_share = 0.0;
+    trainer<cfg> zero(tiny_info(), data, z), base(tiny_info(), data, quiet(3));
+    for (int s = 0; s < 3; ++s) zero.train_step(), base.train_step();
+    CHECK(params_of(zero.gen()) == params_of(base.gen()));
+    CHECK(zero.batch_targets() == base.batch_targets());
+    // the led run trains something else
+    CHECK(params_of(tr.gen()) != params_of(plain.gen()));
+
+    auto bad = quiet(1);
+    bad.neutral_share = 1.5;
+    CHECK_THROWS_WITH_AS(bad.validate(), doctest::Contains("neutral_share"), value_error);
+    std::vector<labelled_clip> no_neutral;
+    for (const auto& c : clips)
+        if (c.emotion != "neutral") no_neutral.push_back(c);
+    CHECK_THROWS_WITH_AS((trainer<cfg>(tiny_info(), prepare_data<cfg>(no_neutral, tiny_info()), o)),
+                         doctest::Contains("needs neutral clips"), value_error);
 }

@@ -17,7 +17,7 @@ struct train_overrides {
     std::string preset = "handemo";
     double lr = -1;
     std::optional<double> g_lr, d_lr, lambda_cls, lambda_rec, lambda_gp, beta1, beta2, decay_start, lambda_id, lambda_pair,
-        lambda_delta, ema, augment;
+        lambda_delta, ema, augment, neutral_share;
     std::optional<int> n_critic, gate_folds;
     std::optional<bool> residual, amplitude, gate_prior, gate_posterior, gate_auto_margin, gate_centre, gate_prior_full, tempo_shrink, tempo_neighbours, lag;
     std::optional<double> gate_margin, gate_guard, gate_iters_scale;
@@ -74,6 +74,10 @@ inline void add_train_options(CLI::App* sub, stargan::train_options& t, train_ov
     sub->add_option("--lambda-pair", o.lambda_pair,
                     "Weight of the paired loss |G(x, c) - same take in emotion c| (handemo 10, paper 0)");
     sub->add_option("--lambda-delta", o.lambda_delta, "Weight of the change-size penalty |G(x, c) - x| (handemo 5, paper 0)");
+    sub->add_option("--neutral-share", o.neutral_share,
+                    "Share of each training batch whose source is a neutral take with a target drawn among the emotions (the "
+                    "mapping a transfer runs); the rest keep StarGAN's sampling, a neutral source in 1 slot of C; 0 = off (0)")
+        ->check(CLI::Range(0.0, 1.0));
     sub->add_option("--ema", o.ema, "Decay of the EMA of G's weights used for transfer, 0 = off (handemo 0.999, paper 0)");
     sub->add_option("--amplitude", o.amplitude,
                     "Scale the output's excursions by the learned amplitude ratio of the emotions, as the tempo (handemo true)");
@@ -159,6 +163,7 @@ inline void finish_train_options(stargan::train_options& t, const train_override
     t.lambda_pair = o.lambda_pair.value_or(p.lambda_pair);
     t.lambda_delta = o.lambda_delta.value_or(p.lambda_delta);
     t.ema = o.ema.value_or(p.ema);
+    t.neutral_share = o.neutral_share.value_or(p.neutral_share);
     t.range = o.range.value_or(p.range);
     t.amplitude = o.amplitude.value_or(p.amplitude);
     t.amplitude_anchor = o.amplitude_anchor.value_or(p.amplitude_anchor);

@@ -116,6 +116,12 @@ struct train_options {
     double lambda_id = 0.0;     ///< identity loss mean |G(x, c_org) - x| (CycleGAN's)
     double lambda_pair = 0.0;   ///< paired loss mean |G(x, c) - y|, y the same content and take performed in emotion c
     double lambda_delta = 0.0;  ///< size of the change mean |G(x, c) - x|
+    /// share of each batch's slots led by a neutral take: the slot's source is a neutral clip drawn at random and its
+    /// target a domain drawn uniformly among the others (the mapping a transfer runs); the other slots keep StarGAN's
+    /// sampling (a clip in turn from the shuffled data, the target the batch's own labels permuted), which gives a
+    /// neutral source to 1 slot in C. round(share x N) slots, spread evenly over the batch; 0: off (StarGAN's
+    /// sampling in every slot, the same bits as before the option)
+    double neutral_share = 0.0;
     double ema = 0.0;           ///< decay of an exponential moving average of G's weights used for transfer; 0: off
     std::string range = "global";  ///< Eq. 3 range: "global" (the paper's one p_min/p_max) or "channel" (handemo-range/2)
     /// transfer scales the output keyframes' excursions about their per-channel anchor (amplitude_anchor) by
@@ -217,6 +223,8 @@ struct train_options {
         if (shards > 2) bad("shards " + std::to_string(shards) + " is not 0, 1 or 2");
         if (!(gate_margin <= 1) || std::isnan(gate_margin)) bad("gate_margin " + std::to_string(gate_margin) + " is not below 1 (a share; <= -1: off)");
         if (!(gate_guard < 1) || std::isnan(gate_guard)) bad("gate_guard " + std::to_string(gate_guard) + " is not below 1 (a share; < 0: off)");
+        if (!(neutral_share >= 0 && neutral_share <= 1))
+            bad("neutral_share " + std::to_string(neutral_share) + " is not in [0, 1] (a share of the batch)");
         if (!(gate_iters_scale > 0 && gate_iters_scale <= 1))
             bad("gate_iters_scale " + std::to_string(gate_iters_scale) + " is not in (0, 1] (a share of iters)");
         parse_tempo_basis(tempo_basis, "train: tempo_basis");
@@ -243,6 +251,7 @@ struct train_options {
         if (lag) j["lag"] = true;
         if (amplitude_anchor != "mean") j["amplitude_anchor"] = amplitude_anchor;  // written only when not the mean
         if (amplitude_estimator != "sum") j["amplitude_estimator"] = amplitude_estimator;  // written only when not the sum
+        if (neutral_share > 0) j["neutral_share"] = neutral_share;  // written only when on
         return j;
     }
 };
@@ -250,6 +259,19 @@ struct train_options {
 /// @brief Whether this process writes the training's files: always, unless it is one of several processes of
 /// train_options::exchange and not rank 0.
 inline bool writes_files(const train_options& o) noexcept { return !o.exchange || o.exchange->writes_files(); }
+
+/// @brief How many of a batch's n slots train_options::neutral_share leads by a neutral take: round(share x n).
+inline std::size_t neutral_led_slots(double share, std::size_t n) noexcept
+{
+    return std::min(n, static_cast<std::size_t>(std::llround(share * static_cast<double>(n))));
+}
+
+/// @brief Whether slot `slot` of a batch of n is one of its `led` neutral-led slots: the slots where floor(slot x
+/// led / n) steps up, so they spread evenly (led = n / 2: every second slot, each half of the batch the same count).
+inline bool neutral_led(std::size_t slot, std::size_t led, std::size_t n) noexcept
+{
+    return led > 0 && (slot + 1) * led / n != slot * led / n;
+}
 
 /// @brief StarGAN exactly as the paper and the reference train it (Eq. 3's one range, G = tanh(...), the
 /// three losses of Eq. 4-5 with StarGAN's weights).
@@ -339,6 +361,7 @@ struct prepared_data {
     /// mean (1 for a global range), so the loss counts degrees as the evaluation does; 0 in the padding
     std::vector<float> pair_weight;
     std::size_t domains = 0;               ///< C
+    int neutral = -1;                      ///< the neutral domain's index (config_info::neutral); -1: none
     /// [C] change gate per target domain (fit_change_gate()): the weight of G's change averaged over the
     /// keyframes (posture) and of the rest (motion); empty: 1 (G's whole change)
     std::vector<double> gate_posture, gate_motion;
@@ -735,6 +758,8 @@ prepared_data prepare_data(const std::vector<labelled_clip>& clips, const config
     }
     for (const auto& j : clips.front().motion.skel.joints) p.joint_names.push_back(j.name);
     p.skel = clips.front().motion.skel;
+    for (std::size_t d = 0; d < info.domain_names.size(); ++d)
+        if (info.domain_names[d] == info.neutral) p.neutral = static_cast<int>(d);
     if (range_mode != "global" && range_mode != "channel")
         throw value_error("train: range '" + std::string(range_mode) + "' is not 'global' or 'channel'");
     p.range = range ? *range : range_mode == "channel" ? compute_channel_range(kfs) : compute_range(kfs);
@@ -1280,6 +1305,13 @@ public:
         ao.beta2 = opt_.beta2;
         og_.emplace(g_, ao);
         od_.emplace(d_, ao);
+        if (opt_.neutral_share > 0) {
+            for (std::size_t m = 0; m < data_.size(); ++m)
+                if (data_.labels[m] == data_.neutral) neutral_clips_.push_back(m);
+            if (neutral_clips_.empty() || C < 2)
+                throw value_error("train: neutral_share " + std::to_string(opt_.neutral_share) +
+                                  " needs neutral clips in the training data and another domain to go to");
+        }
         perm_.resize(data_.size());
         std::iota(perm_.begin(), perm_.end(), 0);
         cursor_ = perm_.size();  // shuffle before the first batch
@@ -1319,6 +1351,11 @@ public:
         ++step_;
         if (step_ % opt_.log_every == 0 || step_ == opt_.iters) log_.push_back({step_, std::vector<double>(last_.begin(), last_.end())});
     }
+
+    /// @brief The domains of the last train_step()'s batch, slot by slot: each source's, and the target G was asked
+    /// for (train_options::neutral_share).
+    const std::array<int, N>& batch_sources() const noexcept { return lab_; }
+    const std::array<int, N>& batch_targets() const noexcept { return tl_; }
 
     /// @brief Parts a batch is cut into by train_step (train_options::shards, resolved).
     std::size_t shards() const noexcept { return shards_; }
@@ -1611,7 +1648,15 @@ private:
     void next_batch()
     {
         constexpr std::size_t per = 3 * H * W;
+        const std::size_t led = neutral_led_slots(opt_.neutral_share, N);
         for (std::size_t n = 0; n < N; ++n) {
+            if (neutral_led(n, led, N)) {
+                const std::size_t m = neutral_clips_[gen_.below(neutral_clips_.size())];
+                std::copy_n(data_.images.data() + m * per, per, x_.data() + n * per);
+                lab_[n] = data_.labels[m];
+                idx_[n] = m;
+                continue;
+            }
             if (cursor_ >= perm_.size()) {
                 for (std::size_t i = perm_.size(); i > 1; --i) std::swap(perm_[i - 1], perm_[gen_.below(i)]);
                 cursor_ = 0;
@@ -1621,14 +1666,22 @@ private:
             lab_[n] = data_.labels[m];
             idx_[n] = m;
         }
-        // target labels: a random permutation of the batch's own labels (as the StarGAN reference)
+        // target labels: a random permutation of the batch's own labels (as the StarGAN reference); with neutral-led
+        // slots, of the other slots' labels among those slots, and each led slot a domain other than neutral
         std::array<std::size_t, N> idx;
-        std::iota(idx.begin(), idx.end(), 0);
-        for (std::size_t i = N; i > 1; --i) std::swap(idx[i - 1], idx[gen_.below(i)]);
+        std::size_t others = 0;
+        for (std::size_t n = 0; n < N; ++n)
+            if (!neutral_led(n, led, N)) idx[others++] = n;
+        for (std::size_t i = others; i > 1; --i) std::swap(idx[i - 1], idx[gen_.below(i)]);
         std::fill(org_.begin(), org_.end(), 0.f);
         std::fill(trg_.begin(), trg_.end(), 0.f);
-        for (std::size_t n = 0; n < N; ++n) {
-            tl_[n] = lab_[idx[n]];
+        for (std::size_t n = 0, k = 0; n < N; ++n) {
+            if (neutral_led(n, led, N)) {
+                const auto d = static_cast<int>(gen_.below(C - 1));
+                tl_[n] = d >= data_.neutral ? d + 1 : d;
+            } else {
+                tl_[n] = lab_[idx[k++]];
+            }
             org_[n * C + static_cast<std::size_t>(lab_[n])] = 1.f;
             trg_[n * C + static_cast<std::size_t>(tl_[n])] = 1.f;
         }
@@ -1777,6 +1830,7 @@ private:
     std::optional<adam<float>> og_, od_;
     std::vector<std::size_t> perm_;
     std::size_t cursor_ = 0;
+    std::vector<std::size_t> neutral_clips_;  ///< the neutral clips, for the neutral-led slots (train_options::neutral_share)
     std::optional<generator<float, cfg>> ema_;
     std::vector<float> x_, xh_, org_, trg_, y_, mask_;
     std::array<int, N> lab_{}, tl_{};
